@@ -1,0 +1,74 @@
+"""Material and flow interpolations as pure factories: numpy versions and NGSolve CF versions.
+
+* smoothed Heaviside ``H(ρ; η, β) = (tanh(βη) + tanh(β(ρ-η))) / (tanh(βη) + tanh(β(1-η)))``
+  (SPEC §1 projection, §2 flow/drainage, §3 Wang γ);
+* SIMP ``E(ρ) = E0 + ρ^p (E1 - E0)`` (thesis eq. A.23) and the two-material law (thesis eq. 6.1);
+* Darcy flow coefficient ``K(ρ) = Kv - (Kv - Ks) H(ρ; ηk, βk)`` and drainage
+  ``D(ρ) = (ln r / Δs)^2 Ks H(ρ; ηh, βh)`` (thesis eqs 3.2–3.4).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+_CLAMP = 20.0  # tanh(20) = 1 - 8e-18: beyond this tanh is 1 to double precision
+
+
+def heaviside_np(rho, eta: float, beta: float):
+    """Smoothed Heaviside on arrays (identity for beta -> 0)."""
+    rho = np.asarray(rho, dtype=float)
+    if beta < 1e-8:
+        return rho.copy()
+    den = np.tanh(beta * eta) + np.tanh(beta * (1.0 - eta))
+    return (np.tanh(beta * eta) + np.tanh(beta * (rho - eta))) / den
+
+
+def heaviside_deriv_np(rho, eta: float, beta: float):
+    """dH/dρ on arrays."""
+    rho = np.asarray(rho, dtype=float)
+    if beta < 1e-8:
+        return np.ones_like(rho)
+    den = np.tanh(beta * eta) + np.tanh(beta * (1.0 - eta))
+    return beta * (1.0 - np.tanh(beta * (rho - eta)) ** 2) / den
+
+
+def tanh_cf(z):
+    """Overflow-safe tanh of a CoefficientFunction that differentiates correctly with ``Diff``."""
+    from ngsolve import IfPos, exp
+
+    zc = IfPos(z - _CLAMP, _CLAMP, IfPos(-_CLAMP - z, -_CLAMP, z))
+    return 1.0 - 2.0 / (exp(2.0 * zc) + 1.0)
+
+
+def heaviside_cf(rho, eta, beta):
+    """Smoothed Heaviside of a CoefficientFunction; ``eta`` and ``beta`` may be Parameters."""
+    import math
+
+    if isinstance(beta, (int, float)) and isinstance(eta, (int, float)):
+        if beta < 1e-8:
+            return rho
+        den = math.tanh(beta * eta) + math.tanh(beta * (1.0 - eta))
+        return (math.tanh(beta * eta) + tanh_cf(beta * (rho - eta))) / den
+    den = tanh_cf(beta * eta) + tanh_cf(beta * (1.0 - eta))
+    return (tanh_cf(beta * eta) + tanh_cf(beta * (rho - eta))) / den
+
+
+def simp_cf(rho, E0, E1, penal):
+    """SIMP modulus ``E0 + ρ^p (E1 - E0)``."""
+    return E0 + rho ** penal * (E1 - E0)
+
+
+def simp2_cf(rho1, rho2, E0, E1, E2, penal):
+    """Two-material SIMP (thesis eq. 6.1): ``(1-ρ1^p) E0 + ρ1^p [(1-ρ2^p) E1 + ρ2^p E2]``."""
+    a = rho1 ** penal
+    b = rho2 ** penal
+    return (1.0 - a) * E0 + a * ((1.0 - b) * E1 + b * E2)
+
+
+def flow_coefficient_cf(rho, Kv, Ks, eta_k, beta_k):
+    """Darcy flow coefficient ``K(ρ) = Kv - (Kv - Ks) H(ρ; ηk, βk)`` (thesis eq. 3.2)."""
+    return Kv - (Kv - Ks) * heaviside_cf(rho, eta_k, beta_k)
+
+
+def drainage_cf(rho, Ks, r, delta_s, eta_h, beta_h):
+    """Drainage coefficient ``D(ρ) = (ln r / Δs)^2 Ks H(ρ; ηh, βh)`` (thesis eqs 3.3–3.4)."""
+    return (np.log(r) / delta_s) ** 2 * Ks * heaviside_cf(rho, eta_h, beta_h)

@@ -1,0 +1,1 @@
+"""Physics: materials as energies, loads, Newton, the mechanics and Darcy blocks."""

@@ -1,0 +1,87 @@
+"""Design-independent loads and springs, written as potential terms ``Π_ext(u)``.
+
+Forces are *totals* in newtons (they are not multiplied by the thickness): a
+:class:`PointLoad` acts at every mesh vertex of a named point region, an :class:`EdgeLoad` is
+spread uniformly over a named boundary (so that a "point" load does not invert the elements
+under it), a :class:`Spring` resists the displacement component along ``direction`` at a named
+point (``k/2 (d·u)²``) or, on a named boundary, its mean over that boundary.  The
+Darcy pressure loads live in :mod:`pacto_ng.physics.darcy`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def _region(mesh, name):
+    if name in mesh.GetBBoundaries():
+        return mesh.BBoundaries(name), "point"
+    if name in mesh.GetBoundaries():
+        return mesh.Boundaries(name), "edge"
+    raise ValueError(f"port '{name}' is neither a named point nor a boundary of the mesh")
+
+
+def _measure(mesh, name):
+    from ngsolve import Integrate, dx, ds
+
+    reg, kind = _region(mesh, name)
+    if kind == "point":
+        return dx(definedon=reg), 1.0
+    length = Integrate(1.0, mesh, definedon=reg)
+    if length <= 0:
+        raise ValueError(f"boundary '{name}' is empty")
+    return ds(definedon=reg), 1.0 / length
+
+
+@dataclass(frozen=True)
+class PointLoad:
+    """Total force ``force`` (N) at a named point or spread uniformly over a named boundary."""
+
+    region: str
+    force: tuple[float, float]
+
+    def work(self, mesh, u, scale=1.0):
+        """``scale · F·u`` as an integral (``scale`` may be a Parameter)."""
+        from ngsolve import CF
+
+        meas, w = _measure(mesh, self.region)
+        return (scale * w * (CF(tuple(self.force)) * u)) * meas
+
+
+EdgeLoad = PointLoad
+
+
+@dataclass(frozen=True)
+class Spring:
+    """Linear spring ``k/2 (d·u)²`` at a named point (or on the mean of a boundary), N/m."""
+
+    region: str
+    stiffness: float
+    direction: tuple[float, float] = (1.0, 0.0)
+
+    def energy(self, mesh, u):
+        from ngsolve import CF
+
+        meas, w = _measure(mesh, self.region)
+        d = np.asarray(self.direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        # the mean displacement of a boundary needs the squared mean, not the mean square:
+        # for a point region w = 1 and both agree; for an edge we use the mean square (a
+        # distributed spring of the same total stiffness), which is stated in the docs.
+        return 0.5 * self.stiffness * w * (CF(tuple(d)) * u) ** 2 * meas
+
+
+@dataclass(frozen=True)
+class Port:
+    """Where a response reads the displacement: ``d · u`` at a named point (or the mean over a
+    named boundary)."""
+
+    region: str
+    direction: tuple[float, float]
+
+    def functional(self, mesh, u):
+        from ngsolve import CF
+
+        meas, w = _measure(mesh, self.region)
+        return w * (CF(tuple(self.direction)) * u) * meas

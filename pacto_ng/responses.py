@@ -1,0 +1,148 @@
+"""Responses (scalar blocks): compliance, output displacement, strain energy, the mechanism
+ratio −sΔ/SE, and volume.
+
+Each returns a float from ``forward`` and, from ``backward(g)``, ``g`` times its partial
+derivatives: a vector on the displacement space for ``u`` and numpy arrays for element fields.
+The displacement part is what the mechanics block's adjoint solve consumes.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+class LinearFunctional:
+    """``J = ℓ(u)`` for a design-independent linear functional ℓ (assembled once).
+
+    Compliance ``f·u`` (ℓ = the external load's work) and an output displacement ``d·u`` at a
+    port (ℓ = the port functional) are both of this form.
+    """
+
+    def __init__(self, mech, terms, inputs=("u",), output="J"):
+        from ngsolve import LinearForm
+
+        self.inputs, self.output = tuple(inputs), output
+        v = mech.fes.TestFunction()
+        lf = LinearForm(mech.fes)
+        lf += terms(v)
+        lf.Assemble()
+        self.vec = lf.vec
+
+    def forward(self, u):
+        return float(self.vec.InnerProduct(u))
+
+    def backward(self, g):
+        out = self.vec.CreateVector()
+        out.data = float(g) * self.vec
+        return (out,)
+
+
+def compliance(mech, output="compliance"):
+    """End compliance ``f·u`` of the design-independent point/edge loads at full load."""
+    if not mech.loads:
+        raise ValueError("compliance needs at least one point or edge load")
+
+    def terms(v):
+        tot = None
+        for ld in mech.loads:
+            w = ld.work(mech.mesh, v)
+            tot = w if tot is None else tot + w
+        return tot
+
+    return LinearFunctional(mech, terms, output=output)
+
+
+def output_displacement(mech, port, output="delta"):
+    """``Δ = d·u`` at the port (a named point, or the mean over a named boundary)."""
+    return LinearFunctional(mech, lambda v: port.functional(mech.mesh, v), output=output)
+
+
+class StrainEnergy:
+    """Stored strain energy ``SE = t ∫ φ(∇u; fields) dΩ`` (the springs are not part of it)."""
+
+    def __init__(self, mech, output="se"):
+        from ngsolve import GridFunction, Grad, Integrate, LinearForm
+
+        self.mech = mech
+        self.inputs = ("u",) + mech.inputs
+        self.output = output
+        self.gfu = GridFunction(mech.fes)
+        dens = mech.thickness * mech._energy(Grad(self.gfu), mech.coeffs)
+        self._dens = dens
+        v = mech.fes.TestFunction()
+        self._du = LinearForm(mech.fes)
+        self._du += dens.Diff(self.gfu, v) * mech.DX
+        self._dfield = {}
+        for f in mech.fields:
+            lf = LinearForm(f.space)
+            lf += dens.Diff(f.gf, f.space.TestFunction()) * mech.DX
+            self._dfield[f.name] = lf
+        self._integrate = Integrate
+
+    def forward(self, u, *fields):
+        # the field values are those the mechanics block was last run with (same chain)
+        self.gfu.vec.data = u
+        return float(self._integrate(self._dens * self.mech.DX, self.mech.mesh))
+
+    def backward(self, g):
+        self._du.Assemble()
+        du = self._du.vec.CreateVector()
+        du.data = float(g) * self._du.vec
+        out = [du]
+        for f in self.mech.fields:
+            lf = self._dfield[f.name]
+            lf.Assemble()
+            if f.space is self.mech.l2:
+                out.append(float(g) * lf.vec.FV().NumPy().copy())
+            else:
+                v = lf.vec.CreateVector()
+                v.data = float(g) * lf.vec
+                out.append(v)
+        return tuple(out)
+
+
+class MechanismRatio:
+    """``f0 = -s Δ / SE`` (thesis eq. 3.9); ``scale`` s > 0 is fixed by the driver at iteration 0."""
+
+    def __init__(self, inputs=("delta", "se"), output="objective", scale=1.0):
+        self.inputs, self.output, self.scale = tuple(inputs), output, float(scale)
+
+    def forward(self, delta, se):
+        self._d, self._se = float(delta), float(se)
+        return -self.scale * self._d / self._se
+
+    def backward(self, g):
+        return (-g * self.scale / self._se, g * self.scale * self._d / self._se ** 2)
+
+
+class Scale:
+    """``J = s · a`` for a scalar ``a`` (e.g. a maximised displacement as ``-Δ``)."""
+
+    def __init__(self, factor, inputs, output):
+        self.factor, self.inputs, self.output = float(factor), tuple(inputs), output
+
+    def forward(self, a):
+        return self.factor * float(a)
+
+    def backward(self, g):
+        return (self.factor * g,)
+
+
+class Volume:
+    """Volume constraint ``Σ a_e ρ̄_e / (V* ) - 1`` over the design elements (``V* = f_v Σ a_e``)."""
+
+    def __init__(self, field, volfrac, inputs=("rho_bar",), output="volume"):
+        if not 0.0 < volfrac < 1.0:
+            raise ValueError(f"volfrac must lie in (0, 1) (got {volfrac})")
+        self.inputs, self.output = tuple(inputs), output
+        self.w = np.where(field.design, field.areas, 0.0)
+        self.total = self.w.sum()
+        self.volfrac = volfrac
+
+    def fraction(self, rho):
+        return float(self.w @ rho / self.total)
+
+    def forward(self, rho):
+        return self.fraction(rho) / self.volfrac - 1.0
+
+    def backward(self, g):
+        return (g * self.w / (self.total * self.volfrac),)

@@ -1,0 +1,74 @@
+"""The classic 88-line code's bilinear Q4 element (plane stress, unit square) and its global
+compliance, written independently in numpy for comparison with the NGSolve discretisation.
+
+KE is the closed-form stiffness of a unit Q4 element with full 2x2 Gauss integration
+(Andreassen et al. 2011, eq. in the 88-line code).  Node order: lower-left, lower-right,
+upper-right, upper-left (counter-clockwise); dofs (u_x, u_y) per node.
+"""
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+
+def q4_stiffness(nu):
+    """The 88-line code's KE for E = 1 (its node order: LL, LR, UR, UL counter-clockwise
+    when y points up)."""
+    A11 = np.array([[12, 3, -6, -3], [3, 12, 3, 0], [-6, 3, 12, -3], [-3, 0, -3, 12]])
+    A12 = np.array([[-6, -3, 0, 3], [-3, -6, -3, -6], [0, -3, -6, 3], [3, -6, 3, -6]])
+    B11 = np.array([[-4, 3, -2, 9], [3, -4, -9, 4], [-2, -9, -4, -3], [9, 4, -3, -4]])
+    B12 = np.array([[2, -3, 4, -9], [-3, 2, 9, -2], [4, 9, 2, 3], [-9, -2, 3, 2]])
+    KE = 1 / (1 - nu ** 2) / 24 * (np.block([[A11, A12], [A12.T, A11]])
+                                     + nu * np.block([[B11, B12], [B12.T, B11]]))
+    return KE
+
+
+def q4_stiffness_gauss(nu):
+    """The same element integrated numerically (2x2 Gauss) from the bilinear shape functions,
+    node order LL, LR, UR, UL, dofs interleaved (ux0, uy0, ux1, ...)."""
+    D = 1 / (1 - nu ** 2) * np.array([[1, nu, 0], [nu, 1, 0], [0, 0, (1 - nu) / 2]])
+    xi = np.array([-1, 1, 1, -1.0]) / 1.0
+    eta = np.array([-1, -1, 1, 1.0])
+    g = 1 / np.sqrt(3)
+    K = np.zeros((8, 8))
+    for a in (-g, g):
+        for b in (-g, g):
+            dN_dxi = 0.25 * xi * (1 + eta * b)
+            dN_deta = 0.25 * eta * (1 + xi * a)
+            # unit square: x = (1+xi)/2 -> dxi/dx = 2; detJ = 1/4
+            dNx, dNy = 2 * dN_dxi, 2 * dN_deta
+            B = np.zeros((3, 8))
+            B[0, 0::2] = dNx
+            B[1, 1::2] = dNy
+            B[2, 0::2] = dNy
+            B[2, 1::2] = dNx
+            K += B.T @ D @ B * 0.25
+    return K
+
+
+def mbb_compliance(rho_grid, nu=0.3, penal=3.0, Emin=1e-9, E0=1.0, F=-1.0):
+    """Compliance of the half MBB beam (88-line code set-up) for a nely x nelx density grid
+    whose row 0 is the *top* row of elements.  Mesh with y pointing up; node (i, j) is column
+    i, row j from the bottom."""
+    nely, nelx = rho_grid.shape
+    KE = q4_stiffness_gauss(nu)
+    nid = lambda i, j: j * (nelx + 1) + i
+    ndof = 2 * (nelx + 1) * (nely + 1)
+    rows, cols, vals = [], [], []
+    for jr in range(nely):  # jr: row from the top
+        j = nely - 1 - jr
+        for i in range(nelx):
+            nodes = [nid(i, j), nid(i + 1, j), nid(i + 1, j + 1), nid(i, j + 1)]
+            dofs = np.ravel([[2 * n, 2 * n + 1] for n in nodes])
+            E = Emin + rho_grid[jr, i] ** penal * (E0 - Emin)
+            rows.append(np.repeat(dofs, 8))
+            cols.append(np.tile(dofs, 8))
+            vals.append((E * KE).ravel())
+    K = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(ndof, ndof)).tocsc()
+    f = np.zeros(ndof)
+    f[2 * nid(0, nely) + 1] = F  # top-left corner, downwards
+    fixed = [2 * nid(0, j) for j in range(nely + 1)] + [2 * nid(nelx, 0) + 1]
+    free = np.setdiff1d(np.arange(ndof), fixed)
+    u = np.zeros(ndof)
+    u[free] = spla.spsolve(K[free][:, free], f[free])
+    return float(f @ u)
