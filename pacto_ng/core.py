@@ -77,9 +77,16 @@ class Chain:
         self.values: dict[str, Any] = {}
 
     def forward(self, **inputs: Any) -> dict[str, Any]:
-        """Evaluate every block; returns (and keeps) the dictionary of all values."""
+        """Evaluate every block; returns (and keeps) the dictionary of all values.
+
+        An intermediate value may be given as an input (e.g. ``rho_bar=...`` to analyse a given
+        physical density): the blocks that produce it, and those whose inputs are then missing,
+        are skipped.
+        """
         vals = dict(inputs)
         for b in self.blocks:
+            if b.output in vals or any(n not in vals for n in b.inputs):
+                continue
             vals[b.output] = b.forward(*(vals[n] for n in b.inputs))
         self.values = vals
         return vals

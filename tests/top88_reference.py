@@ -72,3 +72,68 @@ def mbb_compliance(rho_grid, nu=0.3, penal=3.0, Emin=1e-9, E0=1.0, F=-1.0):
     u = np.zeros(ndof)
     u[free] = spla.spsolve(K[free][:, free], f[free])
     return float(f @ u)
+
+
+def top88(nelx=60, nely=20, volfrac=0.5, penal=3.0, rmin=1.5, ft=1, maxiter=2000, nu=0.3):
+    """The 88-line code (Andreassen et al. 2011) in numpy: OC updates, density (ft=1) or
+    sensitivity (ft=0) filter, stops when the largest change falls below 0.01.  Element
+    numbering as in MATLAB: column-major from the top-left, y downwards.  Returns (x, c, its)."""
+    E0, Emin = 1.0, 1e-9
+    KE = q4_stiffness(nu)
+    nodenrs = np.arange((1 + nelx) * (1 + nely)).reshape((1 + nelx, 1 + nely)).T  # MATLAB reshape
+    edofVec = (2 * nodenrs[:-1, :-1] + 2).T.ravel()  # MATLAB 1-based +1 -> here 0-based +2
+    off = np.array([0, 1, 2 * nely + 2, 2 * nely + 3, 2 * nely + 0, 2 * nely + 1, -2, -1])
+    edofMat = edofVec[:, None] + off[None, :]
+    iK = np.kron(edofMat, np.ones((8, 1))).ravel().astype(int)
+    jK = np.kron(edofMat, np.ones((1, 8))).ravel().astype(int)
+    ndof = 2 * (nely + 1) * (nelx + 1)
+    F = np.zeros(ndof)
+    F[1] = -1.0
+    fixed = np.union1d(np.arange(0, 2 * (nely + 1), 2), [ndof - 1])
+    free = np.setdiff1d(np.arange(ndof), fixed)
+    # filter
+    rows, cols, vals = [], [], []
+    R = int(np.ceil(rmin)) - 1
+    for i1 in range(nelx):
+        for j1 in range(nely):
+            e1 = i1 * nely + j1
+            for i2 in range(max(i1 - R, 0), min(i1 + R + 1, nelx)):
+                for j2 in range(max(j1 - R, 0), min(j1 + R + 1, nely)):
+                    e2 = i2 * nely + j2
+                    rows.append(e1)
+                    cols.append(e2)
+                    vals.append(max(0.0, rmin - np.hypot(i1 - i2, j1 - j2)))
+    H = sp.coo_matrix((vals, (rows, cols)), shape=(nelx * nely, nelx * nely)).tocsr()
+    Hs = np.asarray(H.sum(axis=1)).ravel()
+    x = np.full(nely * nelx, volfrac)
+    xPhys = x.copy()
+    change, loop, c = 1.0, 0, 0.0
+    while change > 0.01 and loop < maxiter:
+        loop += 1
+        sK = (KE.ravel()[None, :] * (Emin + xPhys[:, None] ** penal * (E0 - Emin))).ravel()
+        K = sp.coo_matrix((sK, (iK, jK)), shape=(ndof, ndof)).tocsc()
+        K = (K + K.T) / 2
+        U = np.zeros(ndof)
+        U[free] = spla.spsolve(K[free][:, free], F[free])
+        ce = np.einsum("ij,jk,ik->i", U[edofMat], KE, U[edofMat])
+        c = float(((Emin + xPhys ** penal * (E0 - Emin)) * ce).sum())
+        dc = -penal * (E0 - Emin) * xPhys ** (penal - 1) * ce
+        dv = np.ones(nely * nelx)
+        if ft == 0:
+            dc = H @ (x * dc) / Hs / np.maximum(1e-3, x)
+        else:
+            dc = H @ (dc / Hs)
+            dv = H @ (dv / Hs)
+        l1, l2, move = 0.0, 1e9, 0.2
+        while (l2 - l1) / (l1 + l2) > 1e-3:
+            lmid = 0.5 * (l2 + l1)
+            xnew = np.maximum(0, np.maximum(x - move, np.minimum(1, np.minimum(
+                x + move, x * np.sqrt(-dc / dv / lmid)))))
+            xPhys = xnew if ft == 0 else (H @ xnew) / Hs
+            if xPhys.sum() > volfrac * nelx * nely:
+                l1 = lmid
+            else:
+                l2 = lmid
+        change = float(np.abs(xnew - x).max())
+        x = xnew
+    return xPhys, c, loop

@@ -123,6 +123,7 @@ class Mechanics:
             f.gf = GridFunction(f.space)
         self.coeffs = {f.name: f.gf for f in self.fields}
         self.load = Parameter(1.0)
+        self.target = 1.0  # load factor of the next forward pass (continuation over iterations)
         self.rules = integration_rules(intorder or 2 * order)
         self.DX = dx(intrules=self.rules)
         self._energy, self._body, self._guard = energy, body, guard
@@ -217,7 +218,7 @@ class Mechanics:
         warm = self.result is not None and self.result.converged
         if self.linear:
             warm = True  # one Newton step from any state solves a linear problem
-        res = solve_with_continuation(self, self.gfu.vec, 1.0, self.settings, warm=warm,
+        res = solve_with_continuation(self, self.gfu.vec, self.target, self.settings, warm=warm,
                                       linear=self.linear)
         self.result = res
         if not res.converged:
@@ -233,7 +234,7 @@ class Mechanics:
             return
         # a linear problem's tangent does not depend on u: the one Newton factorised is exact
         if not (self.linear and self._tangent_at is not None):
-            self.assemble_tangent(self.gfu.vec, 1.0)
+            self.assemble_tangent(self.gfu.vec, self.target)
         self._adjoint_ready = True
 
     def adjoint(self, dJdu):

@@ -1,0 +1,28 @@
+"""Pressure-actuated inverter and gripper, half domain (symmetry at y = 0).
+
+Pressure inlet on the left edge, zero pressure on the top and right edges; clamp on the first
+``clamp`` of the top edge with a passive solid block under it.  The gripper adds a passive void
+(the gripped object's place) over x ∈ [0.8L, L], y ∈ [0, 0.2H] and a passive solid jaw pad over
+y ∈ [0.2H, 0.25H] (CASES.md).
+"""
+from pacto_ng.mesh import Layout, Region, Segment
+
+
+def layout(width: float = 0.2, height: float = 0.1, clamp: float | None = None,
+           block: tuple[float, float] | None = None, gripper: bool = False) -> Layout:
+    L, H = width, height
+    clamp = L / 20 if clamp is None else clamp
+    bw, bh = block if block is not None else (L / 20, H / 20)
+    segments = (Segment("inlet", (0.0, H), (0.0, 0.0)),
+                Segment("fixed", (0.0, H), (clamp, H)),
+                Segment("zero_pressure", (clamp, H), (L, H)),
+                Segment("zero_pressure", (L, 0.0), (L, H)),
+                Segment("symmetry", (0.0, 0.0), (L, 0.0)))
+    regions = [Region("block", "solid", 0.0, H - bh, bw, H)]
+    if gripper:
+        regions += [Region("jaw_void", "void", 0.8 * L, 0.0, L, 0.2 * H),
+                    Region("jaw_pad", "solid", 0.8 * L, 0.2 * H, L, 0.25 * H)]
+        points = (("output", (L, 0.2 * H)),)
+    else:
+        points = (("output", (L, 0.0)),)
+    return Layout(L, H, segments=segments, regions=tuple(regions), points=points)

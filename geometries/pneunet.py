@@ -1,0 +1,16 @@
+"""One member of a pneumatic network: an internal chamber (passive void) whose boundary is the
+pressure inlet; zero pressure on the outer boundary; left edge clamped; output at the
+bottom-right corner."""
+from pacto_ng.mesh import Layout, Region, Segment
+
+
+def layout(width: float = 0.1, height: float = 0.05,
+           chamber: tuple[float, float, float, float] = (0.02, 0.01, 0.08, 0.02)) -> Layout:
+    L, H = width, height
+    return Layout(L, H,
+                  segments=(Segment("fixed", (0.0, 0.0), (0.0, H)),
+                            Segment("zero_pressure", (0.0, 0.0), (L, 0.0)),
+                            Segment("zero_pressure", (L, 0.0), (L, H)),
+                            Segment("zero_pressure", (L, H), (0.0, H))),
+                  regions=(Region("chamber", "void", *chamber, boundary="inlet"),),
+                  points=(("output", (L, 0.0)),))

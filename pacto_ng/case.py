@@ -1,0 +1,298 @@
+"""Cases as typed data, and the problem (block chain) built from a case and its parameters.
+
+A :class:`Case` is frozen data: a name, a one-line summary, its source, default
+:class:`~pacto_ng.params.Parameters`, a geometry (``layout(params) -> Layout``) and a set-up
+(``setup(params) -> Setup``: supports, loads, springs, ports, passive regions, objective).  The
+case scripts in ``cases/`` define one each.  :func:`build_problem` turns a case and parameters
+into a :class:`Problem`: the mesh, the design field, the chain of blocks and the names of the
+objective and the constraints.
+"""
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .core import Chain
+from .params import InputError, Parameters
+from .physics.loads import PointLoad, Port, Spring
+from .physics.mechanics import Supports
+
+CASE_MODULES = {
+    "mbb": "pacto_ng.cases.mbb",
+    "cantilever": "pacto_ng.cases.cantilever",
+    "inverter": "pacto_ng.cases.inverter",
+    "c-beam": "pacto_ng.cases.c_beam",
+    "pa-inverter": "pacto_ng.cases.pa_inverter",
+    "pa-gripper": "pacto_ng.cases.pa_gripper",
+    "pneunet": "pacto_ng.cases.pneunet",
+    "mm-gripper": "pacto_ng.cases.mm_gripper",
+}
+
+OBJECTIVES = ("compliance", "energy", "output", "mechanism")
+
+
+@dataclass(frozen=True)
+class Pressure:
+    """Darcy pressure set-up: inlet and zero-pressure boundaries by name."""
+
+    inlet: tuple[str, ...]
+    zero: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Setup:
+    """What a case puts on its mesh (all region names refer to the layout's names)."""
+
+    supports: Supports
+    loads: tuple[PointLoad, ...] = ()
+    springs: tuple[Spring, ...] = ()
+    port: Port | None = None  # the output displacement Δ = d·u
+    solid: tuple[str, ...] = ()  # passive solid materials
+    void: tuple[str, ...] = ()  # passive void materials
+    objective: str = "compliance"
+    pressure: Pressure | None = None
+    materials: int = 1
+
+    def __post_init__(self):
+        if self.objective not in OBJECTIVES:
+            raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{self.objective}')")
+        if self.objective in ("output", "mechanism") and self.port is None:
+            raise InputError(f"objective '{self.objective}' needs an output port")
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    summary: str
+    source: str
+    defaults: Parameters
+    layout: Callable  # params -> Layout
+    setup: Callable  # params -> Setup
+    load_unit: str = "N"
+    analysis_only: bool = False
+    notes: str = ""
+
+
+def get_case(name: str) -> Case:
+    mod = CASE_MODULES.get(name)
+    if mod is None:
+        raise InputError(f"unknown case '{name}' (known: {', '.join(CASE_MODULES)})")
+    try:
+        return importlib.import_module(mod).CASE
+    except ModuleNotFoundError as err:
+        raise InputError(f"case '{name}' is not available in this installation ({err})") from None
+
+
+def available_cases() -> list[Case]:
+    out = []
+    for name in CASE_MODULES:
+        try:
+            out.append(get_case(name))
+        except InputError:
+            pass
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+@dataclass
+class Problem:
+    """A built optimisation problem: mesh, design field, chain and response names."""
+
+    case: Case
+    params: Parameters
+    mesh: object
+    field: object
+    chain: Chain
+    objective: str
+    constraints: list[str]
+    mech: object
+    projections: list
+    penal: object  # ngsolve Parameter
+    setup: Setup
+    h: float
+    reports: list[str] = field(default_factory=list)  # scalar values to log each iteration
+    pressure_block: object = None
+    n_design_fields: int = 1
+
+    # -- schedules ----------------------------------------------------------------------------
+    def apply_schedule(self, penal: float, beta: float, load: float) -> None:
+        self.penal.Set(penal)
+        for pr in self.projections:
+            pr.beta = beta
+        self.mech.target = load
+
+    # -- evaluation -------------------------------------------------------------------------------
+    def evaluate(self, x: np.ndarray, gradients: bool = True):
+        """Return ``f0, fvals`` and, with ``gradients``, ``df0, dfvals`` (shape (m, n))."""
+        vals = self.chain.forward(x=x)
+        f0 = float(vals[self.objective])
+        f = np.array([vals[c] for c in self.constraints], dtype=float)
+        if not gradients:
+            return f0, f
+        df0 = np.asarray(self.chain.gradient(self.objective))
+        df = np.array([np.asarray(self.chain.gradient(c)) for c in self.constraints])
+        return f0, f, df0, df
+
+    @property
+    def values(self) -> dict:
+        return self.chain.values
+
+    def volume_fraction(self) -> float:
+        vol = next(b for b in self.chain.blocks if b.output == "volume")
+        return vol.fraction(self.values[vol.inputs[0]])
+
+
+def mesh_for(case: Case, params: Parameters):
+    """The case's mesh: structured quads if nelx > 0, else Netgen triangles of size maxh."""
+    from .mesh import netgen_mesh, structured_mesh
+
+    layout = case.layout(params)
+    if params.nelx > 0:
+        mesh = structured_mesh(layout, params.nelx, params.nely)
+        h = min(layout.width / params.nelx, layout.height / params.nely)
+    else:
+        if params.maxh > 0.5 * min(layout.width, layout.height):
+            raise InputError(f"maxh: {params.maxh} is too coarse for a {layout.width} x {layout.height} domain")
+        mesh = netgen_mesh(layout, params.maxh)
+        h = params.maxh
+    return mesh, h, layout
+
+
+def make_energy(params: Parameters, penal, fields=("rho_bar",)):
+    """Strain-energy density ``(G, coeffs) -> CF`` and the J-guard for the chosen model."""
+    from .interpolation import simp2_cf, simp_cf
+    from .physics.materials import get_material, jacobian
+
+    def modulus(c):
+        if len(fields) == 2:
+            return simp2_cf(c[fields[0]], c[fields[1]], params.E0, params.E1, params.E2, penal)
+        return simp_cf(c[fields[0]], params.E0, params.E1, penal)
+
+    if params.model == "wang":
+        from .physics import wang
+
+        energy, guard = wang.wang_model(modulus, params.nu, params.plane, fields[0], penal,
+                                        beta=params.wang_beta, eta=params.wang_eta)
+        return energy, guard, False
+    mat = get_material(params.model)
+    energy = lambda G, c: mat.energy(G, modulus(c), params.nu, params.plane)
+    guard = (lambda G, c: jacobian(G)) if mat.needs_positive_J else None
+    return energy, guard, mat.linear
+
+
+def build_problem(case: Case, params: Parameters) -> Problem:
+    """Mesh, design field, filter, projection, [Darcy], mechanics and responses as a chain."""
+    from ngsolve import Parameter
+
+    from . import responses as R
+    from .design import DesignField, Embed, FixPassive
+    from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
+    from .physics.mechanics import Field, Mechanics
+    from .physics.newton import NewtonSettings
+
+    if case.analysis_only:
+        raise InputError(f"case '{case.name}' is an analysis, not an optimisation")
+    mesh, h, layout = mesh_for(case, params)
+    setup = case.setup(params)
+    try:
+        field_ = DesignField(mesh, solid=setup.solid, void=setup.void)
+    except ValueError as err:
+        raise InputError(str(err)) from None
+    radius = params.filter_radius or 3.0 * h
+    nf = setup.materials
+    names = ["rho_bar"] if nf == 1 else ["rho_bar1", "rho_bar2"]
+    blocks, projections = [], []
+    if nf == 2:
+        blocks += [_Slice(field_.n, 0, "x1"), _Slice(field_.n, 1, "x2")]
+    for i, out in enumerate(names):
+        suf = "" if nf == 1 else str(i + 1)
+        xin = "x" if nf == 1 else f"x{suf}"
+        blocks.append(Embed(field_, inputs=(xin,), output=f"rho{suf}"))
+        if params.filter == "helmholtz":
+            flt = HelmholtzFilter(mesh, radius, inputs=(f"rho{suf}",), output=f"rho_tilde{suf}")
+        elif params.filter == "cone":
+            flt = ConeFilter(field_.centroids(), field_.areas, radius, inputs=(f"rho{suf}",),
+                             output=f"rho_tilde{suf}")
+        else:
+            flt = IdentityFilter(inputs=(f"rho{suf}",), output=f"rho_tilde{suf}")
+        blocks.append(flt)
+        pr = HeavisideProjection(params.beta, params.eta, inputs=(f"rho_tilde{suf}",),
+                                 output=f"rho_proj{suf}")
+        projections.append(pr)
+        blocks.append(pr)
+        blocks.append(FixPassive(field_, inputs=(f"rho_proj{suf}",), output=out))
+    penal = Parameter(params.penal)
+    energy, guard, linear = make_energy(params, penal, tuple(names))
+    mech_fields = list(names)
+    body = None
+    pressure_block = None
+    if setup.pressure is not None:
+        from .physics import darcy
+
+        pressure_block, pfield, body = darcy.for_case(mesh, params, setup.pressure, names[0], order=params.order)
+        if params.load_type == "follower":
+            raise InputError("load_type: follower Darcy loads inside the optimisation are not available yet")
+        blocks.append(pressure_block)
+        mech_fields.append(pfield)
+    loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force))) for ld in setup.loads)
+    newton = NewtonSettings(rtol=params.newton_rtol, max_iter=params.newton_max_iter,
+                            initial_increment=params.newton_increment)
+    try:
+        mech = Mechanics(mesh, order=params.order, energy=energy, fields=mech_fields,
+                         supports=setup.supports, loads=loads, springs=setup.springs, body=body,
+                         thickness=params.thickness, guard=guard, linear=linear, newton=newton)
+    except ValueError as err:
+        raise InputError(str(err)) from None
+    blocks.append(mech)
+    reports = []
+    obj = setup.objective if not params.objective else params.objective
+    if obj not in OBJECTIVES:
+        raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{obj}')")
+    if obj == "compliance":
+        if body is not None:
+            blocks.append(darcy.Compliance(mech, pressure_block))
+        else:
+            blocks.append(R.compliance(mech))
+        objective = "compliance"
+    elif obj == "energy":
+        blocks.append(R.StrainEnergy(mech))
+        objective = "se"
+    else:
+        if setup.port is None:
+            raise InputError(f"objective '{obj}' needs an output port")
+        blocks.append(R.output_displacement(mech, setup.port))
+        reports.append("delta")
+        if obj == "output":
+            blocks.append(R.Scale(-1.0, ("delta",), "objective"))
+        else:
+            blocks.append(R.StrainEnergy(mech))
+            blocks.append(R.MechanismRatio())
+            reports.append("se")
+        objective = "objective"
+    for i, out in enumerate(names):
+        vf = params.volfrac if i == 0 else params.volfrac2
+        if i == 0 or params.volfrac2 > 0:
+            blocks.append(R.Volume(field_, vf, inputs=(out,), output="volume" if i == 0 else "volume2"))
+    constraints = ["volume"] + (["volume2"] if nf == 2 and params.volfrac2 > 0 else [])
+    chain = Chain(blocks, inputs=("x",))
+    return Problem(case, params, mesh, field_, chain, objective, constraints, mech, projections,
+                   penal, setup, h, reports, pressure_block, nf)
+
+
+class _Slice:
+    """Block ``x -> x_i``: the i-th of several stacked design fields of n variables each."""
+
+    def __init__(self, n, i, output):
+        self.n, self.i = n, i
+        self.inputs, self.output = ("x",), output
+
+    def forward(self, x):
+        return np.asarray(x)[self.i * self.n:(self.i + 1) * self.n].copy()
+
+    def backward(self, g):
+        self._full = np.zeros(2 * self.n)
+        self._full[self.i * self.n:(self.i + 1) * self.n] = g
+        return (self._full,)

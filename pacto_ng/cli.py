@@ -1,0 +1,154 @@
+"""The ``pacto`` command.
+
+    pacto cases
+    pacto run CASE [--model M] [--load V] [--iterations N] [--maxh H | --nelx NX --nely NY]
+                   [--order K] [--optimizer mma|gcmma] [--set NAME=VALUE ...] [--out DIR]
+                   [--quiet] [--show-parameters]
+    pacto evaluate CASE --density FILE [--filtered] [same options]
+    pacto check-gradients CASE [same options] [--tol T]
+    pacto resume DIR [--quiet]
+
+Bad input gives a one-line error on stderr and exit code 2; a run stopped by a Newton failure
+exits with 1 after saving the last good design.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .params import InputError, Parameters
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise InputError(message)
+
+
+def _case_options(p: argparse.ArgumentParser):
+    p.add_argument("case", help="case name (see 'pacto cases')")
+    p.add_argument("--model", help="linear | gnl | neohookean | wang")
+    p.add_argument("--load", type=float, help="load magnitude (N, or Pa for pressure cases)")
+    p.add_argument("--iterations", type=int, help="maximum optimisation iterations")
+    p.add_argument("--maxh", type=float, help="Netgen triangle size")
+    p.add_argument("--nelx", type=int, help="structured quads in x")
+    p.add_argument("--nely", type=int, help="structured quads in y")
+    p.add_argument("--order", type=int, help="displacement element order (1, 2, 3)")
+    p.add_argument("--optimizer", help="mma | gcmma")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="override any case parameter (see --show-parameters)")
+    p.add_argument("--out", help="output folder (default: output/CASE-MODEL)")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = _Parser(prog="pacto", description="Topology optimisation of pressure-actuated soft "
+                 "robots and compliant mechanisms (NGSolve).")
+    sub = ap.add_subparsers(dest="command", parser_class=_Parser)
+    sub.add_parser("cases", help="list the cases")
+    r = sub.add_parser("run", help="optimise a case")
+    _case_options(r)
+    r.add_argument("--show-parameters", action="store_true", help="print every parameter and exit")
+    e = sub.add_parser("evaluate", help="analyse a given design (no optimisation)")
+    _case_options(e)
+    e.add_argument("--density", required=True, help="element densities (.npy or .csv)")
+    e.add_argument("--filtered", action="store_true",
+                   help="treat the densities as design variables (filter and project them)")
+    g = sub.add_parser("check-gradients", help="finite-difference check of the full chain")
+    _case_options(g)
+    g.add_argument("--tol", type=float, default=1e-5, help="largest relative error accepted")
+    g.add_argument("--seed", type=int, default=0)
+    s = sub.add_parser("resume", help="continue a run from its checkpoint")
+    s.add_argument("dir")
+    s.add_argument("--quiet", action="store_true")
+    return ap
+
+
+def params_from_args(case, args) -> Parameters:
+    p = case.defaults
+    direct = {}
+    for name in ("model", "load", "iterations", "maxh", "nelx", "nely", "order", "optimizer"):
+        val = getattr(args, name, None)
+        if val is not None:
+            direct[name] = str(val)
+    if (args.maxh is not None) and args.nelx is None:
+        direct["nelx"], direct["nely"] = "0", "0"
+    sets = {}
+    for item in args.set:
+        if "=" not in item:
+            raise InputError(f"--set: expected NAME=VALUE, got '{item}'")
+        k, v = item.split("=", 1)
+        sets[k.strip()] = v.strip()
+    return p.with_overrides({**direct, **sets})
+
+
+def _show_parameters(case, params: Parameters):
+    print(f"{case.name}: {case.summary}")
+    units = {"load": case.load_unit}
+    for name, val, unit, help_ in params.describe(units):
+        print(f"  {name:18s} {val!s:>12s} {unit:12s} {help_}")
+
+
+def _default_out(args, params):
+    return args.out or f"output/{args.case}-{params.model}"
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    try:
+        return _main(argv)
+    except InputError as err:
+        print(f"pacto: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("pacto: interrupted (the checkpoint of the last iteration is kept)", file=sys.stderr)
+        return 130
+
+
+def _main(argv) -> int:
+    from .case import available_cases, get_case
+
+    ap = build_parser()
+    args = ap.parse_args(argv)
+    if args.command is None:
+        ap.print_help()
+        return 2
+    if args.command == "cases":
+        for c in available_cases():
+            kind = "analysis" if c.analysis_only else "optimisation"
+            print(f"{c.name:12s} {c.summary}  [{kind}; load in {c.load_unit}]")
+        return 0
+    if args.command == "resume":
+        from .run import resume_run
+
+        return resume_run(args.dir, quiet=args.quiet)
+    case = get_case(args.case)
+    params = params_from_args(case, args)
+    if args.command == "run":
+        if args.show_parameters:
+            _show_parameters(case, params)
+            return 0
+        if case.analysis_only:
+            from . import studies
+
+            return studies.run_analysis_case(case, params, _default_out(args, params), quiet=args.quiet)
+        from .run import run_case
+
+        return run_case(case, params, _default_out(args, params), quiet=args.quiet)
+    if args.command == "evaluate":
+        from .run import evaluate_design
+
+        return evaluate_design(case, params, args.density, _default_out(args, params),
+                               filtered=args.filtered, quiet=args.quiet)
+    if args.command == "check-gradients":
+        from .gradcheck import check_case
+
+        explicit = args.maxh is not None or args.nelx is not None
+        worst = check_case(case, params, seed=args.seed, quiet=args.quiet, explicit_mesh=explicit)
+        ok = worst <= args.tol
+        print(f"worst relative error {worst:.3e} ({'pass' if ok else 'FAIL'}, tolerance {args.tol:g})")
+        return 0 if ok else 1
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

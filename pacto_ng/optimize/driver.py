@@ -1,0 +1,92 @@
+"""The optimisation loop (reads like the 88-line code: set-up, then one section per step).
+
+``optimize`` runs outer iterations ``k = start, start+1, ...``: schedule values, analysis and
+sensitivities through the chain, one MMA/GCMMA update with the external move limit, history
+and checkpoint callbacks, and the convergence test (which restarts whenever a schedule value
+changes, so a run cannot stop mid-continuation).  A Newton failure stops the loop cleanly: the
+last good design is kept and the reason is returned.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..physics.mechanics import NewtonFailure
+from .mma import Optimizer
+from .schedules import Schedule
+
+
+@dataclass
+class LoopState:
+    """Everything needed to continue a run exactly (saved in the checkpoint)."""
+
+    k: int
+    x: np.ndarray
+    opt_state: dict | None
+    scale: float | None  # objective normalisation fixed at the first iteration
+    history: list = field(default_factory=list)
+    stable: int = 0  # consecutive settled iterations with a small change
+    last_good: np.ndarray | None = None  # the last design whose analysis succeeded
+
+
+@dataclass
+class LoopResult:
+    state: LoopState
+    converged: bool
+    stopped: str  # "converged" | "iterations" | "newton"
+    message: str
+
+
+def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method: str,
+             move: float, state: LoopState, on_iteration=None) -> LoopResult:
+    # ---- set-up: everything invariant before the loop ------------------------------------
+    n = state.x.size
+    m = len(problem.constraints)
+    opt = Optimizer(n, m, method=method, move=move)
+    opt.state = state.opt_state
+    x = state.x.copy()
+
+    def values_only(xt):
+        f0, f = problem.evaluate(xt, gradients=False)
+        return f0 * state.scale, f
+
+    while state.k < iterations:
+        k = state.k
+        t0 = time.perf_counter()
+        # ---- continuation schedules ------------------------------------------------------
+        penal, beta, load = schedule.values(k)
+        problem.apply_schedule(penal, beta, load)
+        # ---- analysis and sensitivities ---------------------------------------------------
+        try:
+            f0, f, df0, df = problem.evaluate(x)
+        except NewtonFailure as err:
+            return LoopResult(state, False, "newton",
+                              f"iteration {k}: {err}; the last good design (iteration {k - 1}) is saved")
+        state.last_good = x.copy()
+        if state.scale is None:  # fix the objective normalisation once (kept on resume)
+            state.scale = 10.0 / max(abs(f0), 1e-300)
+        # ---- design update (MMA / GCMMA with move limit) ------------------------------------
+        xnew = opt.update(k + 1, x, f0 * state.scale, df0 * state.scale, f, df,
+                          evaluate=values_only if method == "gcmma" else None)
+        change = float(np.max(np.abs(xnew - x)))
+        # ---- record ----------------------------------------------------------------------
+        res = problem.mech.result
+        row = dict(iteration=k, objective=f0, volume=problem.volume_fraction(),
+                   constraint=float(f[0]), change=change, penal=penal, beta=beta, load=load,
+                   newton=res.iterations if res else 0, load_steps=res.steps if res else 0,
+                   time=time.perf_counter() - t0)
+        for name in problem.reports:
+            row[name] = float(problem.values[name])
+        state.history.append(row)
+        x = xnew
+        state.x, state.opt_state, state.k = x.copy(), opt.state, k + 1
+        # ---- convergence: only once every schedule has settled ------------------------------
+        state.stable = state.stable + 1 if (change < tol and schedule.settled(k)) else 0
+        if on_iteration is not None:
+            on_iteration(state, row)
+        if state.stable >= 2 and f[0] <= 1e-3:
+            return LoopResult(state, True, "converged",
+                              f"converged at iteration {k}: change {change:.3g} < {tol:g}")
+    return LoopResult(state, False, "iterations", f"stopped after {iterations} iterations")

@@ -1,0 +1,76 @@
+"""Continuation schedules as pure functions of the outer iteration ``k``.
+
+A :class:`Schedule` gives the SIMP penalty ``p(k)``, the projection sharpness ``β(k)`` and the
+load factor ``s(k)``.  Wang et al. (2014) — p from 1 to 3 in steps of 0.05 per iteration, then
+β from 4 to 64 doubling every 10 iterations — is ``Schedule(penal=3, penal_start=1,
+penal_step=0.05, beta_start=4, beta_max=64, beta_every=10)``.  The driver's convergence test
+restarts whenever a value changes (:meth:`Schedule.settled`), so a run cannot stop
+mid-continuation.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Schedule:
+    penal: float = 3.0  # final penalty
+    penal_start: float | None = None  # None: no penalty continuation
+    penal_step: float = 0.0
+    penal_every: int = 1
+    beta_start: float = 1.0  # projection sharpness (0: no projection)
+    beta_max: float | None = None  # None: constant beta
+    beta_every: int = 0
+    load_ramp: int = 0  # iterations over which the load factor rises to 1 (0: full load)
+
+    def __post_init__(self):
+        if self.penal <= 0:
+            raise ValueError("penal must be positive")
+        if self.penal_start is not None and (self.penal_step <= 0 or self.penal_start > self.penal):
+            raise ValueError("penalty continuation needs penal_step > 0 and penal_start <= penal")
+        if self.penal_every < 1:
+            raise ValueError("penal_every must be >= 1")
+        if self.beta_start < 0:
+            raise ValueError("beta must be >= 0")
+        if self.beta_max is not None and self.beta_every < 1:
+            raise ValueError("beta continuation needs beta_every >= 1")
+        if self.load_ramp < 0:
+            raise ValueError("load_ramp must be >= 0")
+
+    def penal_done(self) -> int:
+        """First iteration at which the penalty has its final value."""
+        if self.penal_start is None:
+            return 0
+        steps = math.ceil((self.penal - self.penal_start) / self.penal_step - 1e-9)
+        return steps * self.penal_every
+
+    def penalty(self, k: int) -> float:
+        if self.penal_start is None:
+            return self.penal
+        return min(self.penal, self.penal_start + self.penal_step * (k // self.penal_every))
+
+    def beta(self, k: int) -> float:
+        if self.beta_max is None or self.beta_start == 0:
+            return self.beta_start
+        k0 = self.penal_done()
+        if k < k0:
+            return self.beta_start
+        return min(self.beta_max, self.beta_start * 2.0 ** ((k - k0) // self.beta_every))
+
+    def load(self, k: int) -> float:
+        if self.load_ramp <= 0:
+            return 1.0
+        return min(1.0, (k + 1) / self.load_ramp)
+
+    def values(self, k: int) -> tuple[float, float, float]:
+        return self.penalty(k), self.beta(k), self.load(k)
+
+    def settled(self, k: int, window: int = 1) -> bool:
+        """True when the values have not changed over the last ``window`` iterations and are
+        final (the convergence test may run)."""
+        final = (self.penal, self.beta_max if self.beta_max is not None else self.beta_start, 1.0)
+        now = self.values(k)
+        if any(abs(a - b) > 1e-12 for a, b in zip(now, final)):
+            return False
+        return all(self.values(max(k - j, 0)) == now for j in range(window + 1))

@@ -1,0 +1,332 @@
+"""A run and its output folder (the contract users and scripts rely on).
+
+DIR/params.json        case name and every parameter (written first; ``pacto resume`` reads it)
+DIR/checkpoint.npz     design, optimiser state, history, warm-start displacement (every iteration)
+DIR/summary.json       case, model, parameters, iterations, objective and its history, volume
+                       fraction, output displacement, load reached, converged flag, Newton counts,
+                       wall time, mesh size and element order
+DIR/history.csv        one row per iteration
+DIR/design.vtu         x, rho_bar, u (and p) on the mesh
+DIR/design.png         the physical density
+DIR/convergence.png    objective and volume against iteration
+"""
+from __future__ import annotations
+
+import csv
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .case import Case, Problem, build_problem, get_case
+from .optimize.driver import LoopState, optimize
+from .optimize.schedules import Schedule
+from .params import InputError, Parameters
+from .physics.mechanics import NewtonFailure
+
+
+def prepare_output(out: str | os.PathLike) -> Path:
+    """Create the output folder or fail with a one-line InputError."""
+    path = Path(out)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / ".write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as err:
+        raise InputError(f"--out: output folder '{path}' is not writable ({err.strerror})") from None
+    return path
+
+
+def schedule_of(p: Parameters) -> Schedule:
+    return Schedule(penal=p.penal, penal_start=p.penal_start if p.penal_start > 0 else None,
+                    penal_step=p.penal_step, penal_every=p.penal_every, beta_start=p.beta,
+                    beta_max=p.beta_max if p.beta_max > 0 else None, beta_every=p.beta_every,
+                    load_ramp=p.load_ramp)
+
+
+def initial_design(problem: Problem) -> np.ndarray:
+    p = problem.params
+    x0 = p.seed_density if p.seed_density > 0 else p.volfrac
+    x = np.full(problem.field.n, x0)
+    if problem.n_design_fields == 2:
+        x = np.concatenate([x, np.full(problem.field.n, 0.5)])
+    return x
+
+
+def _progress(row: dict, total: int) -> str:
+    extra = "".join(f"  {k} {row[k]: .4e}" for k in ("delta",) if k in row)
+    return (f"it {row['iteration']:4d}/{total}  obj {row['objective']: .5e}  vol {row['volume']:.4f}"
+            f"  change {row['change']:.4f}  newton {row['newton']:3d}  load {row['load']:.3f}"
+            f"  p {row['penal']:.2f}  beta {row['beta']:g}{extra}  {row['time']:.2f} s")
+
+
+# ------------------------------------------------------------------------------------------
+def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
+    arrays = dict(k=state.k, x=state.x, scale=np.nan if state.scale is None else state.scale,
+                  stable=state.stable, history=json.dumps(state.history),
+                  u=problem.mech.gfu.vec.FV().NumPy().copy(),
+                  warm=bool(problem.mech.result is not None and problem.mech.result.converged))
+    if state.last_good is not None:
+        arrays["last_good"] = state.last_good
+    if state.opt_state is not None:
+        for key, val in state.opt_state.items():
+            arrays["opt_" + key] = np.asarray(val)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez(tmp, **arrays)
+    os.replace(tmp, path)
+
+
+def load_checkpoint(path: Path, problem: Problem) -> LoopState:
+    from .physics.newton import NewtonResult
+
+    with np.load(path, allow_pickle=False) as data:
+        opt = {key[4:]: (data[key] if data[key].ndim else float(data[key]))
+               for key in data.files if key.startswith("opt_")}
+        scale = float(data["scale"])
+        state = LoopState(k=int(data["k"]), x=data["x"].copy(), opt_state=opt or None,
+                          scale=None if np.isnan(scale) else scale,
+                          history=json.loads(str(data["history"])), stable=int(data["stable"]),
+                          last_good=data["last_good"].copy() if "last_good" in data.files else None)
+        u = data["u"]
+        if u.size == problem.mech.gfu.vec.size and bool(data["warm"]):
+            problem.mech.gfu.vec.FV().NumPy()[:] = u
+            problem.mech.result = NewtonResult(True, load_reached=1.0)
+    return state
+
+
+# ------------------------------------------------------------------------------------------
+def run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
+             resume: bool = False) -> int:
+    """Optimise ``case`` with ``params``, writing the output folder.  Returns the exit code:
+    0 finished (converged or iteration limit), 1 stopped by a Newton failure."""
+    path = prepare_output(out)
+    t_start = time.perf_counter()
+    (path / "params.json").write_text(json.dumps({"case": case.name, "params": params.to_dict()}, indent=1))
+    problem = build_problem(case, params)
+    ckpt = path / "checkpoint.npz"
+    if resume:
+        if not ckpt.exists():
+            raise InputError(f"resume: no checkpoint in '{path}'")
+        state = load_checkpoint(ckpt, problem)
+        if not quiet:
+            print(f"resuming {case.name} at iteration {state.k}")
+    else:
+        state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
+    if not quiet:
+        print(f"{case.name}: model {params.model}, {problem.mesh.ne} elements, order {params.order}, "
+              f"{problem.mech.fes.ndof} displacement dofs, {problem.field.n} design variables")
+
+    def on_iteration(st, row):
+        save_checkpoint(ckpt, st, problem)
+        if not quiet:
+            print(_progress(row, params.iterations), flush=True)
+
+    result = optimize(problem, schedule_of(params), iterations=params.iterations, tol=params.tol,
+                      method=params.optimizer, move=params.move, state=state,
+                      on_iteration=on_iteration)
+    failed = result.stopped == "newton"
+    final_x = state.last_good if failed else state.x
+    if final_x is None:
+        final_x = state.x
+    # final analysis of the design that is reported (the schedule's last values)
+    k_last = max(state.k - 1, 0)
+    problem.apply_schedule(*schedule_of(params).values(k_last))
+    try:
+        problem.evaluate(final_x, gradients=False)
+    except NewtonFailure as err:
+        failed = True
+        result.message += f"; the final analysis failed too ({err})"
+    wall = time.perf_counter() - t_start
+    write_outputs(path, problem, final_x, state.history, result, wall)
+    if not quiet or failed:
+        print(("run stopped: " if failed else "") + result.message + f" — output in {path}")
+    return 1 if failed else 0
+
+
+def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
+    p = problem.params
+    vals = problem.values
+    mech_res = problem.mech.result
+
+    def val(name):
+        return float(vals[name]) if name in vals else None
+
+    newton_counts = [h["newton"] for h in history]
+    return {
+        "case": problem.case.name,
+        "model": p.model,
+        "parameters": p.to_dict(),
+        "load": p.load,
+        "load_unit": problem.case.load_unit,
+        "iterations": len(history),
+        "objective": val(problem.objective),
+        "objective_name": problem.objective,
+        "objective_history": [h["objective"] for h in history],
+        "volume_fraction": problem.volume_fraction(),
+        "output_displacement": val("delta"),
+        "compliance": val("compliance"),
+        "strain_energy": val("se"),
+        "load_reached": (mech_res.load_reached * p.load) if mech_res else None,
+        "load_factor_reached": mech_res.load_reached if mech_res else None,
+        "converged": result.converged,
+        "stopped": result.stopped,
+        "message": result.message,
+        "newton_iterations": newton_counts,
+        "newton_iterations_total": int(sum(newton_counts)),
+        "wall_time_s": wall,
+        "mesh": {"elements": problem.mesh.ne, "h": problem.h, "order": p.order,
+                 "displacement_dofs": problem.mech.fes.ndof,
+                 "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely},
+        "element_order": p.order,
+    }
+
+
+def _finite(name, arr):
+    if not np.all(np.isfinite(arr)):
+        raise RuntimeError(f"{name} has non-finite values: nothing written")
+
+
+def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, result, wall: float):
+    from .post.plots import convergence_png, density_png
+
+    summ = summary_dict(problem, history, result, wall)
+    for key in ("objective", "volume_fraction"):
+        if summ[key] is not None and not np.isfinite(summ[key]):
+            raise RuntimeError(f"{key} is not finite: nothing written")
+    (path / "summary.json").write_text(json.dumps(summ, indent=1))
+    if history:
+        keys = list(history[0].keys())
+        with open(path / "history.csv", "w", newline="") as fh:
+            w = csv.DictWriter(fh, fieldnames=keys)
+            w.writeheader()
+            w.writerows(history)
+    write_vtu(path / "design", problem, x)
+    density_png(path / "design.png", problem)
+    if history:
+        convergence_png(path / "convergence.png", history, problem.objective)
+
+
+def rho_bar_of(problem: Problem) -> np.ndarray:
+    vals = problem.values
+    if "rho_bar" in vals:
+        return np.asarray(vals["rho_bar"])
+    return np.asarray(vals["rho_bar1"]) * (1 + np.asarray(vals["rho_bar2"])) / 2.0
+
+
+def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
+    from ngsolve import GridFunction, VTKOutput
+
+    mech = problem.mech
+    coefs, names = [], []
+
+    def add_l2(name, arr):
+        _finite(name, arr)
+        gf = GridFunction(mech.l2)
+        gf.vec.FV().NumPy()[:] = arr
+        coefs.append(gf)
+        names.append(name)
+
+    vals = problem.values
+    for key in ("rho_bar", "rho_bar1", "rho_bar2"):
+        if key in vals:
+            add_l2(key, np.asarray(vals[key]))
+    if x is not None and problem.n_design_fields == 1:
+        add_l2("x", problem.field.full(x))
+    _finite("u", mech.gfu.vec.FV().NumPy())
+    coefs.append(mech.gfu)
+    names.append("u")
+    if "p" in vals and problem.pressure_block is not None:
+        pg = problem.pressure_block.gfp
+        _finite("p", pg.vec.FV().NumPy())
+        coefs.append(pg)
+        names.append("p")
+    VTKOutput(problem.mesh, coefs=coefs, names=names, filename=str(stem),
+              subdivision=0 if problem.params.order == 1 else 1, legacy=False).Do()
+
+
+# ------------------------------------------------------------------------------------------
+def read_density(path: str, problem: Problem) -> np.ndarray:
+    """Element densities from .npy or .csv: a flat vector in element order, or for structured
+    meshes a nely x nelx grid whose row 0 is the top row of elements."""
+    p = problem.params
+    fp = Path(path)
+    if not fp.is_file():
+        raise InputError(f"--density: file '{path}' does not exist")
+    try:
+        if fp.suffix == ".npy":
+            arr = np.load(fp, allow_pickle=False)
+        elif fp.suffix in (".csv", ".txt"):
+            arr = np.loadtxt(fp, delimiter="," if fp.suffix == ".csv" else None, ndmin=1)
+        else:
+            raise InputError(f"--density: '{path}' must be a .npy or .csv file")
+    except InputError:
+        raise
+    except Exception as err:  # unreadable file content
+        raise InputError(f"--density: cannot read '{path}' ({type(err).__name__}: {err})") from None
+    arr = np.asarray(arr, dtype=float)
+    ne = problem.mesh.ne
+    if arr.ndim == 2 and p.nelx > 0:
+        if arr.shape != (p.nely, p.nelx):
+            raise InputError(f"--density: '{path}' is a {arr.shape[0]} x {arr.shape[1]} grid, "
+                             f"the mesh is nely x nelx = {p.nely} x {p.nelx}")
+        arr = arr[::-1].ravel()
+    else:
+        arr = arr.ravel()
+    if arr.size != ne:
+        raise InputError(f"--density: '{path}' holds {arr.size} values, the mesh has {ne} elements")
+    if not np.all(np.isfinite(arr)) or arr.min() < 0 or arr.max() > 1:
+        raise InputError(f"--density: values in '{path}' must be finite and lie in [0, 1]")
+    return arr
+
+
+def evaluate_design(case: Case, params: Parameters, density: str, out, *, filtered: bool,
+                    quiet: bool = False) -> int:
+    """One analysis of a given design (no optimisation); writes summary.json and design.vtu."""
+    path = prepare_output(out)
+    t0 = time.perf_counter()
+    problem = build_problem(case, params)
+    arr = read_density(density, problem)
+    if problem.n_design_fields != 1:
+        raise InputError("evaluate: two-material cases need both fields; not supported from one file")
+    sched = schedule_of(params)
+    problem.apply_schedule(params.penal, sched.beta(10 ** 6), 1.0)
+    x = None
+    try:
+        if filtered:
+            x = arr[problem.field.design_index]
+            problem.chain.forward(x=x)
+        else:
+            rho = arr.copy()
+            rho[problem.field.solid] = 1.0
+            rho[problem.field.void] = 0.0
+            problem.chain.forward(rho_bar=rho)
+    except NewtonFailure as err:
+        print(f"evaluate: {err}")
+        return 1
+
+    class _R:
+        converged, stopped, message = True, "evaluated", "single analysis"
+
+    summ = summary_dict(problem, [], _R, time.perf_counter() - t0)
+    summ["evaluated_from"] = str(density)
+    summ["filtered"] = filtered
+    (path / "summary.json").write_text(json.dumps(summ, indent=1))
+    write_vtu(path / "design", problem, x)
+    if not quiet:
+        keys = ("objective", "compliance", "output_displacement", "strain_energy", "volume_fraction")
+        print("  ".join(f"{k} {summ[k]:.6g}" for k in keys if summ[k] is not None))
+    return 0
+
+
+def resume_run(out: str | os.PathLike, *, quiet: bool = False) -> int:
+    path = Path(out)
+    try:
+        info = json.loads((path / "params.json").read_text())
+    except (OSError, ValueError):
+        raise InputError(f"resume: '{path}' holds no run (params.json missing or unreadable)") from None
+    case = get_case(info["case"])
+    params = Parameters(**info["params"])
+    return run_case(case, params, path, quiet=quiet, resume=True)
