@@ -81,13 +81,26 @@ class Mechanics:
         A CF that must stay positive at every integration point (``det F``), or None.
     linear : bool
         The residual is linear in u (one Newton step; the tangent does not depend on u).
+    residual_terms : callable ``(u, v, load) -> integral`` or None
+        Extra residual terms that are not the derivative of a potential (e.g. a follower
+        pressure): the returned sum of integrals, linear in the test function ``v``, is *added
+        to the residual* ``R(u)``; ``load`` is the load-factor Parameter, which the terms must
+        include themselves (and the thickness).  Their tangent comes from
+        ``AssembleLinearization``, so it is unsymmetric in general.  They must not depend on
+        the block's fields: the backward pass leaves them out of ``∂R/∂ρ``.
+    symmetric : bool or None
+        Whether the tangent is symmetric; default: ``residual_terms is None``.
+    inverse : str or None
+        Direct solver of the tangent; default ``sparsecholesky`` for a symmetric tangent and
+        ``umfpack`` otherwise.  With an unsymmetric tangent the adjoint solves ``Kᵀ λ = ∂J/∂u``.
     """
 
     def __init__(self, mesh, *, order: int = 1, energy: Callable, fields=("rho_bar",),
                  supports: Supports = Supports(), loads=(), springs=(), body: Callable | None = None,
                  thickness: float = 1.0, guard: Callable | None = None, linear: bool = False,
                  newton: NewtonSettings = NewtonSettings(), output: str = "u",
-                 inverse: str = "sparsecholesky", intorder: int | None = None):
+                 inverse: str | None = None, intorder: int | None = None,
+                 residual_terms: Callable | None = None, symmetric: bool | None = None):
         from ngsolve import (L2, BilinearForm, GridFunction, Grad, LinearForm, Parameter,
                              VectorH1, Variation, dx)
 
@@ -96,6 +109,9 @@ class Mechanics:
         if thickness <= 0:
             raise ValueError("thickness must be positive")
         self.mesh, self.order, self.thickness = mesh, order, float(thickness)
+        self.symmetric = residual_terms is None if symmetric is None else bool(symmetric)
+        if inverse is None:
+            inverse = "sparsecholesky" if self.symmetric else "umfpack"
         self.linear, self.settings, self.inverse_type = linear, newton, inverse
         self.fields = [f if isinstance(f, Field) else Field(f) for f in fields]
         self.inputs = tuple(f.name for f in self.fields)
@@ -131,8 +147,10 @@ class Mechanics:
 
         u = self.fes.TrialFunction()
         self.gfu = GridFunction(self.fes)
-        self.a = BilinearForm(self.fes, symmetric=True)
+        self.a = BilinearForm(self.fes, symmetric=self.symmetric)
         self.a += Variation(self.potential(u))
+        if residual_terms is not None:
+            self.a += residual_terms(u, self.fes.TestFunction(), self.load)
         # vector of the external load at unit load factor (for norms)
         self._inv = None
         self._tangent_at = None  # id of the state the factorisation belongs to
@@ -238,10 +256,10 @@ class Mechanics:
         self._adjoint_ready = True
 
     def adjoint(self, dJdu):
-        """Solve ``K λ = dJ/du`` with the tangent at the solution; returns λ (a vector)."""
+        """Solve ``Kᵀ λ = dJ/du`` with the tangent at the solution; returns λ (a vector)."""
         self._ensure_tangent()
         lam = self.gfu.vec.CreateVector()
-        lam.data = self._inv * dJdu
+        lam.data = (self._inv if self.symmetric else self._inv.T) * dJdu
         return lam
 
     def backward(self, dJdu):
