@@ -12,6 +12,15 @@ is differentiated by hand.
 | ``linear`` | ``λ/2 tr(ε)² + μ ε:ε`` (thesis eqs 2.11–2.12) |
 | ``gnl`` | St Venant–Kirchhoff ``λ/2 tr(E)² + μ E:E`` on Green–Lagrange ``E`` |
 | ``neohookean`` | ``μ/2 (I1 - 3) - μ ln J + λ/2 (ln J)²`` (thesis eq. 4.4) |
+
+Neo-Hookean in plane stress keeps the 3-D Lamé constants and finds the out-of-plane stretch
+``F33 = c`` from ``S33 = 0`` at every integration point (:func:`plane_stress_stretch`): a
+converged local Newton iteration, unrolled in CF form and frozen, followed by one
+differentiable Newton correction, so that the energy, its gradient and its Hessian are those of
+the exact reduced energy ``ψ(F) = min_c φ(F, c)``.
+
+Stresses for output come from ``.Diff`` of the energy (:func:`first_piola_kirchhoff`,
+:func:`second_piola_kirchhoff`), never from hand-written formulas.
 """
 from __future__ import annotations
 
@@ -61,17 +70,110 @@ def jacobian(G):
     return Det(Id(2) + G)
 
 
+_PS_ITERATIONS = 8  # local Newton iterations for F33 (converged to round-off, see below)
+
+
+def plane_stress_stretch(G, nu):
+    """Out-of-plane stretch ``c = F33`` of a plane-stress Neo-Hookean solid.
+
+    With ``F = diag(F2, c)``, ``J = J2 c`` (``J2 = det F2``) and the energy of thesis eq. 4.4,
+    ``S33 = 0`` reads ``∂φ/∂c = (μ c² - μ + λ ln(J2 c)) / c = 0``.  In ``s = ln c`` this is
+
+        h(s) = e^{2s} + a s - k = 0,   a = λ/μ = 2ν/(1-2ν),   k = 1 - a ln J2,
+
+    convex and increasing in ``s``.  Newton's method started from an upper bound of the root
+    (``s0 = ½ ln k`` if ``k > 1``, else ``s0 = 0``) decreases monotonically to it; eight
+    iterations reach round-off for ``J2`` in ``[1e-8, 1e8]`` and every ``ν < 0.5`` (checked
+    in numpy; seven suffice for ν ≤ 0.499).  Those iterations are frozen (``Freeze``: no
+    derivatives through them) and one more Newton step ``s = s* - h(s*)/h'(s*)`` is taken
+    with the live ``J2``: its value is ``s*`` and its first derivative is the implicit one,
+    ``ds/dJ2 = -h_J2 / h_s``.  Because ``∂φ/∂c = 0`` at ``s*``, the energy's gradient and
+    Hessian need nothing more (``d²ψ = φ_FF + φ_Fc c' + φ_cc c'²``), so residual and tangent
+    are exact.  Only ``ν`` enters (``E`` cancels).
+
+    Parameters
+    ----------
+    G : CoefficientFunction
+        In-plane displacement gradient (2x2); ``det(I + G) > 0`` is required.
+    nu : float
+        Poisson's ratio.
+
+    Returns
+    -------
+    CoefficientFunction
+        ``c = F33 > 0``.
+    """
+    from math import isclose
+
+    from ngsolve import IfPos, exp, log
+
+    a = 2.0 * nu / (1.0 - 2.0 * nu)
+    if isclose(a, 0.0, abs_tol=1e-15):
+        return 1.0 + 0.0 * jacobian(G)  # ν = 0: no lateral contraction
+    lnJ2 = log(jacobian(G))
+    k = 1.0 - a * lnJ2
+    kf = k.Freeze()
+    s = IfPos(kf - 1.0, 0.5 * log(IfPos(kf - 1.0, kf, 1.0)), 0.0 * kf)
+    for _ in range(_PS_ITERATIONS):
+        e2 = exp(2.0 * s)
+        s = s - (e2 + a * s - kf) / (2.0 * e2 + a)
+    s = s.Freeze()
+    e2 = exp(2.0 * s)
+    s = s - (e2 + a * s - k) / (2.0 * e2 + a)
+    return exp(s)
+
+
 def neohookean_energy(G, E, nu, plane="strain"):
-    """Compressible Neo-Hookean ``μ/2 (I1 - 3) - μ ln J + λ/2 (ln J)²`` (plane strain, F33 = 1)."""
+    """Compressible Neo-Hookean ``μ/2 (I1 - 3) - μ ln J + λ/2 (ln J)²`` (thesis eq. 4.4).
+
+    Plane strain embeds ``F`` with ``F33 = 1``: ``I1 = F:F + 1``, ``J = det F``.  Plane stress
+    uses ``F33 = c`` from ``S33 = 0`` (:func:`plane_stress_stretch`): ``I1 = F:F + c²``,
+    ``J = c det F``, with the 3-D Lamé constants (the reduced ``λ*`` of :func:`lame` is the
+    small-strain limit of this model, not an input to it).
+    """
     from ngsolve import Id, InnerProduct, log
 
-    if plane != "strain":
-        raise ValueError("the neohookean model is implemented for plane strain only")
-    mu, lam = lame(E, nu, plane)
+    if plane not in ("strain", "stress"):
+        raise ValueError(f"plane must be 'strain' or 'stress' (got '{plane}')")
+    mu, lam = lame(E, nu, "strain")
     F = Id(2) + G
-    I1 = InnerProduct(F, F) + 1.0  # tr(FᵀF) with F33 = 1
-    lnJ = log(jacobian(G))
+    if plane == "strain":
+        I1 = InnerProduct(F, F) + 1.0  # tr(FᵀF) with F33 = 1
+        lnJ = log(jacobian(G))
+    else:
+        c = plane_stress_stretch(G, nu)
+        I1 = InnerProduct(F, F) + c * c
+        lnJ = log(jacobian(G)) + log(c)
     return 0.5 * mu * (I1 - 3.0) - mu * lnJ + 0.5 * lam * lnJ ** 2
+
+
+# ----------------------------------------------------------------------------------------
+# Stresses for output, by automatic differentiation of an energy
+# ----------------------------------------------------------------------------------------
+def first_piola_kirchhoff(phi, G):
+    """First Piola–Kirchhoff stress ``P = ∂φ/∂F = ∂φ/∂(∇u)`` (2x2, in-plane).
+
+    Parameters
+    ----------
+    phi : callable ``G -> CF``
+        Strain-energy density per unit reference volume as a function of ``∇u``, e.g.
+        ``lambda G: neohookean_energy(G, E, nu)``.
+    G : CoefficientFunction
+        The displacement gradient at which ``P`` is wanted (e.g. ``Grad(gfu)``).
+    """
+    Gv = G.MakeVariable()
+    return phi(Gv).Diff(Gv)
+
+
+def second_piola_kirchhoff(phi, G):
+    """Second Piola–Kirchhoff stress ``S = F⁻¹ P = ∂φ/∂E_GL`` (thesis eq. 4.3), in-plane 2x2.
+
+    ``P`` comes from :func:`first_piola_kirchhoff`; ``F⁻¹ P`` is the kinematic identity
+    ``P = F S``.  For the small-strain ``linear`` energy use ``P`` itself (``σ = ∂φ/∂ε``).
+    """
+    from ngsolve import Id, Inv
+
+    return Inv(Id(2) + G) * first_piola_kirchhoff(phi, G)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,187 @@
+"""The Wang interpolation of a hyperelastic energy with the linear one (thesis ch. 5).
+
+Wang, Lazarov, Sigmund and Jensen (2014) model void with small-strain theory and solid with
+finite-strain theory, so that the crushed void elements of a large-displacement optimisation
+do not stop Newton.  With ``G = ∇u`` and an element-wise interpolation factor ``γ``
+(thesis eq. 5.1, SPEC §3)
+
+    φ_W(G) = φ_H(γ G) - φ_L(γ G) + φ_L(G),
+
+where ``φ_H`` is a hyperelastic energy (Neo-Hookean, thesis eq. 4.4, by default; St
+Venant–Kirchhoff possible) and ``φ_L`` the linear energy (thesis eqs 2.11–2.12), both with the
+SIMP modulus ``E(ρ̄)``.  ``γ = 0`` gives ``φ_L(G)`` exactly (``φ_H(0) = φ_L(0) = 0``), ``γ = 1``
+gives ``φ_H(G)`` exactly.  The interpolation factor is (thesis eq. 5.2)
+
+    γ = H(ρ̄^p; η1, β1) = (tanh(β1 η1) + tanh(β1 (ρ̄^p - η1))) / (tanh(β1 η1) + tanh(β1 (1 - η1))),
+
+a CoefficientFunction of the element density, so that the adjoint ``(φ_W).Diff(ρ̄)``
+differentiates through it.  Defaults β1 = 100, η1 = 0.001 (thesis App. D); Wang et al. used
+β1 = 500, η1 = 0.01.
+
+The logarithm of the Neo-Hookean energy sees the deformation ``I + γ G``: the Newton guard is
+``det(I + γ G) > 0`` (:meth:`WangModel.guard`); in void (``γ = 0``) any ``det(I + G)`` is
+admissible.
+
+Output measures (thesis eqs 5.3–5.5), all from the same ``G``:
+
+* ``E_W1 = E_GL(γG) - ε(γG) + ε(G) = ε(G) + γ² ½ GᵀG`` (eq. 5.4),
+* ``E_W2 = ε(G) + γ ½ GᵀG`` (eq. 5.5),
+* ``S = S_H(γG) - S_L(γG) + S_L(G)`` (eq. 5.3 as evaluated in thesis App. E.2): each part the
+  second Piola–Kirchhoff stress of its own energy at its own argument, ``S_H = F_γ⁻¹ ∂φ_H/∂F``
+  and ``S_L = ∂φ_L/∂ε``, both by ``.Diff``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+from .materials import (first_piola_kirchhoff, linear_energy, neohookean_energy, svk_energy)
+
+HYPERELASTIC = {"neohookean": (neohookean_energy, True), "gnl": (svk_energy, False)}
+
+
+def wang_gamma_cf(rho, penal=3.0, beta: float = 100.0, eta: float = 0.001):
+    """Interpolation factor ``γ = H(ρ̄^p; η1, β1)`` (thesis eq. 5.2) as a CoefficientFunction.
+
+    ``penal`` may be an ngsolve ``Parameter`` (SIMP continuation); ``beta``/``eta`` are floats or
+    Parameters.  ``H(0) = 0`` and ``H(1) = 1`` exactly.
+    """
+    from ..interpolation import heaviside_cf
+
+    return heaviside_cf(rho ** penal, eta, beta)
+
+
+def wang_energy(G, E, nu, gamma, plane: str = "strain", hyper: str | Callable = "neohookean"):
+    """``φ_W = φ_H(γG) - φ_L(γG) + φ_L(G)`` (thesis eq. 5.1) for a given ``γ`` (a CF).
+
+    ``hyper`` names a hyperelastic model of :mod:`~pacto_ng.physics.materials` (``neohookean``,
+    ``gnl``) or is a callable ``(G, E, nu, plane) -> CF``.
+    """
+    phi_h = _hyper(hyper)[0]
+    gG = gamma * G
+    return (phi_h(gG, E, nu, plane) - linear_energy(gG, E, nu, plane)
+            + linear_energy(G, E, nu, plane))
+
+
+def _hyper(hyper):
+    if callable(hyper):
+        return hyper, True
+    try:
+        return HYPERELASTIC[hyper]
+    except KeyError:
+        raise ValueError(f"unknown hyperelastic model '{hyper}' for the Wang interpolation "
+                         f"(choose from {', '.join(HYPERELASTIC)})") from None
+
+
+def _sym(A):
+    return 0.5 * (A + A.trans)
+
+
+@dataclass(frozen=True)
+class WangModel:
+    """The Wang interpolation of one hyperelastic model, as the energy/guard pair
+    :class:`~pacto_ng.physics.mechanics.Mechanics` takes, plus output measures.
+
+    ``energy, guard = model`` unpacks it.  Every method takes ``G`` (a 2x2 CF, ``∇u``) and
+    ``coeffs`` (field name -> GridFunction, as Mechanics passes them).
+
+    Parameters
+    ----------
+    modulus : callable ``coeffs -> CF``
+        Young's modulus, e.g. SIMP ``E0 + ρ̄^p (E1 - E0)``.
+    nu : float
+        Poisson's ratio.
+    plane : {"strain", "stress"}
+    field : str
+        Name of the physical density ``ρ̄`` in ``coeffs``.
+    penal : float or Parameter
+        SIMP exponent ``p`` in ``γ = H(ρ̄^p)``.
+    beta, eta : float or Parameter
+        ``β1``, ``η1`` of eq. 5.2.
+    hyper : str or callable
+        The large-strain energy ``φ_H`` (default Neo-Hookean).
+    gamma_fn : callable ``coeffs -> CF`` or None
+        Replaces eq. 5.2 by a prescribed ``γ`` (fixed patterns such as the C-beam's, or tests).
+    """
+
+    modulus: Callable
+    nu: float
+    plane: str = "strain"
+    field: str = "rho_bar"
+    penal: object = 3.0
+    beta: object = 100.0
+    eta: object = 0.001
+    hyper: object = "neohookean"
+    gamma_fn: Callable | None = None
+
+    def __post_init__(self):
+        _hyper(self.hyper)
+        if self.plane not in ("strain", "stress"):
+            raise ValueError(f"plane must be 'strain' or 'stress' (got '{self.plane}')")
+        if isinstance(self.beta, (int, float)) and self.beta < 0:
+            raise ValueError("wang beta must be >= 0")
+        if isinstance(self.eta, (int, float)) and not 0.0 <= self.eta < 1.0:
+            raise ValueError("wang eta must lie in [0, 1)")
+
+    # -- the model -------------------------------------------------------------------------
+    def gamma(self, coeffs):
+        """``γ`` (eq. 5.2, or ``gamma_fn``)."""
+        if self.gamma_fn is not None:
+            return self.gamma_fn(coeffs)
+        return wang_gamma_cf(coeffs[self.field], self.penal, self.beta, self.eta)
+
+    def energy(self, G, coeffs):
+        """``φ_W(G)`` (eq. 5.1) per unit reference volume."""
+        return wang_energy(G, self.modulus(coeffs), self.nu, self.gamma(coeffs), self.plane,
+                           self.hyper)
+
+    def jacobian(self, G, coeffs):
+        """``det(I + γ G)``: the deformation whose logarithm enters ``φ_H(γG)``."""
+        from ngsolve import Det, Id
+
+        return Det(Id(2) + self.gamma(coeffs) * G)
+
+    @property
+    def guard(self):
+        """The Newton guard ``(G, coeffs) -> det(I + γG)`` (None if ``φ_H`` accepts any F)."""
+        return self.jacobian if _hyper(self.hyper)[1] else None
+
+    def __iter__(self):
+        yield self.energy
+        yield self.guard
+
+    # -- output measures ---------------------------------------------------------------------
+    def strain_w1(self, G, coeffs):
+        """``E_W1 = E_GL(γG) - ε(γG) + ε(G)`` (eq. 5.4): nonlinear part scaled by ``γ²``."""
+        from ngsolve import Id
+
+        gG = self.gamma(coeffs) * G
+        Fg = Id(2) + gG
+        egl = 0.5 * (Fg.trans * Fg - Id(2))
+        return egl - _sym(gG) + _sym(G)
+
+    def strain_w2(self, G, coeffs):
+        """``E_W2 = ε(G) + γ ½ GᵀG`` (eq. 5.5): nonlinear part scaled by ``γ``."""
+        return _sym(G) + self.gamma(coeffs) * (0.5 * (G.trans * G))
+
+    def stress(self, G, coeffs):
+        """``S = S_H(γG) - S_L(γG) + S_L(G)`` (eq. 5.3, App. E.2), 2x2 in-plane.
+
+        ``S_H(A) = (I + A)⁻¹ ∂φ_H/∂A`` and ``S_L(A) = ∂φ_L/∂A = λ tr ε I + 2μ ε``, both from
+        ``.Diff`` of the energies.
+        """
+        from ngsolve import Id, Inv
+
+        E, nu, plane = self.modulus(coeffs), self.nu, self.plane
+        phi_h = _hyper(self.hyper)[0]
+        gG = self.gamma(coeffs) * G
+        s_h = Inv(Id(2) + gG) * first_piola_kirchhoff(lambda A: phi_h(A, E, nu, plane), gG)
+        s_l = lambda A: first_piola_kirchhoff(lambda B: linear_energy(B, E, nu, plane), A)
+        return s_h - s_l(gG) + s_l(G)
+
+
+def wang_model(modulus: Callable, nu: float, plane: str = "strain", field: str = "rho_bar",
+               penal=3.0, *, beta=100.0, eta=0.001, hyper="neohookean",
+               gamma_fn: Callable | None = None) -> WangModel:
+    """Factory of the Wang model; ``energy, guard = wang_model(...)`` (see :class:`WangModel`)."""
+    return WangModel(modulus, nu, plane, field, penal, beta, eta, hyper, gamma_fn)
