@@ -1,0 +1,361 @@
+r"""Design-dependent pressure by the Darcy–drainage method (SPEC §2, thesis ch. 3).
+
+Every element is treated as a porous medium.  With the smoothed Heaviside
+``H(ρ; η, β) = (tanh(βη) + tanh(β(ρ-η))) / (tanh(βη) + tanh(β(1-η)))``:
+
+* flow coefficient (thesis eq. 3.2):  ``K(ρ̄) = Kv - (Kv - Ks) H(ρ̄; ηk, βk)``;
+* drainage (thesis eqs 3.3–3.4):      ``D(ρ̄) = (ln r / Δs)² Ks H(ρ̄; ηh, βh)``,
+  ``Q_drain = -D (p - p_out)``;
+* pressure (thesis eqs 3.5–3.7): find ``p ∈ H1`` with
+
+  ``∫ K ∇p·∇q + D p q dΩ = ∫ D p_out q dΩ``  for all ``q`` vanishing on the Dirichlet parts,
+
+  ``p = P_in`` on the inlet boundaries, ``p = 0`` on the zero-pressure boundaries (a point
+  shared by both gets 0), no flux elsewhere.  In a fully solid region ``-Ks p'' + D p = 0``
+  gives ``p ∝ exp(-|ln r| x / Δs)``: the pressure falls to ``r P_in`` at depth ``Δs``.
+* load (thesis eq. 3.8): body force ``b = -∇p``, external work ``t ∫ -∇p·u dΩ`` (``f = -H p``),
+  deformation independent (SPEC §4).  :func:`darcy_body` gives it to
+  :class:`~pacto_ng.physics.mechanics.Mechanics`, whose load factor multiplies it; the pressure
+  is linear in ``(P_in, p_out)``, so the load factor scales the pressure itself.
+
+Sensitivities (discrete adjoint, backward pass of :class:`DarcyPressure`).  With the residual
+``R(p, ρ̄) = A(ρ̄) p - f(ρ̄)`` on the free dofs and the Dirichlet values fixed,
+
+    ``A λ = dJ/dp`` (free dofs, ``λ = 0`` on the Dirichlet dofs),
+    ``dJ/dρ̄_e = -λᵀ ∂R/∂ρ̄_e = -∂/∂ρ̄_e ∫ K ∇p·∇λ + D (p - p_out) λ dΩ``,
+
+where ``A`` is symmetric, so the transposed solve reuses the Cholesky factorisation of the
+forward solve; the last term is one LinearForm on the L2-order-0 space (``.Diff(ρ̄, q)``),
+integrated with the same quadrature rule as ``A`` (NGSOLVE_NOTES, "one quadrature rule
+everywhere").  Nothing is differentiated by hand.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..interpolation import drainage_cf, flow_coefficient_cf
+from .mechanics import Field, integration_rules
+
+__all__ = ["DarcyPressure", "darcy_body", "pressure_field", "Compliance", "DarcyCompliance",
+           "for_case"]
+
+
+def _names(value, what: str) -> tuple[str, ...]:
+    if isinstance(value, str):
+        return (value,)
+    try:
+        names = tuple(value)
+    except TypeError:
+        raise ValueError(f"{what}: expected a boundary name or a sequence of names "
+                         f"(got {value!r})") from None
+    for n in names:
+        if not isinstance(n, str):
+            raise ValueError(f"{what}: boundary names must be strings (got {n!r})")
+    return names
+
+
+class DarcyPressure:
+    r"""Block ``ρ̄ -> p``: the Darcy–drainage pressure field (thesis eqs 3.2–3.7).
+
+    Parameters
+    ----------
+    mesh : ngsolve.Mesh
+    inlet : str or sequence of str
+        Boundary name(s) where ``p = P_in``.
+    zero : str or sequence of str, optional
+        Boundary name(s) where ``p = 0``.  May be empty (the inlet alone fixes the level).
+    p_in : float
+        Inlet pressure ``P_in`` (Pa), the load magnitude.  Mutable attribute.
+    order : int
+        Order of the H1 pressure space (use the displacement order).
+    Kv, Ks : float
+        Flow coefficients of void and solid, ``0 < Ks < Kv``; ``Ks = 1e-7 Kv`` by default
+        (thesis Table 6.1).
+    eta_k, beta_k, eta_h, beta_h : float
+        Heaviside steps of the flow coefficient (thesis eq. 3.2) and of the drainage
+        (thesis eq. 3.4); ``η ∈ (0, 1)``, ``β >= 0``.  Defaults 0.3, 10, 0.2, 10.
+    r : float
+        Pressure ratio reached at depth ``Δs`` in solid, ``0 < r < 1`` (default 0.1).
+    delta_s : float
+        Penetration depth ``Δs`` (m), positive (default 0.002).
+    p_out : float
+        Drainage (outside) pressure ``p_out`` (default 0).
+    sensitivity : bool
+        If False, :meth:`backward` returns a zero gradient: the load sensitivity (the whole
+        ``dJ/dp`` path) is dropped.  For studies only; the gradient is then wrong.
+    inputs, output : names in a :class:`~pacto_ng.core.Chain`.
+    intorder : int, optional
+        Order of the quadrature rule used by every form (default ``2 * order``: exact for
+        ``A`` on element-wise constant densities, triangles and quads).
+    inverse : str
+        Sparse direct solver (always passed explicitly to NGSolve).
+
+    Notes
+    -----
+    Forward: ``p = P_in ℓ + p0`` with the lifting ``ℓ`` (1 on the inlet dofs, 0 elsewhere) and
+    ``A_ff p0 = f_f - (A P_in ℓ)_f``.  Backward: see the module docstring; ``grad_output`` may be a
+    BaseVector on :attr:`fes` or a numpy array of its length.
+    """
+
+    def __init__(self, mesh, *, inlet, zero=(), p_in: float = 1.0, order: int = 1,
+                 Kv: float = 1.0, Ks: float | None = None, eta_k: float = 0.3,
+                 beta_k: float = 10.0, eta_h: float = 0.2, beta_h: float = 10.0,
+                 r: float = 0.1, delta_s: float = 0.002, p_out: float = 0.0,
+                 sensitivity: bool = True, inputs=("rho_bar",), output: str = "p",
+                 intorder: int | None = None, inverse: str = "sparsecholesky"):
+        from ngsolve import (BND, H1, L2, BilinearForm, GridFunction, LinearForm, dx, grad)
+
+        inlet = _names(inlet, "inlet")
+        zero = _names(zero, "zero")
+        Ks = 1e-7 * Kv if Ks is None else Ks
+        self._validate(mesh, inlet, zero, p_in, order, Kv, Ks, eta_k, beta_k, eta_h, beta_h,
+                       r, delta_s, p_out)
+        self.mesh, self.order = mesh, int(order)
+        self.inlet, self.zero = inlet, zero
+        self.p_in, self.p_out = float(p_in), float(p_out)
+        self.Kv, self.Ks = float(Kv), float(Ks)
+        self.eta_k, self.beta_k = float(eta_k), float(beta_k)
+        self.eta_h, self.beta_h = float(eta_h), float(beta_h)
+        self.r, self.delta_s = float(r), float(delta_s)
+        self.sensitivity = bool(sensitivity)
+        self.inputs, self.output = tuple(inputs), output
+        if len(self.inputs) != 1:
+            raise ValueError("inputs: DarcyPressure takes exactly one density field")
+        self.inverse_type = inverse
+
+        self.fes = H1(mesh, order=self.order, dirichlet="|".join(inlet + zero))
+        self.l2 = L2(mesh, order=0)
+        self.rules = integration_rules(intorder or 2 * self.order)
+        DX = dx(intrules=self.rules)
+        self.DX = DX
+        self.rho = GridFunction(self.l2)
+        self.K = flow_coefficient_cf(self.rho, self.Kv, self.Ks, self.eta_k, self.beta_k)
+        self.D = drainage_cf(self.rho, self.Ks, self.r, self.delta_s, self.eta_h, self.beta_h)
+
+        p, q = self.fes.TnT()
+        self.a = BilinearForm(self.fes, symmetric=True)
+        self.a += (self.K * grad(p) * grad(q) + self.D * p * q) * DX
+        self.f = LinearForm(self.fes)
+        self.f += self.D * self.p_out * q * DX
+        self._inv = None
+
+        # unit lifting: 1 on the inlet dofs, 0 elsewhere (zero-pressure dofs win at shared points)
+        lift = GridFunction(self.fes)
+        lift.Set(1.0, BND, definedon=mesh.Boundaries("|".join(inlet)))
+        on_inlet = self.fes.GetDofs(mesh.Boundaries("|".join(inlet)))
+        vals = lift.vec.FV().NumPy()
+        vals[~np.array(list(on_inlet), dtype=bool)] = 0.0
+        if zero:
+            on_zero = np.array(list(self.fes.GetDofs(mesh.Boundaries("|".join(zero)))), dtype=bool)
+            vals[on_zero] = 0.0
+        self._lift = lift.vec
+
+        # state, adjoint and the sensitivity form -λᵀ ∂R/∂ρ̄ (built once)
+        self.gfp = GridFunction(self.fes)
+        self.lam = GridFunction(self.fes)
+        dens = (self.K * grad(self.gfp) * grad(self.lam)
+                + self.D * (self.gfp - self.p_out) * self.lam)
+        self._sens = LinearForm(self.l2)
+        self._sens += dens.Diff(self.rho, self.l2.TestFunction()) * DX
+        self._rhs = self.gfp.vec.CreateVector()
+        self._ready = False
+
+    # -- validation --------------------------------------------------------------------------
+    @staticmethod
+    def _validate(mesh, inlet, zero, p_in, order, Kv, Ks, eta_k, beta_k, eta_h, beta_h, r,
+                  delta_s, p_out):
+        known = sorted(set(mesh.GetBoundaries()))
+        if not inlet:
+            raise ValueError("inlet: at least one inlet boundary is needed")
+        for what, names in (("inlet", inlet), ("zero", zero)):
+            for n in names:
+                if n not in known:
+                    raise ValueError(f"{what}: boundary '{n}' is not in the mesh "
+                                     f"(boundaries: {', '.join(known)})")
+        both = sorted(set(inlet) & set(zero))
+        if both:
+            raise ValueError(f"zero: boundary {both} is also an inlet")
+        if order not in (1, 2, 3, 4):
+            raise ValueError(f"order: must be 1, 2, 3 or 4 (got {order})")
+        for name, v in (("p_in", p_in), ("p_out", p_out)):
+            if not np.isfinite(v):
+                raise ValueError(f"{name}: must be finite (got {v})")
+        if not Kv > 0:
+            raise ValueError(f"Kv: must be positive (got {Kv})")
+        if not Ks > 0:
+            raise ValueError(f"Ks: must be positive (got {Ks})")
+        if not Ks < Kv:
+            raise ValueError(f"Ks: must be smaller than Kv (got Ks={Ks}, Kv={Kv})")
+        if not 0.0 < r < 1.0:
+            raise ValueError(f"r: must lie in (0, 1) (got {r})")
+        if not delta_s > 0:
+            raise ValueError(f"delta_s: must be positive (got {delta_s})")
+        for name, v in (("eta_k", eta_k), ("eta_h", eta_h)):
+            if not 0.0 < v < 1.0:
+                raise ValueError(f"{name}: must lie in (0, 1) (got {v})")
+        for name, v in (("beta_k", beta_k), ("beta_h", beta_h)):
+            if not v >= 0:
+                raise ValueError(f"{name}: must be >= 0 (got {v})")
+
+    # -- block interface ------------------------------------------------------------------------
+    def forward(self, rho):
+        """Solve ``A(ρ̄) p = f(ρ̄)`` with ``p = P_in`` on the inlet, 0 on the zero boundaries."""
+        rho = np.asarray(rho, dtype=float)
+        if rho.shape != (self.l2.ndof,):
+            raise ValueError(f"{self.inputs[0]}: expected {self.l2.ndof} element values "
+                             f"(got shape {rho.shape})")
+        self.rho.vec.FV().NumPy()[:] = rho
+        self.a.Assemble()
+        self.f.Assemble()
+        if self._inv is None:
+            self._inv = self.a.mat.Inverse(self.fes.FreeDofs(), inverse=self.inverse_type)
+        else:
+            self._inv.Update()
+        p = self.gfp.vec
+        p.data = self.p_in * self._lift
+        self._rhs.data = self.f.vec - self.a.mat * p
+        p.data += self._inv * self._rhs
+        self._ready = True
+        out = p.CreateVector()
+        out.data = p
+        return out
+
+    def adjoint(self, dJdp):
+        """``λ`` with ``A λ = dJ/dp`` on the free dofs, ``λ = 0`` on the Dirichlet dofs."""
+        if not self._ready:
+            raise RuntimeError("DarcyPressure.backward called before forward")
+        if isinstance(dJdp, np.ndarray):
+            self._rhs.FV().NumPy()[:] = dJdp
+        else:
+            self._rhs.data = dJdp
+        lam = self._rhs.CreateVector()
+        lam.data = self._inv * self._rhs  # A symmetric: the forward factorisation serves
+        return lam
+
+    def backward(self, grad_output):
+        """``dJ/dρ̄ = -λᵀ ∂R/∂ρ̄`` (zero if :attr:`sensitivity` is off)."""
+        if not self.sensitivity:
+            return (np.zeros(self.l2.ndof),)
+        self.lam.vec.data = self.adjoint(grad_output)
+        self._sens.Assemble()
+        return (-self._sens.vec.FV().NumPy().copy(),)
+
+    # -- helpers --------------------------------------------------------------------------------
+    def field(self) -> Field:
+        """The :class:`~pacto_ng.physics.mechanics.Field` through which ``p`` enters Mechanics."""
+        return Field(self.output, self.fes)
+
+    def decay_rate(self) -> float:
+        """``|ln r| / Δs``: the exponential decay rate of the pressure in solid (1/m)."""
+        return abs(np.log(self.r)) / self.delta_s
+
+
+def pressure_field(block: DarcyPressure) -> Field:
+    """``Field(block.output, block.fes)`` for ``Mechanics(fields=(..., pressure_field(b)))``."""
+    return block.field()
+
+
+def darcy_body(p_name: str = "p"):
+    r"""The ``body`` callable of :class:`~pacto_ng.physics.mechanics.Mechanics` for the Darcy load.
+
+    Returns ``(u, coeffs) -> -∇p · u``: the body-force potential density of ``b = -∇p``
+    (thesis eq. 3.8), deformation independent (SPEC §4).  Mechanics multiplies it by the
+    thickness and the load factor, so the external work is ``s t ∫ -∇p·u dΩ``.
+    """
+    def body(u, coeffs):
+        from ngsolve import InnerProduct, grad
+
+        if p_name not in coeffs:
+            raise ValueError(f"p_name: '{p_name}' is not a field of the mechanics block "
+                             f"(fields: {', '.join(coeffs)})")
+        return InnerProduct(-grad(coeffs[p_name]), u)
+
+    return body
+
+
+class Compliance:
+    r"""Compliance with the design-dependent load: block ``(u, p) -> J``.
+
+    ``J = f(p)·u = t ∫ -∇p·u dΩ + Σ F_i·u_i`` (the Darcy load and any point/edge loads of the
+    mechanics block, at unit load factor, as :func:`pacto_ng.responses.compliance`).
+
+    Backward: ``∂J/∂u`` and ``∂J/∂p`` (≠ 0: the load depends on the design through p) as
+    LinearForms from ``Diff``; the ``p`` part flows back through :class:`DarcyPressure`.
+
+    Parameters
+    ----------
+    mech : Mechanics
+        The mechanics block (its space, thickness, quadrature rule and point loads).
+    pressure : DarcyPressure
+        The pressure block (its space and output name).
+    inputs : (str, str), optional
+        Names of ``u`` and ``p`` (default: the two blocks' outputs).
+    """
+
+    def __init__(self, mech, pressure: DarcyPressure, inputs=None, output: str = "compliance"):
+        from ngsolve import GridFunction, InnerProduct, LinearForm, grad
+
+        self.mech, self.pressure = mech, pressure
+        self.inputs = tuple(inputs) if inputs is not None else (mech.output, pressure.output)
+        self.output = output
+        self.gfu = GridFunction(mech.fes)
+        self.gfp = GridFunction(pressure.fes)
+        dens = mech.thickness * InnerProduct(-grad(self.gfp), self.gfu)
+        self._dens = dens
+        v = mech.fes.TestFunction()
+        self._fixed = None  # the design-independent point/edge loads (assembled once)
+        if mech.loads:
+            lf = LinearForm(mech.fes)
+            for ld in mech.loads:
+                lf += ld.work(mech.mesh, v)
+            lf.Assemble()
+            self._fixed = lf.vec
+        self._du = LinearForm(mech.fes)
+        self._du += dens.Diff(self.gfu, v) * mech.DX
+        self._dp = LinearForm(pressure.fes)
+        self._dp += dens.Diff(self.gfp, pressure.fes.TestFunction()) * mech.DX
+
+    def forward(self, u, p):
+        from ngsolve import Integrate
+
+        self.gfu.vec.data = u
+        if isinstance(p, np.ndarray):
+            self.gfp.vec.FV().NumPy()[:] = p
+        else:
+            self.gfp.vec.data = p
+        val = float(Integrate(self._dens * self.mech.DX, self.mech.mesh))
+        if self._fixed is not None:
+            val += float(self._fixed.InnerProduct(self.gfu.vec))
+        return val
+
+    def backward(self, g):
+        g = float(g)
+        self._du.Assemble()
+        self._dp.Assemble()
+        du = self._du.vec.CreateVector()
+        du.data = g * self._du.vec
+        if self._fixed is not None:
+            du.data += g * self._fixed
+        dp = self._dp.vec.CreateVector()
+        dp.data = g * self._dp.vec
+        return (du, dp)
+
+
+DarcyCompliance = Compliance
+
+
+def for_case(mesh, params, pressure, rho_name: str = "rho_bar", *, order: int = 1,
+             output: str = "p"):
+    """Build the Darcy part of a case: ``(DarcyPressure block, Field for Mechanics, body)``.
+
+    ``pressure`` has ``inlet`` and ``zero`` (boundary names); ``params`` supplies
+    ``load`` (= P_in), Kv, Ks, eta_k, beta_k, eta_h, beta_h, r, delta_s, p_out and
+    load_sensitivity (SPEC §2 defaults in :class:`~pacto_ng.params.Parameters`).
+    """
+    block = DarcyPressure(mesh, inlet=pressure.inlet, zero=pressure.zero, p_in=params.load,
+                          order=order, Kv=params.Kv, Ks=params.Ks, eta_k=params.eta_k,
+                          beta_k=params.beta_k, eta_h=params.eta_h, beta_h=params.beta_h,
+                          r=params.r, delta_s=params.delta_s, p_out=params.p_out,
+                          sensitivity=params.load_sensitivity, inputs=(rho_name,),
+                          output=output)
+    return block, block.field(), darcy_body(output)
