@@ -77,8 +77,9 @@ class ConeFilter:
         d = tree.sparse_distance_matrix(tree, radius, output_type="coo_matrix")
         w = radius - d.data
         keep = w > 0
-        W = sp.coo_matrix((w[keep], (d.row[keep], d.col[keep])), shape=(len(c), len(c))).tocsr()
-        W = W + sp.diags(np.full(len(c), radius))  # the zero distances dropped by the tree
+        off = keep & (d.row != d.col)
+        W = sp.coo_matrix((w[off], (d.row[off], d.col[off])), shape=(len(c), len(c))).tocsr()
+        W = W + sp.diags(np.full(len(c), radius))  # each element's own weight, R - 0
         W = W @ sp.diags(areas)
         self.P = sp.diags(1.0 / np.asarray(W.sum(axis=1)).ravel()) @ W
         self.PT = self.P.T.tocsr()

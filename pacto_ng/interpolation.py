@@ -52,15 +52,28 @@ def heaviside_cf(rho, eta, beta):
     return (tanh_cf(beta * eta) + tanh_cf(beta * (rho - eta))) / den
 
 
+def power_cf(rho, penal):
+    """``ρ^p`` that is 0 (with zero derivative) at ρ = 0.
+
+    NGSolve differentiates ``ρ**p`` through ``log ρ``, which gives NaN at ρ = 0 even where the
+    derivative is taken in a direction that does not involve ρ (the residual in u), and so do
+    subnormal densities (1e-320 occurs in filtered designs).  Below 1e-30 the power is taken
+    as 0: with p >= 1 it is below 1e-30 there, far under any void stiffness E0/E1.
+    """
+    from ngsolve import IfPos
+
+    return IfPos(rho - 1e-30, rho ** penal, 0.0)
+
+
 def simp_cf(rho, E0, E1, penal):
     """SIMP modulus ``E0 + ρ^p (E1 - E0)``."""
-    return E0 + rho ** penal * (E1 - E0)
+    return E0 + power_cf(rho, penal) * (E1 - E0)
 
 
 def simp2_cf(rho1, rho2, E0, E1, E2, penal):
     """Two-material SIMP (thesis eq. 6.1): ``(1-ρ1^p) E0 + ρ1^p [(1-ρ2^p) E1 + ρ2^p E2]``."""
-    a = rho1 ** penal
-    b = rho2 ** penal
+    a = power_cf(rho1, penal)
+    b = power_cf(rho2, penal)
     return (1.0 - a) * E0 + a * ((1.0 - b) * E1 + b * E2)
 
 

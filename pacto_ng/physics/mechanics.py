@@ -226,7 +226,8 @@ class Mechanics:
     def set_fields(self, *values):
         for f, v in zip(self.fields, values):
             if isinstance(v, np.ndarray):
-                f.gf.vec.FV().NumPy()[:] = v
+                # densities live in [0, 1]; round-off below 0 (or -0.0) would make ρ^p NaN
+                f.gf.vec.FV().NumPy()[:] = np.where(v > 0.0, v, 0.0)
             else:
                 f.gf.vec.data = v
         self._tangent_at = None  # a new design: any factorisation is stale
