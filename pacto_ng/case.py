@@ -232,7 +232,11 @@ def build_problem(case: Case, params: Parameters) -> Problem:
     if setup.pressure is not None:
         from .physics import darcy
 
-        pressure_block, pfield, body = darcy.for_case(mesh, params, setup.pressure, names[0], order=params.order)
+        try:
+            pressure_block, pfield, body = darcy.for_case(mesh, params, setup.pressure, names[0],
+                                                          order=params.order)
+        except ValueError as err:
+            raise InputError(str(err)) from None
         if params.load_type == "follower":
             raise InputError("load_type: follower Darcy loads inside the optimisation are not available yet")
         blocks.append(pressure_block)

@@ -47,9 +47,12 @@ class Optimizer:
         dfdx = np.asarray(df, dtype=float).reshape(self.m, self.n)
         df0dx = np.asarray(df0, dtype=float)[:, None]
         if self.method == "mma":
+            # global bounds [0, 1] for the asymptotes (Svanberg's scaling); the move limit
+            # |x_new - x| <= move is mmasub's own bound alfa/beta = x ∓ move (xmax - xmin)
+            zero, one = np.zeros((self.n, 1)), np.ones((self.n, 1))
             xmma, *_rest, low, upp = mmapy.mmasub(
-                self.m, self.n, it, xval, xmin, xmax, s["xold1"], s["xold2"], f0, df0dx, fval,
-                dfdx, s["low"], s["upp"], self.a0, self.a, self.c, self.d, move=1.0)
+                self.m, self.n, it, xval, zero, one, s["xold1"], s["xold2"], f0, df0dx, fval,
+                dfdx, s["low"], s["upp"], self.a0, self.a, self.c, self.d, move=self.move)
             s["low"], s["upp"] = low, upp
         else:
             xmma = self._gcmma(it, xval, xmin, xmax, f0, df0dx, fval, dfdx, evaluate)

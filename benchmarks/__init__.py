@@ -1,0 +1,1 @@
+"""Benchmarks: speed/accuracy studies that write docs/benchmarks.md (not tests)."""
