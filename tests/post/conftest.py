@@ -1,0 +1,103 @@
+"""Synthetic designs for the post-analysis tests (no optimisation needed).
+
+* the *chamber*: a 0.1 x 0.05 m domain (a pneunet-like layout) whose solid is a thick
+  rectangular frame ``[0, 0.09] x [0.005, 0.04]`` around a passive void cavity
+  ``[0.03, 0.07] x [0.015, 0.03]`` (boundary ``inlet``), clamped on the left edge (``fixed``),
+  output port at the frame's bottom-right corner; the pressure is ``P_in`` inside the cavity
+  and 0 elsewhere;
+* the *ring quarter*: the exact (curved, OCC) quarter of a thick-walled cylinder
+  ``a = 1 <= r <= b = 2`` with symmetry edges ``left`` (x = 0) and ``bottom`` (y = 0), inner
+  arc ``pressure``, outer arc ``outer`` and the point ``output`` at (a, 0).
+"""
+import numpy as np
+import pytest
+
+W, H = 0.1, 0.05
+CAVITY = (0.03, 0.015, 0.07, 0.03)
+FRAME = (0.0, 0.005, 0.09, 0.04)
+P_IN = 1e5
+
+
+def chamber_layout():
+    from pacto_ng.mesh import Layout, Region, Segment
+
+    return Layout(W, H, segments=(Segment("fixed", (0.0, H), (0.0, 0.0)),),
+                  regions=(Region("cavity", "void", *CAVITY, boundary="inlet"),),
+                  points=(("output", (FRAME[2], FRAME[1])),))
+
+
+def box_density(mesh, boxes_in, boxes_out=()):
+    """Element densities: 1 where the centroid is in a box of ``boxes_in`` and in none of
+    ``boxes_out``, else 0."""
+    from pacto_ng.post.threshold import mesh_to_pyvista
+
+    c = np.asarray(mesh_to_pyvista(mesh).cell_centers().points)[:, :2]
+
+    def inside(box):
+        x0, y0, x1, y1 = box
+        return (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
+
+    rho = np.zeros(len(c), dtype=bool)
+    for b in boxes_in:
+        rho |= inside(b)
+    for b in boxes_out:
+        rho &= ~inside(b)
+    return rho.astype(float)
+
+
+def chamber_density(mesh):
+    return box_density(mesh, [FRAME], [CAVITY])
+
+
+def chamber_pressure(x, y):
+    x0, y0, x1, y1 = CAVITY
+    return np.where((x > x0) & (x < x1) & (y > y0) & (y < y1), P_IN, 0.0)
+
+
+@pytest.fixture(scope="session")
+def chamber_quads():
+    from pacto_ng.mesh import structured_mesh
+
+    return structured_mesh(chamber_layout(), 100, 50)
+
+
+@pytest.fixture(scope="session")
+def chamber_trigs():
+    from pacto_ng.mesh import netgen_mesh
+
+    return netgen_mesh(chamber_layout(), 0.0012)
+
+
+@pytest.fixture(scope="session")
+def chamber_remeshed(chamber_quads):
+    from pacto_ng.post.remesh import remesh
+    from pacto_ng.post.threshold import threshold
+
+    th = threshold(chamber_quads, chamber_density(chamber_quads))
+    return th, remesh(th, 0.003, pressure=chamber_pressure)
+
+
+def ring_quarter_mesh(maxh, a=1.0, b=2.0, curve=3):
+    import ngsolve as ng
+    from netgen import occ
+
+    shape = (occ.Circle((0, 0), b).Face() - occ.Circle((0, 0), a).Face()) \
+        * occ.MoveTo(0, 0).Rectangle(b, b).Face()
+    for e in shape.edges:
+        c = e.center
+        if abs(c.x) < 1e-9:
+            e.name = "left"
+        elif abs(c.y) < 1e-9:
+            e.name = "bottom"
+        else:
+            e.name = "pressure" if np.hypot(c.x, c.y) < 0.5 * (a + b) else "outer"
+    shape.vertices.Nearest((a, 0, 0)).name = "output"
+    mesh = ng.Mesh(occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
+    if curve > 1:
+        mesh.Curve(curve)
+    return mesh
+
+
+@pytest.fixture(scope="session")
+def ring_quarter():
+    return ring_quarter_mesh(0.1)
