@@ -1,0 +1,340 @@
+"""A body-fitted Netgen mesh of a thresholded design, with its boundaries named by location.
+
+Geometry (the recipe of ``shared/NGSOLVE_NOTES.md``): every loop of :mod:`.threshold` is cut at
+its *break points* — where the name of the source boundary it runs along changes, and at the
+corners of that boundary.  A run along the source mesh's outer boundary becomes one straight
+``occ.Segment`` (so a clamp stays exactly on the clamp line); a run inside the domain is thinned
+to points at least ``min_spacing`` apart and becomes one ``occ.SplineApproximation`` (a loop
+with no break point is split into four runs).  Faces are built from the wires, holes are cut
+out, and Netgen meshes the result with triangles of size ``maxh``; the material is ``solid``.
+
+Names carried over from the source mesh:
+
+* boundary segments on the source's outer boundary keep that boundary's name (``fixed``,
+  ``symmetry``, ``inlet``, ...); the other boundary segments are ``free``;
+* **the wetting rule** — a boundary segment of the new mesh is renamed ``pressure`` when
+
+  - it lies on a source boundary whose name is in ``wet_boundaries`` (the fluid is on the
+    other side of the domain boundary, e.g. the inlet), or
+  - it lies inside the source domain and the pressure field at its midpoint moved a distance
+    ``probe`` (default: the source element size) along the outward normal of the solid — its
+    cavity side — is at least ``wet_fraction`` (default 0.5) times the inlet pressure
+    ``p_in`` (default: the largest nodal pressure).  A probe point outside the source mesh
+    sees zero pressure.
+
+* every named point (co-dimension 2 region) of the source becomes the nearest vertex of the
+  new mesh.
+
+Solid pieces that touch none of the ``clamp`` boundaries would float (a singular stiffness):
+they are dropped and reported; if no piece touches the clamp, :func:`remesh` raises.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .threshold import Loop, Thresholded, _BoundaryLocator, outer_boundary
+
+PRESSURE = "pressure"
+FREE = "free"
+
+
+@dataclass
+class Remeshed:
+    """The result of :func:`remesh`.
+
+    Attributes
+    ----------
+    mesh : ngsolve.Mesh
+        Triangle mesh of the solid (material ``solid``) with the named boundaries and points.
+    area : float
+        Area of the new mesh.
+    thresholded_area : float
+        Area of the clipped solid it was built from (:attr:`Thresholded.area`).
+    dropped_area : float
+        Area of the floating pieces that were dropped.
+    ports : dict
+        Point name -> ``(source position, new vertex position)``.
+    wetted_length : float
+        Length of the ``pressure`` boundary.
+    p_in : float or None
+        The inlet pressure the wetting rule used.
+    """
+
+    mesh: object
+    area: float
+    thresholded_area: float
+    dropped_area: float = 0.0
+    ports: dict = field(default_factory=dict)
+    wetted_length: float = 0.0
+    p_in: float | None = None
+
+
+# ---------------------------------------------------------------------------------------
+def _clean(points, labels, tol):
+    """Merge consecutive points closer than ``tol`` (the merged edge keeps the longer one's label)."""
+    p, lab = [np.asarray(q) for q in points], list(labels)
+    i = 0
+    while len(p) > 3 and i < len(p):
+        j = (i + 1) % len(p)
+        if np.linalg.norm(p[j] - p[i]) < tol:
+            # drop point j: the tiny edge i -> j and the edge j -> j+1 become one edge
+            lab[i] = lab[j]
+            del p[j], lab[j]
+            if j < i:
+                i -= 1
+            continue
+        i += 1
+    return np.array(p), lab
+
+
+def _breaks(p, lab):
+    """Indices where a run starts: the label changes, or a boundary run turns a corner."""
+    n = len(p)
+    out = []
+    for i in range(n):
+        a, b = lab[i - 1], lab[i]
+        if a != b:
+            out.append(i)
+        elif a is not None:
+            d0 = p[i] - p[i - 1]
+            d1 = p[(i + 1) % n] - p[i]
+            cross = d0[0] * d1[1] - d0[1] * d1[0]
+            if abs(cross) > 1e-8 * np.linalg.norm(d0) * np.linalg.norm(d1):
+                out.append(i)
+    if not out:  # a loop entirely inside the domain: four runs of equal arc length
+        s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(np.vstack([p, p[:1]]), axis=0), axis=1))]
+        out = sorted({int(np.searchsorted(s, k * s[-1] / 4.0)) % n for k in range(4)})
+    return out
+
+
+def _thin(run, spacing):
+    """Keep the ends of a run and interior points at least ``spacing`` apart."""
+    kept = [run[0]]
+    for q in run[1:-1]:
+        if np.linalg.norm(q - kept[-1]) >= spacing:
+            kept.append(q)
+    if len(kept) > 1 and np.linalg.norm(run[-1] - kept[-1]) < 0.5 * spacing:
+        kept.pop()
+    kept.append(run[-1])
+    return np.array(kept)
+
+
+def _loop_edges(loop: Loop, spacing, tol, h):
+    """OCC edges of one loop (straight runs on the boundary, splines inside)."""
+    from netgen import occ
+
+    p, lab = _clean(loop.points, loop.labels, 1e-3 * h)
+    n = len(p)
+    br = _breaks(p, lab)
+    edges = []
+    for k, i0 in enumerate(br):
+        i1 = br[(k + 1) % len(br)]
+        idx = list(range(i0, i1 + 1)) if i1 > i0 else list(range(i0, n)) + list(range(0, i1 + 1))
+        run = p[idx]
+        P = [occ.Pnt(float(x), float(y), 0.0) for x, y in run]
+        if lab[i0] is not None or len(run) == 2:
+            edges.append(occ.Segment(P[0], P[-1]))
+            continue
+        thin = _thin(run, spacing)
+        if len(thin) == 2:
+            edges.append(occ.Segment(P[0], P[-1]))
+            continue
+        Q = [occ.Pnt(float(x), float(y), 0.0) for x, y in thin]
+        edges.append(occ.SplineApproximation(Q, deg_min=1, deg_max=3, tol=tol))
+    return edges
+
+
+def build_geometry(components, h, *, min_spacing=None, spline_tol=None, locator=None):
+    """The netgen.occ shape (material ``solid``, edges named by location) of solid pieces.
+
+    Parameters
+    ----------
+    components : sequence of Component
+    h : float
+        Element size of the source mesh (sets the defaults below).
+    min_spacing : float, optional
+        Minimum distance between spline points, default ``0.6 h``.
+    spline_tol : float, optional
+        Tolerance of the spline approximation, default ``0.1 h``.
+    locator : _BoundaryLocator, optional
+        Names of the source's outer boundary; edges not on it are ``free``.
+    """
+    from netgen import occ
+
+    spacing = 0.6 * h if min_spacing is None else float(min_spacing)
+    tol = 0.1 * h if spline_tol is None else float(spline_tol)
+    faces = []
+    for comp in components:
+        face = occ.Face(occ.Wire(_loop_edges(comp.outer, spacing, tol, h)))
+        for hole in comp.holes:
+            face = face - occ.Face(occ.Wire(_loop_edges(hole, spacing, tol, h)))
+        faces.append(face)
+    shape = occ.Glue(faces) if len(faces) > 1 else faces[0]
+    shape.faces.name = "solid"
+    for e in shape.edges:
+        c = e.center
+        name = locator.locate([(c.x, c.y)])[0] if locator is not None else None
+        e.name = name or FREE
+    return shape
+
+
+# ---------------------------------------------------------------------------------------
+def pressure_sampler(pressure, source):
+    """A function ``(xy) -> p`` for points ``xy`` (n, 2); zero outside the source mesh.
+
+    ``pressure`` may be an NGSolve CoefficientFunction or GridFunction on ``source``, a numpy
+    array of nodal values (one per source vertex, the vertex order of ``source``), or a
+    Python callable ``f(x, y)`` on arrays.
+    """
+    import ngsolve
+
+    if isinstance(pressure, np.ndarray):
+        vals = np.asarray(pressure, dtype=float).ravel()
+        if vals.shape[0] != source.nv:
+            raise ValueError(f"nodal pressure has {vals.shape[0]} values but the mesh has "
+                             f"{source.nv} vertices")
+        gf = ngsolve.GridFunction(ngsolve.H1(source, order=1))
+        gf.vec.FV().NumPy()[:source.nv] = vals
+        pressure = gf
+    if isinstance(pressure, ngsolve.CoefficientFunction):
+        cf = pressure
+
+        def sample(xy):
+            xy = np.atleast_2d(np.asarray(xy, dtype=float))
+            mips = source(xy[:, 0].copy(), xy[:, 1].copy())
+            out = np.zeros(len(xy))
+            inside = mips["nr"] >= 0
+            if inside.any():
+                out[inside] = np.asarray(cf(mips[inside])).ravel()
+            return out
+
+        return sample
+    if callable(pressure):
+        return lambda xy: np.asarray(pressure(np.atleast_2d(xy)[:, 0], np.atleast_2d(xy)[:, 1]),
+                                     dtype=float) * np.ones(len(np.atleast_2d(xy)))
+    raise TypeError("pressure must be a CoefficientFunction, GridFunction, nodal array or callable")
+
+
+def _source_points(mesh):
+    """Named points (co-dimension 2 regions other than 'default') of a mesh: name -> (x, y)."""
+    from ngsolve import BBND
+
+    out = {}
+    for el in mesh.Elements(BBND):
+        if el.mat != "default" and el.mat not in out:
+            out[el.mat] = tuple(mesh[el.vertices[0]].point)
+    return out
+
+
+def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
+           p_in: float | None = None, wet_fraction: float = 0.5, wet_boundaries=("inlet",),
+           probe: float | None = None, min_spacing: float | None = None,
+           spline_tol: float | None = None) -> Remeshed:
+    """Mesh the thresholded solid with Netgen triangles and carry the names over.
+
+    Parameters
+    ----------
+    th : Thresholded
+        Output of :func:`~pacto_ng.post.threshold.threshold`.
+    maxh : float
+        Element size of the new mesh.
+    clamp : sequence of str
+        Boundary names of the source that support the structure.  Pieces touching none of them
+        are dropped; empty: keep every piece.
+    pressure : CoefficientFunction, GridFunction, ndarray or callable, optional
+        The pressure field on the source mesh (see :func:`pressure_sampler`); None: only the
+        ``wet_boundaries`` are wetted.
+    p_in : float, optional
+        Inlet pressure of the wetting rule; default the largest nodal pressure.
+    wet_fraction : float
+        A segment inside the domain is wetted where ``p(probe point) >= wet_fraction * p_in``.
+    wet_boundaries : sequence of str
+        Source boundaries whose solid parts are wetted (the fluid lies beyond them).
+    probe : float, optional
+        Distance of the probe point from the segment midpoint, default the source element size.
+    min_spacing, spline_tol : float, optional
+        Geometry parameters of :func:`build_geometry`.
+
+    Returns
+    -------
+    Remeshed
+
+    Raises
+    ------
+    ValueError
+        If no solid touches the clamp boundary, or ``maxh`` is not positive.
+    """
+    import ngsolve
+    from netgen import occ
+    from netgen.meshing import Element0D
+
+    if maxh <= 0:
+        raise ValueError("maxh must be positive")
+    if not 0.0 < wet_fraction <= 1.0:
+        raise ValueError(f"wet_fraction must lie in (0, 1], got {wet_fraction!r}")
+    clamp = (clamp,) if isinstance(clamp, str) else tuple(clamp)
+    comps = list(th.components)
+    if not comps:
+        raise ValueError("the thresholded design has no solid")
+    if clamp:
+        kept = [c for c in comps if c.names & set(clamp)]
+        if not kept:
+            raise ValueError(f"no solid touches the clamp boundary {'|'.join(clamp)} "
+                             f"(threshold {th.threshold:g})")
+    else:
+        kept = comps
+    dropped = sum(c.area for c in comps if c not in kept)
+
+    src = th.source
+    seg, names = outer_boundary(src)
+    diam = float(np.ptp(seg.reshape(-1, 2), axis=0).max())
+    locator = _BoundaryLocator(seg, names, 1e-8 * max(diam, th.h))
+    shape = build_geometry(kept, th.h, min_spacing=min_spacing, spline_tol=spline_tol,
+                           locator=locator)
+    ngm = occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh)
+
+    # -- the wetting rule, segment by segment ----------------------------------------------
+    coords = np.asarray(ngm.Coordinates(), dtype=float)
+    sample = pressure_sampler(pressure, src) if pressure is not None else None
+    if sample is not None and p_in is None:
+        p_in = float(np.max(sample(np.asarray(src.ngmesh.Coordinates(), dtype=float))))
+    probe = th.h if probe is None else float(probe)
+    centroid = {}
+    for el in ngm.Elements2D():
+        vs = [v.nr - 1 for v in el.vertices]
+        c = coords[vs].mean(axis=0)
+        for a, b in zip(vs, vs[1:] + vs[:1]):
+            centroid[(min(a, b), max(a, b))] = c
+    segs = list(ngm.Elements1D())
+    ends = np.array([[v.nr - 1 for v in s.vertices][:2] for s in segs])
+    mid = 0.5 * (coords[ends[:, 0]] + coords[ends[:, 1]])
+    tang = coords[ends[:, 1]] - coords[ends[:, 0]]
+    length = np.linalg.norm(tang, axis=1)
+    normal = np.c_[tang[:, 1], -tang[:, 0]] / length[:, None]
+    inner = np.array([centroid[(min(a, b), max(a, b))] for a, b in ends])
+    flip = np.einsum("ij,ij->i", normal, inner - mid) > 0
+    normal[flip] *= -1.0  # outward from the solid
+    current = [ngm.GetBCName(s.index - 1) for s in segs]
+    on_outer = np.array([n is not None for n in locator.locate(mid)])
+    wet = np.array([c in wet_boundaries for c in current]) & on_outer
+    if sample is not None and p_in is not None and p_in > 0:
+        pv = sample(mid + probe * normal)
+        wet |= (~on_outer) & (pv >= wet_fraction * p_in)
+    if wet.any():
+        idx = ngm.AddRegion(PRESSURE, dim=1)
+        for s, w in zip(segs, wet):
+            if w:
+                s.index = idx
+    # -- named points --------------------------------------------------------------------
+    ports = {}
+    for name, (px, py) in _source_points(src).items():
+        k = int(np.argmin(np.hypot(coords[:, 0] - px, coords[:, 1] - py)))
+        idx = ngm.AddRegion(name, dim=0)
+        ngm.Add(Element0D(k + 1, index=idx))
+        ports[name] = ((px, py), tuple(coords[k]))
+    mesh = ngsolve.Mesh(ngm)
+    area = ngsolve.Integrate(ngsolve.CF(1.0), mesh)
+    return Remeshed(mesh, float(area), th.area, float(dropped), ports,
+                    float(length[wet].sum()), p_in)

@@ -1,0 +1,103 @@
+"""Body-fitted remeshing of a thresholded design and the names it carries (post.remesh)."""
+import numpy as np
+import pytest
+
+from conftest import (CAVITY, FRAME, H, W, box_density, chamber_density, chamber_layout,
+                      chamber_pressure)
+from pacto_ng.post.remesh import remesh
+from pacto_ng.post.threshold import threshold
+
+
+def _length(mesh, name):
+    import ngsolve as ng
+
+    if name not in mesh.GetBoundaries():
+        return 0.0
+    return ng.Integrate(1.0, mesh, ng.BND, definedon=mesh.Boundaries(name))
+
+
+def _segments(mesh, name):
+    import ngsolve as ng
+
+    return np.array([[mesh[v].point for v in el.vertices] for el in mesh.Elements(ng.BND)
+                     if el.mat == name])
+
+
+@pytest.mark.parametrize("which", ["chamber_quads", "chamber_trigs"])
+def test_remeshed_area_within_2_percent(request, which):
+    mesh = request.getfixturevalue(which)
+    th = threshold(mesh, chamber_density(mesh))
+    rm = remesh(th, 0.002, pressure=chamber_pressure)
+    assert abs(rm.area / th.area - 1.0) < 0.02
+    assert rm.thresholded_area == th.area
+    assert set(rm.mesh.GetMaterials()) == {"solid"}
+
+
+def test_clamp_is_straight_and_port_is_nearest_vertex(chamber_remeshed):
+    """The clamp run is one straight OCC segment: its meshed length is the solid's extent along
+    x = 0 (0.035 m) and every clamp segment lies on x = 0.  The port is a vertex of the new
+    mesh at most one element size from the original port."""
+    th, rm = chamber_remeshed
+    assert _length(rm.mesh, "fixed") == pytest.approx(0.035, rel=1e-9)
+    assert np.all(np.abs(_segments(rm.mesh, "fixed")[:, :, 0]) < 1e-12)
+    src, new = rm.ports["output"]
+    assert src == pytest.approx((FRAME[2], FRAME[1]))
+    assert np.hypot(new[0] - src[0], new[1] - src[1]) <= 0.003
+    verts = np.array([rm.mesh[v].point for v in rm.mesh.vertices])
+    assert np.min(np.hypot(*(verts - np.array(new)).T)) == 0.0
+    assert "output" in rm.mesh.GetBBoundaries()
+
+
+def test_pressure_boundary_is_the_cavity_wall(chamber_remeshed):
+    """The wetted boundary is the cavity wall and only it.  The thresholded cavity is the
+    rectangle with its four corners cut by diagonals of one element (h = 1 mm), so its
+    perimeter is 0.11 - 4 (2 - sqrt 2) h.  The splines follow that polygon within their
+    tolerance (0.1 h) and the mesh chords them (measured: 5e-5 relative at maxh = 3 h)."""
+    th, rm = chamber_remeshed
+    h = 0.001
+    assert rm.wetted_length == pytest.approx(_length(rm.mesh, "pressure"), rel=1e-12)
+    assert rm.wetted_length == pytest.approx(0.11 - 4 * (2 - np.sqrt(2)) * h, rel=1e-3)
+    mid = _segments(rm.mesh, "pressure").mean(axis=1)
+    x0, y0, x1, y1 = CAVITY
+    assert np.all((mid[:, 0] > x0 - 2 * h) & (mid[:, 0] < x1 + 2 * h)
+                  & (mid[:, 1] > y0 - 2 * h) & (mid[:, 1] < y1 + 2 * h))
+    # no wetted segment on the outer walls, and every boundary is named
+    assert set(rm.mesh.GetBoundaries()) == {"fixed", "free", "pressure"}
+    assert rm.p_in == pytest.approx(1e5)
+
+
+def test_no_solid_at_the_clamp_raises(chamber_quads):
+    shifted = (0.01, FRAME[1], FRAME[2], FRAME[3])
+    th = threshold(chamber_quads, box_density(chamber_quads, [shifted], [CAVITY]))
+    with pytest.raises(ValueError, match="no solid touches the clamp") as err:
+        remesh(th, 0.003)
+    assert "\n" not in str(err.value)
+    th = threshold(chamber_quads, chamber_density(chamber_quads))
+    with pytest.raises(ValueError, match="no solid touches the clamp"):
+        remesh(th, 0.003, clamp=("clamped",))
+
+
+def test_floating_piece_is_dropped(chamber_quads):
+    island = (0.05, 0.045, 0.08, 0.05)  # on the top edge, away from the frame and the clamp
+    th = threshold(chamber_quads, box_density(chamber_quads, [FRAME, island], [CAVITY]))
+    assert len(th.components) == 2
+    rm = remesh(th, 0.003, pressure=chamber_pressure)
+    small = min(c.area for c in th.components)
+    assert rm.dropped_area == pytest.approx(small, rel=1e-12)
+    assert abs(rm.area / (th.area - small) - 1.0) < 0.02
+
+
+def test_wetted_by_boundary_name():
+    """A block on the left edge named 'inlet' (the fluid beyond it) and clamped on the top:
+    without a pressure field the wetted boundary is exactly its part of the inlet edge."""
+    from pacto_ng.mesh import Layout, Segment, structured_mesh
+
+    lay = Layout(W, H, segments=(Segment("inlet", (0.0, 0.0), (0.0, H)),
+                                 Segment("fixed", (0.0, H), (0.02, H))))
+    mesh = structured_mesh(lay, 50, 25)
+    th = threshold(mesh, box_density(mesh, [(0.0, 0.02, 0.03, H)]))
+    rm = remesh(th, 0.004)
+    assert _length(rm.mesh, "pressure") == pytest.approx(0.03, rel=1e-9)
+    assert _length(rm.mesh, "inlet") == 0.0
+    assert _length(rm.mesh, "fixed") == pytest.approx(0.02, rel=1e-9)
+    assert rm.p_in is None
