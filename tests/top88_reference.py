@@ -136,4 +136,4 @@ def top88(nelx=60, nely=20, volfrac=0.5, penal=3.0, rmin=1.5, ft=1, maxiter=2000
                 l2 = lmid
         change = float(np.abs(xnew - x).max())
         x = xnew
-    return xPhys, c, loop
+    return xPhys, c, loop, x
