@@ -1,0 +1,327 @@
+"""Neo-Hookean re-analysis of a remeshed design over a sweep of pressures (thesis §6.1.1–6.1.2).
+
+Three loads, each in plane strain with thickness ``t`` on the remeshed solid (reference
+configuration Ω0, boundary ``pressure`` with outward unit normal N0 and unit tangent T):
+
+``fixed``
+    boundary pressure, deformation independent: the residual gains ``t ∫ P N0 · v dA0``
+    (a potential term, symmetric tangent);
+``follower``
+    boundary pressure following the deformation: ``t ∫ P J F⁻ᵀ N0 · v dA0``.  In 2D
+    ``J F⁻ᵀ N0 = Rot(F T)`` with ``Rot(w) = (w₁, -w₀)`` and ``F T = T + (∇u) T``, which only needs
+    the tangential derivative ``Grad(u).Trace()`` available on a boundary.  The term is not the
+    derivative of a potential: it enters :class:`~pacto_ng.physics.mechanics.Mechanics` as a
+    residual term, and ``AssembleLinearization`` supplies its load stiffness (an unsymmetric
+    tangent, solved with UMFPACK);
+``darcy``
+    the Darcy pressure of the thresholded design as a fixed body load ``t ∫ -∇p · v dΩ0``
+    (SPEC §4), given as a callable ``body(mesh) -> CF`` (see :func:`pressure_body_force`), scaled
+    linearly with the swept inlet pressure.
+
+With ``N0`` the outward normal of the solid, ``+P N0`` in the residual is the traction
+``-P N0``: the pressure pushes into the solid.  Each pressure of a sweep is solved by Newton with
+adaptive load steps (:mod:`pacto_ng.physics.newton`), warm-started from the previous pressure's
+equilibrium; an output spring ``k`` along ``direction`` acts at the output point, where the
+output displacement ``Δ = direction · u`` is read.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..physics.materials import jacobian, neohookean_energy
+from ..physics.mechanics import Mechanics, NewtonFailure, Supports
+from ..physics.newton import NewtonSettings
+
+KINDS = ("fixed", "follower", "darcy")
+
+
+@dataclass(frozen=True)
+class Output:
+    """Where and along which direction the output displacement Δ is read, and its spring.
+
+    Parameters
+    ----------
+    region : str
+        A named point (co-dimension 2) of the mesh.
+    direction : tuple of float
+        Δ = direction · u (normalised).
+    stiffness : float
+        Output spring ``k/2 (direction · u)²`` in N/m (0: none).
+    """
+
+    region: str = "output"
+    direction: tuple[float, float] = (1.0, 0.0)
+    stiffness: float = 0.0
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """The result at one pressure."""
+
+    pressure: float
+    delta: float  # output displacement Δ (m)
+    max_u: float  # largest |u| over the mesh vertices (m)
+    min_j: float  # smallest det F over the integration points
+    iterations: int  # Newton iterations, summed over the load steps
+    converged: bool
+    load_reached: float = 1.0  # fraction of the pressure at which equilibrium was found
+
+
+@dataclass
+class Sweep:
+    """A sweep of one analysis kind; ``states[i]`` is the displacement vector at pressure i."""
+
+    kind: str
+    points: list
+    analysis: "Reanalysis"
+    states: list = field(default_factory=list)
+
+    def _arr(self, name):
+        return np.array([getattr(p, name) for p in self.points])
+
+    @property
+    def pressures(self) -> np.ndarray:
+        return self._arr("pressure")
+
+    @property
+    def delta(self) -> np.ndarray:
+        return self._arr("delta")
+
+    @property
+    def converged(self) -> np.ndarray:
+        return self._arr("converged")
+
+    def displacement(self, i: int | None = None):
+        """The displacement GridFunction at sweep point ``i`` (default: the last converged)."""
+        from ngsolve import GridFunction
+
+        if i is None:
+            ok = [k for k, p in enumerate(self.points) if p.converged]
+            if not ok:
+                raise ValueError(f"the {self.kind} sweep has no converged point")
+            i = ok[-1]
+        if self.states[i] is None:
+            raise ValueError(f"the {self.kind} analysis did not converge at point {i}")
+        gf = GridFunction(self.analysis.mech.fes)
+        gf.vec.FV().NumPy()[:] = self.states[i]
+        return gf
+
+    def table(self) -> list[dict]:
+        """One dict per pressure (for CSV/JSON)."""
+        return [dict(kind=self.kind, **p.__dict__) for p in self.points]
+
+
+# ---------------------------------------------------------------------------------------
+def outward_sign(mesh):
+    """±1 per boundary edge so that ``sign * specialcf.normal(2)`` points out of the body.
+
+    NGSolve orients a boundary normal by the edge's own orientation, which on the boundary of a
+    hole points *into* the body (checked: ``∫ n·x ds`` over a ring quarter gave 2.5π instead of
+    2|Ω| = 1.5π).  The sign is decided per edge by comparing ``Rot(∫ T ds)`` (NGSolve's normal
+    direction, as ``n = Rot(T)``) with the direction from the neighbouring element's centroid to
+    the edge midpoint; it is returned as a GridFunction on ``FacetFESpace(mesh, order=0)``.
+    """
+    from ngsolve import BND, FacetFESpace, GridFunction, LinearForm, ds, specialcf
+
+    fes = FacetFESpace(mesh, order=0)
+    q = fes.TestFunction()
+    T = specialcf.tangential(2)
+    tx = LinearForm(T[0] * q * ds).Assemble().vec.FV().NumPy()
+    ty = LinearForm(T[1] * q * ds).Assemble().vec.FV().NumPy()
+    sign = GridFunction(fes)
+    vals = sign.vec.FV().NumPy()
+    for el in mesh.Elements(BND):
+        d = fes.GetDofNrs(el)[0]
+        vol = mesh[el.edges[0]].elements[0]
+        cen = np.mean([mesh[v].point for v in mesh[vol].vertices], axis=0)
+        mid = np.mean([mesh[v].point for v in el.vertices], axis=0)
+        vals[d] = 1.0 if ty[d] * (mid[0] - cen[0]) - tx[d] * (mid[1] - cen[1]) > 0 else -1.0
+    return sign
+
+
+class FixedBoundaryPressure:
+    """Boundary pressure ``P`` on ``boundary`` that does not follow the deformation.
+
+    Used as a load of :class:`Mechanics`: its work ``W(u) = -t ∫ P N0 · u dA0`` enters the
+    potential as ``-s W(u)`` (``s`` the load factor), so the residual gains ``s t ∫ P N0 · v``.
+    """
+
+    def __init__(self, boundary: str, pressure, thickness: float):
+        self.boundary, self.pressure, self.thickness = boundary, pressure, float(thickness)
+
+    def work(self, mesh, u, scale=1.0):
+        from ngsolve import ds, specialcf
+
+        n = outward_sign(mesh) * specialcf.normal(2)
+        return (scale * (-self.thickness) * self.pressure * (n * u)) * ds(self.boundary)
+
+
+def follower_pressure_terms(mesh, boundary: str, pressure, thickness: float) -> Callable:
+    """Residual terms ``(u, v, load) -> s t ∫ P J F⁻ᵀ N0 · v dA0`` for :class:`Mechanics`.
+
+    Uses ``J F⁻ᵀ N0 = Rot(F T)`` (2D), ``F T = T + Grad(u).Trace() T``, with the tangent
+    oriented by :func:`outward_sign` so that ``Rot(T) = N0`` points out of the body.
+    """
+    from ngsolve import CF, Grad, ds, specialcf
+
+    sign = outward_sign(mesh)
+
+    def terms(u, v, load):
+        T = sign * specialcf.tangential(2)
+        FT = T + Grad(u).Trace() * T
+        return (load * thickness * pressure * (CF((FT[1], -FT[0])) * v)) * ds(boundary)
+
+    return terms
+
+
+def pressure_body_force(p, order: int = 1) -> Callable:
+    """A body-force callable ``mesh -> -∇p`` for the ``darcy`` analysis.
+
+    ``p`` is the Darcy pressure of the thresholded design (a GridFunction or CF on the source
+    mesh, e.g. the output of :class:`~pacto_ng.physics.darcy.DarcyPressure` at inlet pressure
+    ``P_in``, which the analysis then takes as ``body_pressure``); it is interpolated onto an
+    H1 space of ``order`` on the new mesh (NGSolve's ``Set`` evaluates a field of another mesh
+    by point search) and differentiated there.
+    """
+
+    def body(mesh):
+        from ngsolve import H1, Grad, GridFunction
+
+        gp = GridFunction(H1(mesh, order=order))
+        gp.Set(p)
+        return -Grad(gp)
+
+    return body
+
+
+def _point(mesh, region):
+    from ngsolve import BBND
+
+    for el in mesh.Elements(BBND):
+        if el.mat == region:
+            return tuple(mesh[el.vertices[0]].point)
+    raise ValueError(f"the mesh has no named point '{region}'")
+
+
+class Reanalysis:
+    """One Neo-Hookean plane-strain analysis of a remeshed solid under one kind of pressure.
+
+    Parameters
+    ----------
+    mesh : ngsolve.Mesh
+        The remeshed solid (see :func:`~pacto_ng.post.remesh.remesh`).
+    kind : {"fixed", "follower", "darcy"}
+    E, nu : float
+        Young's modulus (Pa) and Poisson's ratio of the solid.
+    thickness : float
+        Out-of-plane thickness (m).
+    supports : Supports
+        Dirichlet conditions by boundary / point name.
+    output : Output
+        Output point, direction and spring.
+    order : int
+        Order of the displacement space.
+    boundary : str
+        The wetted boundary (``fixed`` and ``follower``).
+    body : callable ``mesh -> CF``, optional
+        Body force per unit volume at inlet pressure ``body_pressure`` (``darcy``).
+    body_pressure : float
+        The inlet pressure ``body`` belongs to; the load scales with ``P / body_pressure``.
+    newton : NewtonSettings
+    """
+
+    def __init__(self, mesh, kind: str, *, E: float, nu: float, thickness: float,
+                 supports: Supports, output: Output = Output(), order: int = 2,
+                 boundary: str = "pressure", body: Callable | None = None,
+                 body_pressure: float = 1.0, newton: NewtonSettings = NewtonSettings()):
+        from ngsolve import QUAD, TRIG, VOL, Grad, InnerProduct, IntegrationRule, Parameter
+
+        from ..physics.loads import Spring
+
+        if kind not in KINDS:
+            raise ValueError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
+        if kind in ("fixed", "follower") and boundary not in mesh.GetBoundaries():
+            raise ValueError(f"the mesh has no '{boundary}' boundary to apply the pressure on")
+        if kind == "darcy" and body is None:
+            raise ValueError("the darcy analysis needs a body-force callable (see pressure_body_force)")
+        self.mesh, self.kind, self.output = mesh, kind, output
+        self.E, self.nu, self.thickness = float(E), float(nu), float(thickness)
+        self.P = Parameter(0.0)
+        self.out_xy = _point(mesh, output.region)
+        d = np.asarray(output.direction, dtype=float)
+        self.direction = d / np.linalg.norm(d)
+        springs = ()
+        if output.stiffness > 0:
+            springs = (Spring(output.region, output.stiffness, tuple(self.direction)),)
+        loads, terms, bodyf = (), None, None
+        if kind == "fixed":
+            loads = (FixedBoundaryPressure(boundary, self.P, thickness),)
+        elif kind == "follower":
+            terms = follower_pressure_terms(mesh, boundary, self.P, thickness)
+        else:
+            b = body(mesh)
+            self.body_pressure = float(body_pressure)
+            bodyf = lambda u, coeffs: (self.P / self.body_pressure) * InnerProduct(b, u)
+        energy = lambda G, coeffs: neohookean_energy(G, self.E, self.nu, "strain")
+        self.mech = Mechanics(mesh, order=order, energy=energy, fields=(), supports=supports,
+                              loads=loads, springs=springs, body=bodyf, thickness=thickness,
+                              guard=lambda G, coeffs: jacobian(G), newton=newton,
+                              residual_terms=terms)
+        rule = {TRIG: IntegrationRule(TRIG, 2 * order), QUAD: IntegrationRule(QUAD, 2 * order)}
+        self._pts = mesh.MapToAllElements(rule, VOL)
+        self._J = jacobian(Grad(self.mech.gfu))
+        coords = np.array([mesh[v].point for v in mesh.vertices])
+        self._vertices = mesh(coords[:, 0].copy(), coords[:, 1].copy())
+
+    def solve(self, pressure: float) -> SweepPoint:
+        """Equilibrium at ``pressure`` (warm-started from the previous converged state)."""
+        self.P.Set(float(pressure))
+        try:
+            self.mech.forward()
+            ok = True
+        except NewtonFailure:
+            ok = False
+        res = self.mech.result
+        if not ok:
+            return SweepPoint(float(pressure), np.nan, np.nan, np.nan, res.iterations, False,
+                              float(res.load_reached))
+        gfu = self.mech.gfu
+        u_out = np.asarray(gfu(self.mesh(*self.out_xy))).ravel()
+        u_v = np.asarray(gfu(self._vertices)).reshape(-1, 2)
+        return SweepPoint(float(pressure), float(self.direction @ u_out),
+                          float(np.max(np.linalg.norm(u_v, axis=1))),
+                          float(np.min(self._J(self._pts))), int(res.iterations), True, 1.0)
+
+    def sweep(self, pressures, *, stop_on_failure: bool = True) -> Sweep:
+        """Solve at every pressure in turn (give them in increasing order).
+
+        After a failure the remaining pressures are recorded as not converged without being
+        attempted (``stop_on_failure``), since a larger pressure starts from further away.
+        """
+        from ngsolve import TaskManager
+
+        out = Sweep(self.kind, [], self)
+        failed = False
+        with TaskManager():  # threads as set by SetNumThreads before the call
+            for P in pressures:
+                if failed and stop_on_failure:
+                    out.points.append(SweepPoint(float(P), np.nan, np.nan, np.nan, 0, False, 0.0))
+                    out.states.append(None)
+                    continue
+                pt = self.solve(P)
+                out.points.append(pt)
+                out.states.append(self.mech.gfu.vec.FV().NumPy().copy() if pt.converged else None)
+                failed = not pt.converged
+        return out
+
+
+def analyse(mesh, pressures, *, kinds=("fixed", "follower"), **kwargs) -> dict:
+    """Sweep ``pressures`` with every analysis in ``kinds``; returns ``{kind: Sweep}``.
+
+    ``kwargs`` go to :class:`Reanalysis` (``E``, ``nu``, ``thickness``, ``supports``,
+    ``output``, ``order``, ``boundary``, ``body``, ``body_pressure``, ``newton``).
+    """
+    return {k: Reanalysis(mesh, k, **kwargs).sweep(pressures) for k in kinds}

@@ -1,0 +1,147 @@
+"""Neo-Hookean re-analysis under fixed, follower and Darcy-type pressure (post.reanalysis).
+
+Closed forms: the thick-walled cylinder (Lamé) under internal pressure P in plane strain,
+``u_r(a) = (1+ν) a² P / (E (b² - a²)) ((1-2ν) a + b²/a)``; and the same cylinder under a
+radial body force ``f_r = -dp/dr`` with traction-free faces, whose small-strain solution
+follows from ``(λ+2μ) d/dr((1/r) d(r u)/dr) = -f_r``:
+``u = I(r) / ((λ+2μ) r) + A r + B / r`` with ``I(r) = ∫_a^r s p(s) ds`` and ``A``, ``B`` from
+``σ_r(a) = σ_r(b) = 0``, ``σ_r = p - 2μ/(λ+2μ) I/r² + 2(λ+μ) A - 2μ B/r²``.
+"""
+import numpy as np
+import pytest
+
+from conftest import chamber_pressure, ring_quarter_mesh
+from pacto_ng.physics.mechanics import Supports
+from pacto_ng.physics.newton import NewtonSettings
+from pacto_ng.post.reanalysis import (Output, Reanalysis, analyse, outward_sign,
+                                      pressure_body_force)
+
+E, NU, A, B = 1e6, 0.3, 1.0, 2.0
+RING = dict(E=E, nu=NU, thickness=1.0, supports=Supports(fix_x=("left",), fix_y=("bottom",)),
+            output=Output("output", (1.0, 0.0)))
+
+
+def lame_inner(P):
+    return (1 + NU) * A * A * P / (E * (B * B - A * A)) * ((1 - 2 * NU) * A + B * B / A)
+
+
+def body_force_inner(pfun):
+    """u_r(a) of the small-strain cylinder under f_r = -p'(r), traction-free faces."""
+    from scipy.integrate import quad
+
+    mu, lam = E / (2 * (1 + NU)), E * NU / ((1 + NU) * (1 - 2 * NU))
+    M = lam + 2 * mu
+    Ib = quad(lambda s: s * pfun(s), A, B, epsabs=0, epsrel=1e-13)[0]
+    mat = np.array([[2 * (lam + mu), -2 * mu / A**2], [2 * (lam + mu), -2 * mu / B**2]])
+    ca, cb = np.linalg.solve(mat, -np.array([pfun(A), pfun(B) - 2 * mu / M * Ib / B**2]))
+    return ca * A + cb / A
+
+
+def test_outward_sign_gives_outward_normals(ring_quarter):
+    """Divergence theorem with the corrected normal: ∫ s n·x ds = 2 |Ω| (the ring quarter's
+    inner arc is the boundary NGSolve orients inwards)."""
+    import ngsolve as ng
+
+    s = outward_sign(ring_quarter)
+    lhs = ng.Integrate(s * ng.specialcf.normal(2) * ng.CF((ng.x, ng.y)), ring_quarter, ng.BND,
+                       order=5)
+    assert lhs == pytest.approx(2 * ng.Integrate(1.0, ring_quarter, order=5), rel=1e-12)
+
+
+def test_fixed_pressure_matches_lame(ring_quarter):
+    """Small-strain limit, P = 1e-5 E: the Neo-Hookean departure from Lamé is ≈ 0.6 P/E
+    (measured), so 1e-5 leaves room only for a discretisation error of the same size."""
+    P = 1e-5 * E
+    sw = Reanalysis(ring_quarter, "fixed", order=3, **RING).sweep([P])
+    assert sw.points[0].converged
+    assert sw.delta[0] > 0  # the pressure pushes the inner wall outwards
+    assert sw.delta[0] == pytest.approx(lame_inner(P), rel=1e-5)
+    assert sw.points[0].max_u == pytest.approx(sw.delta[0], rel=1e-6)  # |u| peaks at r = a
+
+
+def test_follower_equals_fixed_as_pressure_vanishes(ring_quarter):
+    """The follower and the fixed load differ by O(P²) in Δ: the relative difference is
+    proportional to P, so it falls tenfold with P."""
+    Ps = [1e-5 * E, 1e-4 * E]
+    fol = Reanalysis(ring_quarter, "follower", **RING).sweep(Ps)
+    fix = Reanalysis(ring_quarter, "fixed", **RING).sweep(Ps)
+    assert fol.converged.all() and fix.converged.all()
+    rel = np.abs(fol.delta / fix.delta - 1.0)
+    assert rel[0] < 1e-4
+    assert rel[0] / rel[1] == pytest.approx(0.1, rel=0.01)
+
+
+def test_follower_tangent_is_the_derivative_of_the_residual(ring_quarter):
+    """At a deformed state (P = 0.05 E, |u| ≈ 10 % of a): the assembled tangent applied to a
+    direction equals the central difference of the residual, and it is unsymmetric (the
+    load stiffness of the follower pressure)."""
+    r = Reanalysis(ring_quarter, "follower", **RING)
+    pt = r.solve(0.05 * E)
+    assert pt.converged and pt.max_u > 0.05 * A
+    a, u0 = r.mech.a, r.mech.gfu.vec
+    rng = np.random.default_rng(1)
+    w, z = u0.CreateVector(), u0.CreateVector()
+    w.FV().NumPy()[:] = rng.standard_normal(len(w)) * 1e-2
+    z.FV().NumPy()[:] = rng.standard_normal(len(z)) * 1e-2
+    a.AssembleLinearization(u0)
+    Kw = (a.mat * w).Evaluate().FV().NumPy()
+    Kz = (a.mat * z).Evaluate().FV().NumPy()
+    eps = 1e-6
+    up, um, rp, rm = (u0.CreateVector() for _ in range(4))
+    up.data = u0 + eps * w
+    um.data = u0 - eps * w
+    a.Apply(up, rp)
+    a.Apply(um, rm)
+    fd = (rp.FV().NumPy() - rm.FV().NumPy()) / (2 * eps)
+    assert np.linalg.norm(fd - Kw) < 1e-7 * np.linalg.norm(Kw)
+    asym = abs(z.FV().NumPy() @ Kw - w.FV().NumPy() @ Kz)
+    assert asym > 1e-6 * abs(z.FV().NumPy() @ Kw)
+
+
+def test_darcy_body_matches_axisymmetric_solution(ring_quarter):
+    """The ``darcy`` analysis with p = P exp(-(r-a)/δ), δ = 0.2, passed as a body force
+    -∇p: Δ matches the closed-form small-strain solution (P = 1e-5 E; the Neo-Hookean
+    departure is O(P/E), as for the Lamé check)."""
+    import ngsolve as ng
+
+    P, delta = 1e-5 * E, 0.2
+    p = P * ng.exp(-(ng.sqrt(ng.x**2 + ng.y**2) - A) / delta)
+    sw = Reanalysis(ring_quarter, "darcy", order=3, body=pressure_body_force(p, order=3),
+                    body_pressure=P, **RING).sweep([P])
+    ref = body_force_inner(lambda s: P * np.exp(-(s - A) / delta))
+    assert sw.delta[0] == pytest.approx(ref, rel=1e-5)
+
+
+def test_failure_is_reported_and_the_sweep_stops(ring_quarter):
+    settings = NewtonSettings(max_iter=4, max_steps=2)
+    sw = Reanalysis(ring_quarter, "fixed", newton=settings, **RING).sweep(
+        [1e-5 * E, 3.0 * E, 4.0 * E])
+    assert sw.converged.tolist() == [True, False, False]
+    assert sw.points[1].load_reached < 1.0 and np.isnan(sw.delta[1])
+    assert sw.points[2].iterations == 0  # not attempted
+    assert sw.displacement().vec.FV().NumPy() @ sw.states[0] > 0  # last converged state
+
+
+def test_chamber_pipeline_follower_tends_to_fixed(chamber_remeshed):
+    """Threshold -> remesh -> sweep on the synthetic chamber (E = 1e8, t = 1 mm, output spring
+    1e4 N/m): every pressure converges with det F > 0, and the follower/fixed difference falls
+    tenfold with the pressure (first order in P)."""
+    th, rm = chamber_remeshed
+    res = analyse(rm.mesh, [1e3, 1e4], E=1e8, nu=0.4, thickness=1e-3,
+                  supports=Supports(clamp=("fixed",)), output=Output("output", (0.0, -1.0), 1e4),
+                  order=2)
+    for sw in res.values():
+        assert sw.converged.all()
+        assert all(0.0 < pt.min_j < 1.0 + 1e-3 for pt in sw.points)
+        assert all(1 <= pt.iterations <= 6 for pt in sw.points)
+    rel = np.abs(res["follower"].delta / res["fixed"].delta - 1.0)
+    assert rel[0] / rel[1] == pytest.approx(0.1, rel=0.05)
+
+
+def test_unknown_kind_and_missing_boundary_raise(ring_quarter):
+    with pytest.raises(ValueError, match="kind"):
+        Reanalysis(ring_quarter, "dead", **RING)
+    with pytest.raises(ValueError, match="wet"):
+        Reanalysis(ring_quarter, "fixed", boundary="wet", **RING)
+    with pytest.raises(ValueError, match="body"):
+        Reanalysis(ring_quarter, "darcy", **RING)
