@@ -67,6 +67,7 @@ class Parameters:
     optimizer: str = _p("mma", "", "mma | gcmma")
     move: float = _p(0.1, "", "move limit per iteration")
     tol: float = _p(0.01, "", "stop when the largest design change falls below this")
+    obj_tol: float = _p(1e-4, "", "... or the objective changed less than this (relative) over 5 iterations")
     objective: str = _p("", "", "case objective variant (empty: the case's default)")
     seed_density: float = _p(0.0, "", "initial design density (0: volfrac)")
     # -- Newton

@@ -126,7 +126,7 @@ def run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: b
 
     result = optimize(problem, schedule_of(params), iterations=params.iterations, tol=params.tol,
                       method=params.optimizer, move=params.move, state=state,
-                      on_iteration=on_iteration)
+                      on_iteration=on_iteration, obj_tol=params.obj_tol)
     failed = result.stopped == "newton"
     final_x = state.last_good if failed else state.x
     if final_x is None:

@@ -39,8 +39,17 @@ class LoopResult:
     message: str
 
 
+def _stalled(history: list, obj_tol: float, window: int = 5) -> bool:
+    """The objective moved less than ``obj_tol`` (relative) over the last ``window`` iterations."""
+    if obj_tol <= 0 or len(history) <= window:
+        return False
+    recent = [h["objective"] for h in history[-window - 1:]]
+    scale = max(abs(recent[-1]), 1e-300)
+    return (max(recent) - min(recent)) / scale < obj_tol
+
+
 def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method: str,
-             move: float, state: LoopState, on_iteration=None) -> LoopResult:
+             move: float, state: LoopState, on_iteration=None, obj_tol: float = 0.0) -> LoopResult:
     # ---- set-up: everything invariant before the loop ------------------------------------
     n = state.x.size
     m = len(problem.constraints)
@@ -83,10 +92,12 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         x = xnew
         state.x, state.opt_state, state.k = x.copy(), opt.state, k + 1
         # ---- convergence: only once every schedule has settled ------------------------------
-        state.stable = state.stable + 1 if (change < tol and schedule.settled(k)) else 0
+        small = change < tol or _stalled(state.history, obj_tol)
+        state.stable = state.stable + 1 if (small and schedule.settled(k, window=5)) else 0
         if on_iteration is not None:
             on_iteration(state, row)
         if state.stable >= 2 and f[0] <= 1e-3:
             return LoopResult(state, True, "converged",
-                              f"converged at iteration {k}: change {change:.3g} < {tol:g}")
+                              f"converged at iteration {k}: change {change:.3g}, objective "
+                              f"change over 5 iterations below {obj_tol:g} or design change below {tol:g}")
     return LoopResult(state, False, "iterations", f"stopped after {iterations} iterations")
