@@ -1,0 +1,20 @@
+"""Post-analysis of a result (SPEC §7, thesis ch. 6): from a density field to a part.
+
+threshold → polygons (:mod:`.threshold`) → body-fitted Netgen mesh with named boundaries
+(:mod:`.remesh`) → Neo-Hookean sweeps under fixed, follower and Darcy pressure
+(:mod:`.reanalysis`) → STL, VTU and pictures (:mod:`.export`).
+"""
+from .export import (convert, deformation_fields, extrude_solid, plot_deformed, plot_sweeps,
+                     write_stl, write_vtu)
+from .reanalysis import (FixedBoundaryPressure, Output, Reanalysis, Sweep, SweepPoint, analyse,
+                         follower_pressure_terms, outward_sign, pressure_body_force)
+from .remesh import Remeshed, build_geometry, pressure_sampler, remesh
+from .threshold import (Component, Loop, Thresholded, mesh_to_pyvista, nodal_density,
+                        outer_boundary, threshold)
+
+__all__ = ["threshold", "nodal_density", "mesh_to_pyvista", "outer_boundary", "Thresholded",
+           "Component", "Loop", "remesh", "Remeshed", "build_geometry", "pressure_sampler",
+           "Reanalysis", "analyse", "Output", "Sweep", "SweepPoint", "FixedBoundaryPressure",
+           "follower_pressure_terms", "outward_sign", "pressure_body_force", "write_stl",
+           "extrude_solid", "write_vtu", "deformation_fields", "convert", "plot_deformed",
+           "plot_sweeps"]

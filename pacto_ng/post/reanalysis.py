@@ -8,11 +8,11 @@ configuration Ω0, boundary ``pressure`` with outward unit normal N0 and unit ta
     (a potential term, symmetric tangent);
 ``follower``
     boundary pressure following the deformation: ``t ∫ P J F⁻ᵀ N0 · v dA0``.  In 2D
-    ``J F⁻ᵀ N0 = Rot(F T)`` with ``Rot(w) = (w₁, -w₀)`` and ``F T = T + (∇u) T``, which only needs
-    the tangential derivative ``Grad(u).Trace()`` available on a boundary.  The term is not the
-    derivative of a potential: it enters :class:`~pacto_ng.physics.mechanics.Mechanics` as a
-    residual term, and ``AssembleLinearization`` supplies its load stiffness (an unsymmetric
-    tangent, solved with UMFPACK);
+    ``J F⁻ᵀ N0 = Rot(F T)`` with ``Rot(w) = (w₁, -w₀)`` and ``F T = T + (∇u) T``, which only
+    needs the tangential derivative ``Grad(u).Trace()`` available on a boundary.  The term is
+    not the derivative of a potential: it enters :class:`~pacto_ng.physics.mechanics.Mechanics`
+    as a residual term, and ``AssembleLinearization`` supplies its load stiffness (an
+    unsymmetric tangent, solved with UMFPACK);
 ``darcy``
     the Darcy pressure of the thresholded design as a fixed body load ``t ∫ -∇p · v dΩ0``
     (SPEC §4), given as a callable ``body(mesh) -> CF`` (see :func:`pressure_body_force`), scaled
@@ -246,7 +246,8 @@ class Reanalysis:
         if kind in ("fixed", "follower") and boundary not in mesh.GetBoundaries():
             raise ValueError(f"the mesh has no '{boundary}' boundary to apply the pressure on")
         if kind == "darcy" and body is None:
-            raise ValueError("the darcy analysis needs a body-force callable (see pressure_body_force)")
+            raise ValueError("the darcy analysis needs a body-force callable "
+                             "(see pressure_body_force)")
         self.mesh, self.kind, self.output = mesh, kind, output
         self.E, self.nu, self.thickness = float(E), float(nu), float(thickness)
         self.P = Parameter(0.0)

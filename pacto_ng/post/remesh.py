@@ -73,7 +73,7 @@ class Remeshed:
 
 # ---------------------------------------------------------------------------------------
 def _clean(points, labels, tol):
-    """Merge consecutive points closer than ``tol`` (the merged edge keeps the longer one's label)."""
+    """Merge consecutive points closer than ``tol`` (the merged edge keeps the longer label)."""
     p, lab = [np.asarray(q) for q in points], list(labels)
     i = 0
     while len(p) > 3 and i < len(p):

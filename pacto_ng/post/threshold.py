@@ -386,7 +386,8 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
             continue
         holes = []
         for j, hl in enumerate(kept):
-            if hl.depth == lp.depth + 1 and kpaths[i].contains_point(0.5 * (hl.points[0] + hl.points[1])):
+            probe = 0.5 * (hl.points[0] + hl.points[1])
+            if hl.depth == lp.depth + 1 and kpaths[i].contains_point(probe):
                 holes.append(hl)
         comps.append(Component(lp, tuple(holes)))
     comps.sort(key=lambda c: -c.area)

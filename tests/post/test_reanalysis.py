@@ -10,7 +10,6 @@ follows from ``(λ+2μ) d/dr((1/r) d(r u)/dr) = -f_r``:
 import numpy as np
 import pytest
 
-from conftest import chamber_pressure, ring_quarter_mesh
 from pacto_ng.physics.mechanics import Supports
 from pacto_ng.physics.newton import NewtonSettings
 from pacto_ng.post.reanalysis import (Output, Reanalysis, analyse, outward_sign,

@@ -2,8 +2,7 @@
 import numpy as np
 import pytest
 
-from conftest import (CAVITY, FRAME, H, W, box_density, chamber_density, chamber_layout,
-                      chamber_pressure)
+from conftest import CAVITY, FRAME, H, W, box_density, chamber_density, chamber_pressure
 from pacto_ng.post.remesh import remesh
 from pacto_ng.post.threshold import threshold
 

@@ -10,7 +10,7 @@ likewise (the solid gains h²/2).
 import numpy as np
 import pytest
 
-from conftest import FRAME, CAVITY, chamber_density, box_density, chamber_layout
+from conftest import CAVITY, FRAME, box_density, chamber_density
 from pacto_ng.post.threshold import nodal_density, threshold
 
 h = 0.001  # element size of the 100 x 50 structured chamber mesh

@@ -1,0 +1,276 @@
+"""Files and pictures of a post-analysis: STL of the part, VTU of the fields, PNG figures.
+
+* ``design.stl`` — the solid extruded by the thickness with pyvista's ``extrude(...,
+  capping=True)``, normals oriented consistently outward (:func:`write_stl`);
+* ``remeshed.vtu`` / ``deformed.vtu`` — the remeshed solid in the reference / deformed
+  configuration with point data ``u`` and cell data ``J`` (det F), ``stress`` (Cauchy, 3x3,
+  row-major) and ``von_mises`` (:func:`write_vtu`, written with meshio);
+* :func:`convert` — any of stl | vtk | vtu | msh to another, through meshio;
+* ``deformed.png`` (:func:`plot_deformed`) and ``analysis.png`` (:func:`plot_sweeps`), drawn
+  with matplotlib's Agg canvas (no screen, no change of the global backend).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+FORMATS = {".stl": "stl", ".vtk": "vtk", ".vtu": "vtu", ".msh": "gmsh"}
+
+
+# ---------------------------------------------------------------------------------------
+def _mesh_arrays(mesh):
+    """Vertex coordinates (nv, 2) and meshio cell blocks of a 2D NGSolve mesh."""
+    pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
+    tris, quads = [], []
+    for el in mesh.ngmesh.Elements2D():
+        vs = [v.nr - 1 for v in el.vertices]
+        (tris if len(vs) == 3 else quads).append(vs)
+    blocks = []
+    if tris:
+        blocks.append(("triangle", np.array(tris, dtype=np.int64)))
+    if quads:
+        blocks.append(("quad", np.array(quads, dtype=np.int64)))
+    return pts, blocks
+
+
+def solid_surface(source):
+    """A triangulated pyvista surface (z = 0) of an NGSolve mesh or a pyvista dataset."""
+    import pyvista as pv
+
+    if isinstance(source, pv.DataSet):
+        surf = source.extract_surface(algorithm="dataset_surface") \
+            if not isinstance(source, pv.PolyData) else source
+    else:
+        from .threshold import mesh_to_pyvista
+
+        surf = mesh_to_pyvista(source).extract_surface(algorithm="dataset_surface")
+    surf = surf.triangulate().clean()
+    surf.clear_data()  # bookkeeping arrays (vtkOriginalCellIds) would not survive extrusion
+    return surf
+
+
+def extrude_solid(source, thickness: float):
+    """The closed 3D solid: ``source`` (2D, z = 0) extruded by ``thickness`` along z.
+
+    Returns a triangulated pyvista PolyData with consistent, outward normals.
+    """
+    if thickness <= 0:
+        raise ValueError("thickness must be positive")
+    surf = solid_surface(source)
+    solid = surf.extrude((0.0, 0.0, float(thickness)), capping=True).triangulate().clean()
+    return solid.compute_normals(consistent_normals=True, auto_orient_normals=True,
+                                 split_vertices=False, cell_normals=True, point_normals=False)
+
+
+def write_stl(path, source, thickness: float):
+    """Write the extruded solid as a binary STL; returns the PolyData written."""
+    solid = extrude_solid(source, thickness)
+    solid.save(str(path), binary=True)
+    return solid
+
+
+# ---------------------------------------------------------------------------------------
+def deformation_fields(mesh, u, E: float, nu: float) -> tuple[np.ndarray, dict]:
+    """Vertex displacements and element-centroid ``J``, Cauchy stress and von Mises stress.
+
+    The first Piola–Kirchhoff stress is ``∂φ/∂F`` of the Neo-Hookean energy, by automatic
+    differentiation; ``σ = P Fᵀ / J`` in plane, and ``σ_zz = λ ln J / J`` (F33 = 1).
+
+    Returns
+    -------
+    u_vertices : ndarray, shape (nv, 2)
+    cell_data : dict of ndarray
+        ``J`` (ne,), ``stress`` (ne, 9), ``von_mises`` (ne,)
+    """
+    from ngsolve import Grad, Id, log
+
+    from ..physics.materials import first_piola_kirchhoff, jacobian, lame, neohookean_energy
+
+    pts, _ = _mesh_arrays(mesh)
+    uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy()))).reshape(-1, 2)
+    cen = []
+    for el in mesh.ngmesh.Elements2D():
+        cen.append(pts[[v.nr - 1 for v in el.vertices]].mean(axis=0))
+    cen = np.array(cen)
+    mips = mesh(cen[:, 0].copy(), cen[:, 1].copy())
+    Pk = first_piola_kirchhoff(lambda G: neohookean_energy(G, E, nu, "strain"), Grad(u))
+    F = Id(2) + Grad(u)
+    J = jacobian(Grad(u))
+    sig = (Pk * F.trans) / J
+    _, lam = lame(E, nu)
+    szz = lam * log(J) / J
+    Jv = np.asarray(J(mips)).ravel()
+    s2 = np.asarray(sig(mips)).reshape(-1, 2, 2)
+    sz = np.asarray(szz(mips)).ravel()
+    s3 = np.zeros((len(cen), 3, 3))
+    s3[:, :2, :2] = s2
+    s3[:, 2, 2] = sz
+    dev = s3 - np.einsum("ijj->i", s3)[:, None, None] / 3.0 * np.eye(3)
+    vm = np.sqrt(1.5 * np.einsum("ijk,ijk->i", dev, dev))
+    return uv, {"J": Jv, "stress": s3.reshape(-1, 9), "von_mises": vm}
+
+
+def write_vtu(path, mesh, u=None, *, E: float | None = None, nu: float | None = None,
+              deformed: bool = False):
+    """Write a 2D NGSolve mesh (and its displacement fields) as VTU with meshio.
+
+    Parameters
+    ----------
+    path : str or Path
+    mesh : ngsolve.Mesh
+    u : GridFunction, optional
+        Displacement; with ``E`` and ``nu`` the cell data ``J``, ``stress``, ``von_mises`` are
+        written too.
+    deformed : bool
+        Move the points by ``u`` (``deformed.vtu``); otherwise the reference configuration.
+
+    Returns
+    -------
+    meshio.Mesh
+    """
+    import meshio
+
+    pts, blocks = _mesh_arrays(mesh)
+    point_data, cell_data = {}, {}
+    if u is not None:
+        if E is not None and nu is not None:
+            uv, cells = deformation_fields(mesh, u, E, nu)
+            order = _block_order(mesh)
+            for key, val in cells.items():
+                cell_data[key] = [val[idx] for idx in order]
+        else:
+            uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy()))).reshape(-1, 2)
+        point_data["u"] = np.c_[uv, np.zeros(len(uv))]
+        if deformed:
+            pts = pts + uv
+    elif deformed:
+        raise ValueError("a deformed configuration needs the displacement u")
+    out = meshio.Mesh(np.c_[pts, np.zeros(len(pts))], blocks, point_data=point_data,
+                      cell_data=cell_data)
+    out.write(str(path), file_format="vtu")
+    return out
+
+
+def _block_order(mesh):
+    """Element indices of the triangle block and the quad block (meshio's cell order)."""
+    tri, quad = [], []
+    for k, el in enumerate(mesh.ngmesh.Elements2D()):
+        (tri if len(el.vertices) == 3 else quad).append(k)
+    return [np.array(b, dtype=np.int64) for b in (tri, quad) if b]
+
+
+def convert(src, dst):
+    """Convert a mesh file between stl, vtk, vtu and msh (by extension) with meshio.
+
+    Raises
+    ------
+    ValueError
+        For another extension, or when meshio cannot write the cells to the target format
+        (e.g. an STL of a mesh without triangles).
+    """
+    import meshio
+
+    src, dst = Path(src), Path(dst)
+    for p in (src, dst):
+        if p.suffix.lower() not in FORMATS:
+            raise ValueError(f"unsupported format '{p.suffix}' (use {', '.join(FORMATS)})")
+    m = meshio.read(str(src), file_format=FORMATS[src.suffix.lower()])
+    fmt = FORMATS[dst.suffix.lower()]
+    if fmt == "stl":
+        tri = [b for b in m.cells if b.type == "triangle"]
+        if not tri:
+            raise ValueError(f"{src.name} has no triangles to write as STL")
+        m = meshio.Mesh(m.points, tri)
+    try:
+        meshio.write(str(dst), m, file_format=fmt, **({"binary": True} if fmt == "stl" else {}))
+    except Exception as exc:  # meshio raises assorted types for unsupported cells
+        raise ValueError(f"meshio cannot write {src.name} as {fmt}: {exc}") from exc
+    return dst
+
+
+# ---------------------------------------------------------------------------------------
+def _figure(figsize):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150):
+    """``deformed.png``: the deformed solid coloured by |u| over the undeformed outline.
+
+    True scale (no magnification), equal axes; the outline is every boundary edge of the
+    reference mesh.
+    """
+    from matplotlib.collections import LineCollection
+    from matplotlib.tri import Triangulation
+    from ngsolve import BND
+
+    pts, blocks = _mesh_arrays(mesh)
+    uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy()))).reshape(-1, 2)
+    tris = [b for t, b in blocks if t == "triangle"]
+    for t, b in blocks:
+        if t == "quad":
+            tris.append(np.r_[b[:, [0, 1, 2]], b[:, [0, 2, 3]]])
+    tri = np.vstack(tris)
+    mag = np.linalg.norm(uv, axis=1)
+    segs = [[mesh[v].point for v in el.vertices] for el in mesh.Elements(BND)]
+    def_pts = pts + uv
+    lo = np.minimum(pts.min(axis=0), def_pts.min(axis=0))
+    hi = np.maximum(pts.max(axis=0), def_pts.max(axis=0))
+    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
+    fig = _figure((7.0, float(np.clip(5.6 * aspect + 1.4, 3.0, 9.0))))
+    ax = fig.add_subplot()
+    tc = ax.tripcolor(Triangulation(def_pts[:, 0], def_pts[:, 1], tri), mag, shading="gouraud",
+                      cmap="viridis")
+    ax.add_collection(LineCollection(segs, colors="k", linewidths=0.8, label="undeformed"))
+    ax.set_aspect("equal")
+    pad = 0.03 * (hi - lo).max()
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), frameon=False)
+    fig.colorbar(tc, ax=ax, label="|u| (m), deformed solid", shrink=0.9)
+    ax.set_title(title or "deformed solid (true scale) over the undeformed outline")
+    fig.savefig(str(path), dpi=dpi)
+    return path
+
+
+_STYLE = {"expected": ("o", "expected (optimisation)"),
+          "fixed": ("s", "fixed pressure (deformation independent)"),
+          "follower": ("^", "follower pressure"),
+          "darcy": ("D", "Darcy pressure (deformation independent)")}
+
+
+def plot_sweeps(path, sweeps, *, expected=None, title: str | None = None, dpi: int = 150):
+    """``analysis.png``: output displacement Δ against pressure.
+
+    Parameters
+    ----------
+    sweeps : dict ``kind -> Sweep`` or iterable of Sweep
+        Non-converged points are left out.
+    expected : tuple ``(pressures, deltas)``, optional
+        The displacements the optimisation predicted.
+    """
+    fig = _figure((6.5, 4.5))
+    ax = fig.add_subplot()
+    if expected is not None:
+        pe, de = (np.asarray(a, dtype=float) for a in expected)
+        m, lab = _STYLE["expected"]
+        ax.plot(pe, de, m, ls="none", mfc="none", ms=8, label=lab)
+    items = sweeps.values() if isinstance(sweeps, dict) else sweeps
+    for sw in items:
+        ok = sw.converged.astype(bool)
+        m, lab = _STYLE.get(sw.kind, ("x", sw.kind))
+        ax.plot(sw.pressures[ok], sw.delta[ok], marker=m, label=lab)
+    ax.set_xlabel("pressure (Pa)")
+    ax.set_ylabel("output displacement Δ (m)")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    ax.set_title(title or "output displacement against pressure")
+    fig.savefig(str(path), dpi=dpi)
+    return path
