@@ -2,13 +2,15 @@
 
 threshold → polygons (:mod:`.threshold`) → body-fitted Netgen mesh with named boundaries
 (:mod:`.remesh`) → Neo-Hookean sweeps under fixed, follower and Darcy pressure
-(:mod:`.reanalysis`) → STL, VTU and pictures (:mod:`.export`).
+(:mod:`.reanalysis`) → STL, VTU and pictures (:mod:`.export`); all of it in one call with
+:func:`.report.post_analyse`.
 """
 from .export import (convert, deformation_fields, extrude_solid, plot_deformed, plot_sweeps,
                      write_stl, write_vtu)
 from .reanalysis import (FixedBoundaryPressure, Output, Reanalysis, Sweep, SweepPoint, analyse,
                          follower_pressure_terms, outward_sign, pressure_body_force)
 from .remesh import Remeshed, build_geometry, pressure_sampler, remesh
+from .report import PostResult, post_analyse
 from .threshold import (Component, Loop, Thresholded, mesh_to_pyvista, nodal_density,
                         outer_boundary, threshold)
 
@@ -17,4 +19,4 @@ __all__ = ["threshold", "nodal_density", "mesh_to_pyvista", "outer_boundary", "T
            "Reanalysis", "analyse", "Output", "Sweep", "SweepPoint", "FixedBoundaryPressure",
            "follower_pressure_terms", "outward_sign", "pressure_body_force", "write_stl",
            "extrude_solid", "write_vtu", "deformation_fields", "convert", "plot_deformed",
-           "plot_sweeps"]
+           "plot_sweeps", "post_analyse", "PostResult"]
