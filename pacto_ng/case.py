@@ -31,7 +31,7 @@ CASE_MODULES = {
     "mm-gripper": "pacto_ng.cases.mm_gripper",
 }
 
-OBJECTIVES = ("compliance", "energy", "output", "mechanism")
+OBJECTIVES = ("compliance", "energy", "output", "mechanism", "output_se")
 
 
 @dataclass(frozen=True)
@@ -55,11 +55,12 @@ class Setup:
     objective: str = "compliance"
     pressure: Pressure | None = None
     materials: int = 1
+    se_max: float = 0.0  # strain-energy limit (J) of objective "output_se" unless --set se_max
 
     def __post_init__(self):
         if self.objective not in OBJECTIVES:
             raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{self.objective}')")
-        if self.objective in ("output", "mechanism") and self.port is None:
+        if self.objective in ("output", "mechanism", "output_se") and self.port is None:
             raise InputError(f"objective '{self.objective}' needs an output port")
 
 
@@ -116,6 +117,7 @@ class Problem:
     reports: list[str] = field(default_factory=list)  # scalar values to log each iteration
     pressure_block: object = None
     n_design_fields: int = 1
+    model_choice: dict | None = None  # what --model auto decided, and why
 
     # -- schedules ----------------------------------------------------------------------------
     def apply_schedule(self, penal: float, beta: float, load: float) -> None:
@@ -143,6 +145,14 @@ class Problem:
     def volume_fraction(self) -> float:
         vol = next(b for b in self.chain.blocks if b.output == "volume")
         return vol.fraction(self.values[vol.inputs[0]])
+
+
+def domain_size(params: Parameters, width: float, height: float) -> tuple[float, float]:
+    """``(width, height)``, or ``(nelx, nely)`` with ``unit_elements`` (1 x 1 elements, the
+    set-up of the classic MATLAB codes)."""
+    if params.unit_elements:
+        return float(params.nelx), float(params.nely)
+    return width, height
 
 
 def mesh_for(case: Case, params: Parameters):
@@ -228,17 +238,30 @@ def build_problem(case: Case, params: Parameters) -> Problem:
     energy, guard, linear = make_energy(params, penal, tuple(names))
     mech_fields = list(names)
     body = None
+    follower = None  # residual density of a follower Darcy load (SPEC §4)
+    if params.load_type == "follower" and setup.pressure is None:
+        raise InputError(f"load_type: case '{case.name}' has no pressure load to follow the deformation")
     pressure_block = None
+    if params.inlet and setup.pressure is None:
+        raise InputError(f"inlet: case '{case.name}' has no pressure load")
     if setup.pressure is not None:
         from .physics import darcy
 
+        if params.delta_s < 0.1 * h:
+            raise InputError(f"delta_s: {params.delta_s:g} is below a tenth of the element size "
+                             f"{h:g} (set delta_s in the units of the mesh)")
+        pressure = setup.pressure
+        if params.inlet:
+            pressure = Pressure(inlet=tuple(params.inlet.split("|")), zero=pressure.zero)
         try:
-            pressure_block, pfield, body = darcy.for_case(mesh, params, setup.pressure, names[0],
+            pressure_block, pfield, body = darcy.for_case(mesh, params, pressure, names[0],
                                                           order=params.order)
         except ValueError as err:
             raise InputError(str(err)) from None
         if params.load_type == "follower":
-            raise InputError("load_type: follower Darcy loads inside the optimisation are not available yet")
+            # -cof(F)∇p: a residual term (unsymmetric tangent, transposed adjoint).  It is
+            # affine in u in 2D, so a linear material keeps its one-step linear solve.
+            follower, body = body, None
         blocks.append(pressure_block)
         mech_fields.append(pfield)
     loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force))) for ld in setup.loads)
@@ -247,7 +270,8 @@ def build_problem(case: Case, params: Parameters) -> Problem:
     try:
         mech = Mechanics(mesh, order=params.order, energy=energy, fields=mech_fields,
                          supports=setup.supports, loads=loads, springs=setup.springs, body=body,
-                         thickness=params.thickness, guard=guard, linear=linear, newton=newton)
+                         thickness=params.thickness, guard=guard, linear=linear, newton=newton,
+                         residual_density=follower)
     except ValueError as err:
         raise InputError(str(err)) from None
     blocks.append(mech)
@@ -256,6 +280,9 @@ def build_problem(case: Case, params: Parameters) -> Problem:
     if obj not in OBJECTIVES:
         raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{obj}')")
     if obj == "compliance":
+        if follower is not None:
+            raise InputError("objective: compliance is not defined for a follower load (the load "
+                             "vector depends on u); use energy, mechanism, output or output_se")
         if body is not None:
             blocks.append(darcy.Compliance(mech, pressure_block))
         else:
@@ -271,6 +298,15 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         reports.append("delta")
         if obj == "output":
             blocks.append(R.Scale(-1.0, ("delta",), "objective"))
+        elif obj == "output_se":  # max Δ subject to SE <= se_max
+            se_max = params.se_max or setup.se_max
+            if not se_max > 0:
+                raise InputError(f"se_max: objective output_se needs a positive limit (case "
+                                 f"'{case.name}' has no default; --set se_max=...)")
+            blocks.append(R.Scale(-1.0, ("delta",), "objective"))
+            blocks.append(R.StrainEnergy(mech))
+            blocks.append(_Bound(se_max, ("se",), "se_limit"))
+            reports.append("se")
         else:
             blocks.append(R.StrainEnergy(mech))
             blocks.append(R.MechanismRatio())
@@ -281,9 +317,24 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         if i == 0 or params.volfrac2 > 0:
             blocks.append(R.Volume(field_, vf, inputs=(out,), output="volume" if i == 0 else "volume2"))
     constraints = ["volume"] + (["volume2"] if nf == 2 and params.volfrac2 > 0 else [])
+    if obj == "output_se":
+        constraints.append("se_limit")
     chain = Chain(blocks, inputs=("x",))
     return Problem(case, params, mesh, field_, chain, objective, constraints, mech, projections,
                    penal, setup, h, reports, pressure_block, nf)
+
+
+class _Bound:
+    """Block ``a -> a / bound - 1`` (a constraint ``a <= bound`` in the form ``g <= 0``)."""
+
+    def __init__(self, bound, inputs, output):
+        self.bound, self.inputs, self.output = float(bound), tuple(inputs), output
+
+    def forward(self, a):
+        return float(a) / self.bound - 1.0
+
+    def backward(self, g):
+        return (g / self.bound,)
 
 
 class _Slice:

@@ -104,8 +104,17 @@ def run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: b
     0 finished (converged or iteration limit), 1 stopped by a Newton failure."""
     path = prepare_output(out)
     t_start = time.perf_counter()
-    (path / "params.json").write_text(json.dumps({"case": case.name, "params": params.to_dict()}, indent=1))
+    model_choice = None
+    if params.model == "auto":
+        from .auto import choose_model
+
+        params, model_choice = choose_model(case, params)
+        if not quiet:
+            print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
+    (path / "params.json").write_text(json.dumps({"case": case.name, "params": params.to_dict(),
+                                                  "model_choice": model_choice}, indent=1))
     problem = build_problem(case, params)
+    problem.model_choice = model_choice
     ckpt = path / "checkpoint.npz"
     if resume:
         if not ckpt.exists():
@@ -181,6 +190,9 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
                  "displacement_dofs": problem.mech.fes.ndof,
                  "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely},
         "element_order": p.order,
+        "model_choice": getattr(problem, "model_choice", None),
+        "darcy_solve": problem.pressure_block is not None,
+        "symmetric_half_domain": any(n == "symmetry" for n in problem.mesh.GetBoundaries()),
     }
 
 
