@@ -62,6 +62,9 @@ class Parameters:
     load_type: str = _p("fixed", "", "Darcy load: fixed | follower")
     load_sensitivity: bool = _p(True, "", "include the pressure-load sensitivity (off: study only)")
     volfrac2: float = _p(0.0, "", "volume fraction limit of the stiff material (0: none)")
+    inlet: str = _p("", "", "Darcy inlet boundary name(s), '|'-separated (empty: the case's own)")
+    se_max: float = _p(0.0, "J", "strain-energy limit of objective output_se (0: the case's default)")
+    unit_elements: bool = _p(False, "", "structured mesh of unit square elements (domain nelx x nely)")
     # -- optimisation
     iterations: int = _p(100, "", "maximum optimisation iterations")
     optimizer: str = _p("mma", "", "mma | gcmma")
@@ -125,6 +128,10 @@ class Parameters:
             raise InputError(f"load_type: must be fixed or follower (got '{self.load_type}')")
         if not 0.0 <= self.volfrac2 < 1.0:
             raise InputError(f"volfrac2: must lie in [0, 1) (got {self.volfrac2})")
+        if self.se_max < 0:
+            raise InputError(f"se_max: must be >= 0 (got {self.se_max})")
+        if self.unit_elements and self.nelx == 0:
+            raise InputError("unit_elements: needs a structured mesh (give --nelx and --nely)")
 
     # -- helpers --------------------------------------------------------------------------
     @classmethod
