@@ -25,15 +25,18 @@ Sensitivities (discrete adjoint, backward pass of :class:`DarcyPressure`).  With
     ``dJ/dρ̄_e = -λᵀ ∂R/∂ρ̄_e = -∂/∂ρ̄_e ∫ K ∇p·∇λ + D (p - p_out) λ dΩ``,
 
 where ``A`` is symmetric, so the transposed solve reuses the Cholesky factorisation of the
-forward solve; the last term is one LinearForm on the L2-order-0 space (``.Diff(ρ̄, q)``),
-integrated with the same quadrature rule as ``A`` (NGSOLVE_NOTES, "one quadrature rule
-everywhere").  Nothing is differentiated by hand.
+forward solve.  Because ρ̄ is constant on each element, so are ``K`` and ``D``: they are
+evaluated in numpy and handed to NGSolve as L2-order-0 GridFunctions (no Heaviside CF at every
+quadrature point), and the last term is ``-(K'(ρ̄_e) ∫_e ∇p·∇λ + D'(ρ̄_e) ∫_e (p - p_out) λ)``,
+one LinearForm on the L2-order-0 space with the element-wise derivatives ``K'``, ``D'`` as
+coefficients, integrated with the same quadrature rule as ``A`` (NGSOLVE_NOTES, "one quadrature
+rule everywhere").
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..interpolation import drainage_cf, flow_coefficient_cf
+from ..interpolation import heaviside_deriv_np, heaviside_np
 from .mechanics import Field, integration_rules
 
 __all__ = ["DarcyPressure", "darcy_body", "pressure_field", "Compliance", "DarcyCompliance",
@@ -129,8 +132,12 @@ class DarcyPressure:
         DX = dx(intrules=self.rules)
         self.DX = DX
         self.rho = GridFunction(self.l2)
-        self.K = flow_coefficient_cf(self.rho, self.Kv, self.Ks, self.eta_k, self.beta_k)
-        self.D = drainage_cf(self.rho, self.Ks, self.r, self.delta_s, self.eta_h, self.beta_h)
+        # K(ρ̄) and D(ρ̄) are element-wise constants: computed in numpy in forward()
+        self.K = GridFunction(self.l2)
+        self.D = GridFunction(self.l2)
+        self._dK = GridFunction(self.l2)
+        self._dD = GridFunction(self.l2)
+        self._drain = (np.log(self.r) / self.delta_s) ** 2 * self.Ks
 
         p, q = self.fes.TnT()
         self.a = BilinearForm(self.fes, symmetric=True)
@@ -153,10 +160,10 @@ class DarcyPressure:
         # state, adjoint and the sensitivity form -λᵀ ∂R/∂ρ̄ (built once)
         self.gfp = GridFunction(self.fes)
         self.lam = GridFunction(self.fes)
-        dens = (self.K * grad(self.gfp) * grad(self.lam)
-                + self.D * (self.gfp - self.p_out) * self.lam)
+        q0 = self.l2.TestFunction()
         self._sens = LinearForm(self.l2)
-        self._sens += dens.Diff(self.rho, self.l2.TestFunction()) * DX
+        self._sens += (self._dK * grad(self.gfp) * grad(self.lam)
+                       + self._dD * (self.gfp - self.p_out) * self.lam) * q0 * DX
         self._rhs = self.gfp.vec.CreateVector()
         self._ready = False
 
@@ -205,6 +212,9 @@ class DarcyPressure:
             raise ValueError(f"{self.inputs[0]}: expected {self.l2.ndof} element values "
                              f"(got shape {rho.shape})")
         self.rho.vec.FV().NumPy()[:] = rho
+        self.K.vec.FV().NumPy()[:] = self.Kv - (self.Kv - self.Ks) * heaviside_np(
+            rho, self.eta_k, self.beta_k)
+        self.D.vec.FV().NumPy()[:] = self._drain * heaviside_np(rho, self.eta_h, self.beta_h)
         self.a.Assemble()
         self.f.Assemble()
         if self._inv is None:
@@ -237,6 +247,11 @@ class DarcyPressure:
         if not self.sensitivity:
             return (np.zeros(self.l2.ndof),)
         self.lam.vec.data = self.adjoint(grad_output)
+        rho = self.rho.vec.FV().NumPy()
+        self._dK.vec.FV().NumPy()[:] = -(self.Kv - self.Ks) * heaviside_deriv_np(
+            rho, self.eta_k, self.beta_k)
+        self._dD.vec.FV().NumPy()[:] = self._drain * heaviside_deriv_np(rho, self.eta_h,
+                                                                         self.beta_h)
         self._sens.Assemble()
         return (-self._sens.vec.FV().NumPy().copy(),)
 
