@@ -117,7 +117,7 @@ def plane_stress_stretch(G, nu):
     for _ in range(_PS_ITERATIONS):
         e2 = exp(2.0 * s)
         s = s - (e2 + a * s - kf) / (2.0 * e2 + a)
-    s = s.Freeze()
+    s = s.Compile().Freeze()  # compiled: the unrolled iteration is a DAG, evaluated once
     e2 = exp(2.0 * s)
     s = s - (e2 + a * s - k) / (2.0 * e2 + a)
     return exp(s)
