@@ -1,10 +1,26 @@
-"""Newton's method with a J > 0 guard, step cutting and adaptive load increments.
+"""Newton's method with a J > 0 guard, step cutting and adaptive load increments (SPEC §3).
 
 The problem object supplies ``residual(vec, out, load)``, ``assemble_tangent(vec, load)``,
-``solve_tangent(rhs, out)``, ``admissible(vec)`` and ``free`` (a numpy mask of free dofs).  A
-step that makes the state inadmissible (``det F <= 0`` where the energy needs ``J > 0``, or a
-non-finite residual) is halved, never accepted.  Load increments grow after easy steps and are
-cut after a failure; the last converged state is kept, so a failure reports how far it got.
+``solve_tangent(rhs, out)``, ``admissible(vec)``, ``load_norm(load)`` and ``free`` (a numpy
+mask of free dofs).  One Newton iteration at load factor ``s`` solves ``K(u) du = R(u; s)`` and
+tries ``u - α du`` for ``α = 1, 1/2, 1/4, ...``:
+
+* ``line_search="guard"`` (default) accepts the first ``α`` whose state is admissible
+  (``det F > 0`` at every integration point where the energy needs it) with a finite residual;
+* ``line_search="residual"`` also asks for the Armijo-type decrease
+  ``|R(u - α du)| <= (1 - 1e-4 α) |R(u)|`` of the free-dof residual norm, and otherwise takes
+  the admissible trial with the smallest residual.
+
+An inadmissible state is never accepted.  The iteration stops when ``|R| <= rtol |f|`` (``f``
+the external load at the target) or at the round-off floor (``|R| < 1e-7 |f|`` and no longer
+halving).  Load increments grow after easy steps and are halved after a failed one; the last
+converged state is kept, so a failure reports the load factor reached and why.
+
+Measured (iterations per load step; guard / residual): cantilever 1 x 0.25 m, 1410
+triangles, solid, Neo-Hookean, Wang and gnl alike, P1 and P2: 2e5 N in one step 5 / 19,
+5e5 N in one step 7 / 23 + 18, 5e5 N in four steps 5 / 13; C-beam sweeps (Neo-Hookean and
+Wang, Q1, Q2, P2) 4.5-5.0 / 7-19.  Backtracking on the residual norm over-damps Newton, as the
+NGSolve notes warned; the guard-only search is the default and the other one an option.
 """
 from __future__ import annotations
 
@@ -23,8 +39,11 @@ class NewtonSettings:
     grow: float = 1.5
     easy: int = 4  # a step converging in <= easy iterations lets the increment grow
     max_steps: int = 200
+    line_search: str = "guard"  # "guard" (admissibility only) or "residual" (Armijo on |R|)
 
     def __post_init__(self):
+        if self.line_search not in ("guard", "residual"):
+            raise ValueError("line_search must be 'guard' or 'residual'")
         if not 0 < self.initial_increment <= 1:
             raise ValueError("initial_increment must lie in (0, 1]")
         if self.rtol <= 0 or self.max_iter < 1:
@@ -48,10 +67,14 @@ def _norm_free(vec, free):
 
 
 def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
-    """Newton iterations at a fixed load factor.  Returns (converged, iterations, reason, res)."""
+    """Newton iterations at a fixed load factor.  Returns (converged, iterations, reason, res).
+
+    ``u`` is updated in place only by accepted (admissible) steps.
+    """
     r = u.CreateVector()
     du = u.CreateVector()
     trial = u.CreateVector()
+    best = u.CreateVector()
     problem.residual(u, r, load)
     res = _norm_free(r, problem.free)
     if not np.isfinite(res):
@@ -64,20 +87,30 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
             break  # stagnation at the round-off floor, far below any meaningful tolerance
         prev = res
         if it >= s.max_iter:
-            return False, it, f"no convergence in {s.max_iter} iterations (residual {res:.2e})", res
+            return False, it, f"no convergence in {s.max_iter} iterations (residual {res / ref:.2e} of the load)", res
         problem.assemble_tangent(u, load)
         problem.solve_tangent(r, du)
         alpha = 1.0
+        new, best_res = np.inf, np.inf
         for _ in range(s.max_backtracks + 1):
             trial.data = u - alpha * du
             if problem.admissible(trial):
                 problem.residual(trial, r, load)
                 new = _norm_free(r, problem.free)
                 if np.isfinite(new):
-                    break
+                    if s.line_search == "guard" or new <= (1.0 - 1e-4 * alpha) * res:
+                        break
+                    if new < best_res:
+                        best_res = new
+                        best.data = trial
             alpha *= 0.5
         else:
-            return False, it + 1, "every step length inverted an element (det F <= 0)", res
+            if not np.isfinite(best_res):
+                return False, it + 1, ("every step length inverted an element (det F <= 0) "
+                                       "or gave a non-finite residual"), res
+            trial.data = best  # no sufficient decrease: the best admissible trial
+            problem.residual(trial, r, load)
+            new = best_res
         u.data = trial
         res = new
         it += 1
@@ -87,13 +120,19 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
 
 
 def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, warm: bool,
-                            linear: bool = False) -> NewtonResult:
+                            linear: bool = False, on_step=None, accept=None) -> NewtonResult:
     """Bring ``u`` to equilibrium at load factor ``target``.
 
     With ``warm`` the current ``u`` (the previous design's equilibrium at the same load) is
     tried first at the full load; otherwise, or if that fails, the load is ramped from zero.
+    ``accept(load, u) -> str``, if given, may reject a converged equilibrium by returning a
+    reason (an empty string accepts it); a rejected one counts as a failed increment.
+    ``on_step(load, u)``, if given, is called at every accepted equilibrium.  On failure ``u``
+    holds the last equilibrium, ``load_reached`` its load factor and ``reason`` says why.
     """
     ref = problem.load_norm(target)
+    if not np.isfinite(ref):
+        return NewtonResult(False, 0, 0.0, 0, "non-finite external load (or residual at u = 0)")
     if ref == 0.0:
         u[:] = 0.0
         return NewtonResult(True, 0, target, 0, "no load", 0.0)
@@ -103,9 +142,14 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
         saved.data = u
         ok, it, why, res = newton_step_solve(problem, u, target, ref, s, linear)
         result.iterations += it
+        if ok and accept is not None:
+            why = accept(target, u)
+            ok = not why
         if ok:
             result.converged, result.load_reached, result.steps, result.residual = True, target, 1, res / ref
             result.history.append((target, it))
+            if on_step is not None:
+                on_step(target, u)
             return result
         u[:] = 0.0
     else:
@@ -120,11 +164,16 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
         saved.data = u
         ok, it, why, res = newton_step_solve(problem, u, trial_load, ref, s, linear)
         result.iterations += it
+        if ok and accept is not None:
+            why = accept(trial_load, u)
+            ok = not why
         if ok:
             load = trial_load
             result.steps += 1
             result.history.append((load, it))
             result.residual = res / ref
+            if on_step is not None:
+                on_step(load, u)
             if it <= s.easy:
                 inc *= s.grow
         else:
@@ -132,8 +181,8 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
             inc *= 0.5
             result.reason = why
             if inc < s.min_increment * target:
-                result.reason = (f"load increment fell below {s.min_increment:g} of the target at "
-                                 f"load factor {load / target:.4g}: {why}")
+                result.reason = (f"load increment fell below {s.min_increment:g} of the target "
+                                 f"at load factor {load:.6g} of {target:.6g}: {why}")
                 break
     result.load_reached = load
     result.converged = load >= target * (1 - 1e-12)

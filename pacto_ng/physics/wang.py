@@ -44,11 +44,12 @@ def wang_gamma_cf(rho, penal=3.0, beta: float = 100.0, eta: float = 0.001):
     """Interpolation factor ``γ = H(ρ̄^p; η1, β1)`` (thesis eq. 5.2) as a CoefficientFunction.
 
     ``penal`` may be an ngsolve ``Parameter`` (SIMP continuation); ``beta``/``eta`` are floats or
-    Parameters.  ``H(0) = 0`` and ``H(1) = 1`` exactly.
+    Parameters.  ``H(0) = 0`` and ``H(1) = 1`` to round-off (1e-16).  ``ρ^p`` is
+    :func:`~pacto_ng.interpolation.power_cf` (a plain ``ρ**p`` makes the residual NaN at ρ = 0).
     """
-    from ..interpolation import heaviside_cf
+    from ..interpolation import heaviside_cf, power_cf
 
-    return heaviside_cf(rho ** penal, eta, beta)
+    return heaviside_cf(power_cf(rho, penal), eta, beta)
 
 
 def wang_energy(G, E, nu, gamma, plane: str = "strain", hyper: str | Callable = "neohookean"):

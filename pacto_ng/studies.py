@@ -1,0 +1,167 @@
+"""Script-level analyses that are not optimisations: the C-beam load limit (SPEC §6, CASES.md).
+
+The C-beam (Yoon et al. 2005; Wang et al. 2014 §2; thesis §5.2.1 and App. C) is a 10 x 10 m
+square whose C-shaped solid (1 m thick top, bottom and left arms; ``ρ = γ = 1``) surrounds a
+void (``ρ = γ = 0``, ``E0 = 1e-9 E1``).  The left edge is clamped; ``f1`` pulls the free end of
+the top arm down and ``f2`` the free end of the bottom arm to the right, both times a load
+factor ``λ``.  The void elements between the arms are crushed as ``λ`` grows: with a
+Neo-Hookean void they invert and Newton stops; the Wang interpolation (thesis eq. 5.1) treats
+the void with small-strain theory and carries the C much further.  Thesis (COMSOL, triangles):
+Neo-Hookean (f1, f2) = (0.0009, 0.0099) N, Wang (0.0055, 0.0145) N.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def c_beam_layout(size: float = 10.0, arm: float = 1.0, loads_on: str = "points"):
+    """The C-beam layout: ``fixed`` left edge, material ``void`` inside the C, load regions
+    ``f1`` (top arm's free end) and ``f2`` (bottom arm's free end) as corner points
+    (``loads_on="points"``) or as the arms' end edges (``loads_on="edges"``)."""
+    from .mesh import Layout, Region, Segment
+
+    segs = [Segment("fixed", (0.0, 0.0), (0.0, size))]
+    pts = ()
+    if loads_on == "points":
+        pts = (("f1", (size, size)), ("f2", (size, 0.0)))
+    elif loads_on == "edges":
+        segs += [Segment("f1", (size, size - arm), (size, size)),
+                 Segment("f2", (size, 0.0), (size, arm))]
+    else:
+        raise ValueError("loads_on must be 'points' or 'edges'")
+    return Layout(size, size, segments=tuple(segs),
+                  regions=(Region("void", "void", arm, arm, size, size - arm),), points=pts)
+
+
+@dataclass
+class CBeamResult:
+    """Outcome of :func:`c_beam_limit`.
+
+    ``load_factor`` is the largest ``λ`` at which an equilibrium was found with no inverted
+    element in the checked region (the forces are then ``λ (f1, f2)``); ``reason`` says what
+    stopped the next increment (Newton, or an inverted element).  ``history`` lists
+    ``(λ, Newton iterations)`` and ``steps`` ``(λ, min det F solid, min det F void)`` per
+    accepted increment, ``det F`` sampled at the integration points, the vertices, the edge
+    midpoints and the centroid of every element.
+    """
+
+    model: str
+    order: int
+    mesh: str
+    load_factor: float
+    forces: tuple[float, float]
+    reached_max: bool
+    reason: str
+    iterations: int
+    tip_displacement: tuple[float, float, float, float]  # (u_x, u_y) at f1, then at f2
+    history: list = field(default_factory=list)
+    steps: list = field(default_factory=list)
+    mechanics: object = None
+
+
+def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad",
+                 lam_max: float = 20.0, first_step: float = 0.05, resolution: float = 0.01,
+                 f1: float = 0.002, f2: float = 0.003, E1: float = 1.0, E0_ratio: float = 1e-9,
+                 nu: float = 0.3, thickness: float = 1.0, h: float = 1.0,
+                 loads_on: str = "points", line_search: str = "guard",
+                 wang_beta: float = 100.0, wang_eta: float = 0.001,
+                 stop_at_inversion: bool = True) -> CBeamResult:
+    """Largest load factor ``λ`` the C-beam reaches with a given model before Newton fails.
+
+    The load is ramped from 0 towards ``lam_max`` by :func:`~pacto_ng.physics.newton.
+    solve_with_continuation` (first increment ``first_step``, growing after easy steps, halved
+    after a failed one down to ``resolution``); an increment is failed when Newton does not
+    converge in 30 iterations or when every step length would make ``det F <= 0`` at an
+    integration point where the model needs ``J > 0`` (the whole mesh for ``neohookean``, the
+    solid — ``det(I + γ∇u)`` — for ``wang``).  ``λ`` is therefore resolved to ``resolution``.
+
+    Parameters
+    ----------
+    model : {"linear", "gnl", "neohookean", "wang"}
+    order : int
+        Displacement order.
+    mesh : {"quad", "trig"}
+        Structured ``h``-sized quadrilaterals (10 x 10 at h = 1) or Netgen triangles of size h.
+    lam_max, first_step, resolution : float
+        Target, first increment and smallest increment of the load factor.
+    f1, f2 : float
+        Base forces (N): ``f1`` downward at the top arm's end, ``f2`` rightward at the bottom's.
+    E0_ratio : float
+        ``E0 / E1`` of the void.
+    wang_beta, wang_eta : float
+        ``β1``, ``η1`` of eq. 5.2 (γ is 1 in the C and 0 in the void to round-off for any of them).
+    """
+    from ngsolve import Grad
+
+    from .interpolation import simp_cf
+    from .mesh import netgen_mesh, structured_mesh
+    from .physics.loads import PointLoad
+    from .physics.materials import get_material, jacobian
+    from .physics.mechanics import Mechanics, Supports
+    from .physics.newton import NewtonSettings, solve_with_continuation
+    from .physics.wang import wang_model
+
+    layout = c_beam_layout(loads_on=loads_on)
+    if mesh == "quad":
+        n = int(round(layout.width / h))
+        msh = structured_mesh(layout, n, n)
+    elif mesh == "trig":
+        msh = netgen_mesh(layout, h)
+    else:
+        raise ValueError("mesh must be 'quad' or 'trig'")
+    E0 = E0_ratio * E1
+    modulus = lambda c: simp_cf(c["rho_bar"], E0, E1, 3.0)
+    if model == "wang":
+        energy, guard = wang_model(modulus, nu, "strain", "rho_bar", 3.0, beta=wang_beta,
+                                   eta=wang_eta)
+        linear = False
+    else:
+        mat = get_material(model)
+        energy = lambda G, c: mat.energy(G, modulus(c), nu, "strain")
+        guard = (lambda G, c: jacobian(G)) if mat.needs_positive_J else None
+        linear = mat.linear
+    settings = NewtonSettings(rtol=1e-10, max_iter=30, initial_increment=first_step / lam_max,
+                              min_increment=resolution / lam_max, max_steps=2000,
+                              line_search=line_search)
+    mech = Mechanics(msh, order=order, energy=energy, supports=Supports(clamp=("fixed",)),
+                     loads=(PointLoad("f1", (0.0, -f1)), PointLoad("f2", (f2, 0.0))),
+                     thickness=thickness, guard=guard, linear=linear, newton=settings)
+    solid = np.array([el.mat != "void" for el in msh.Elements()])
+    mech.set_fields(solid.astype(float))
+
+    # det F sampled densely: integration points, vertices, edge midpoints and centroid
+    from ngsolve import QUAD, TRIG, VOL, IntegrationRule
+
+    extra = {TRIG: [(0, 0), (1, 0), (0, 1), (0.5, 0), (0.5, 0.5), (0, 0.5), (1 / 3, 1 / 3)],
+             QUAD: [(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0), (1, 0.5), (0.5, 1), (0, 0.5),
+                    (0.5, 0.5)]}
+    rules = {}
+    for et, ir in mech.rules.items():
+        pts_ = [tuple(p[:2]) for p in ir.points] + extra[et]
+        rules[et] = IntegrationRule(pts_, [0.0] * len(pts_))
+    Jcf = jacobian(Grad(mech.gfu))
+    pts = msh.MapToAllElements(rules, VOL)
+    per_el = len(rules[QUAD if mesh == "quad" else TRIG].points)
+    solid_pts = np.repeat(solid, per_el)
+    checked = solid_pts if model == "wang" else np.ones_like(solid_pts)
+    steps = []
+
+    def accept(load, u):
+        mech.gfu.vec.data = u
+        vals = np.asarray(Jcf(pts)).ravel()
+        if stop_at_inversion and float(vals[checked].min()) <= 0.0:
+            where = "of the solid " if model == "wang" else ""
+            return f"an element {where}inverted (det F <= 0 at a vertex or edge midpoint)"
+        steps.append((load, float(vals[solid_pts].min()), float(vals[~solid_pts].min())))
+        return ""
+
+    res = solve_with_continuation(mech, mech.gfu.vec, lam_max, settings, warm=False,
+                                  linear=linear, accept=accept)
+    lam = res.load_reached
+    reason = f"reached lam_max = {lam_max:g}" if res.converged else res.reason
+    u1 = mech.gfu(msh(layout.width, layout.height))
+    u2 = mech.gfu(msh(layout.width, 0.0))
+    return CBeamResult(model, order, mesh, lam, (lam * f1, lam * f2), res.converged, reason,
+                       res.iterations, (u1[0], u1[1], u2[0], u2[1]), res.history, steps, mech)
