@@ -7,6 +7,8 @@
     pacto evaluate CASE --density FILE [--filtered] [same options]
     pacto check-gradients CASE [same options] [--tol T]
     pacto resume DIR [--quiet]
+    pacto sweep CASE --loads L1,L2,... [--models M1,M2] [--scheduler ADDRESS] [--workers N]
+                [run options but --model/--load]
 
 Bad input gives a one-line error on stderr and exit code 2; a run stopped by a Newton failure
 exits with 1 after saving the last good design.
@@ -60,6 +62,18 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("resume", help="continue a run from its checkpoint")
     s.add_argument("dir")
     s.add_argument("--quiet", action="store_true")
+    w = sub.add_parser("sweep", help="run a case over a grid of loads and models (Dask)")
+    w.add_argument("case", help="case name (see 'pacto cases')")
+    w.add_argument("--loads", required=True, help="comma-separated loads, e.g. 1e5,1e6,1e7")
+    w.add_argument("--models", help="comma-separated models (default: the case's model)")
+    w.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
+    w.add_argument("--workers", type=int, help="local worker processes (default: the cores)")
+    for opt, kind in (("--iterations", int), ("--maxh", float), ("--nelx", int), ("--nely", int),
+                      ("--order", int), ("--optimizer", str)):
+        w.add_argument(opt, type=kind, help="as for run")
+    w.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="as for run")
+    w.add_argument("--out", help="sweep folder (default: output/sweep-CASE)")
+    w.add_argument("--quiet", action="store_true", help="no progress lines")
     return ap
 
 
@@ -128,12 +142,19 @@ def _main(argv) -> int:
             _show_parameters(case, params)
             return 0
         if case.analysis_only:
-            from . import studies
+            from .analysis_case import run_analysis_case
 
-            return studies.run_analysis_case(case, params, _default_out(args, params), quiet=args.quiet)
+            return run_analysis_case(case, params, _default_out(args, params), quiet=args.quiet)
         from .run import run_case
 
         return run_case(case, params, _default_out(args, params), quiet=args.quiet)
+    if args.command == "sweep":
+        from . import sweep
+
+        loads = sweep.parse_loads(args.loads)
+        models = sweep.parse_models(args.models, params.model)
+        return sweep.run_sweep(case, params, models, loads, args.out or f"output/sweep-{args.case}",
+                               scheduler=args.scheduler, workers=args.workers, quiet=args.quiet)
     if args.command == "evaluate":
         from .run import evaluate_design
 
