@@ -1,0 +1,191 @@
+"""Newton with the J > 0 guard, step cutting and load continuation: what is accepted, what a
+failure reports, and the line-search choice.
+
+Confined uniaxial compression of a unit square (F = diag(λ1, 1)) has closed forms:
+Neo-Hookean ``P11 = μ (λ1 - 1/λ1) + λ ln λ1 / λ1`` (unbounded as λ1 -> 0); St Venant–Kirchhoff
+``P11 = (λ + 2μ) λ1 (λ1² - 1) / 2``, whose compressive force is largest, ``(λ + 2μ) / (3√3)``,
+at λ1 = 1/√3: beyond that no equilibrium with J > 0 exists.
+"""
+import numpy as np
+import pytest
+
+from nonlinear_setup import cantilever, cantilever_mesh
+from pacto_ng.mesh import Layout, Segment, structured_mesh
+from pacto_ng.physics.loads import PointLoad
+from pacto_ng.physics.materials import jacobian, lame, neohookean_energy, svk_energy
+from pacto_ng.physics.mechanics import Mechanics, NewtonFailure, Supports
+from pacto_ng.physics.newton import NewtonSettings, solve_with_continuation
+
+E, NU, T = 2.0e6, 0.4, 0.1
+MU, LAM = lame(E, NU)
+
+
+def square():
+    lay = Layout(1.0, 1.0, segments=(Segment("left", (0, 0), (0, 1)), Segment("right", (1, 0), (1, 1)),
+                                      Segment("bottom", (0, 0), (1, 0)), Segment("top", (0, 1), (1, 1))))
+    return structured_mesh(lay, 3, 3)
+
+
+def compressed_square(energy, P11, settings):
+    mesh = square()
+    mech = Mechanics(mesh, order=1, energy=lambda G, c: energy(G, E, NU),
+                     supports=Supports(fix_x=("left",), fix_y=("bottom", "top")),
+                     loads=(PointLoad("right", (P11 * 1.0 * T, 0.0)),), thickness=T,
+                     guard=lambda G, c: jacobian(G), newton=settings)
+    mech.set_fields(np.ones(mesh.ne))
+    return mesh, mech
+
+
+def vertex_jacobians(mech):
+    """det F at every vertex of every element (independent of the guard's quadrature points)."""
+    from ngsolve import Grad
+
+    J = jacobian(Grad(mech.gfu))
+    out = []
+    for el in mech.mesh.Elements():
+        for v in el.vertices:
+            p = mech.mesh[v].point
+            c = np.mean([mech.mesh[w].point for w in el.vertices], axis=0)
+            q = 0.999 * np.array(p) + 0.001 * c  # just inside this element
+            out.append(J(mech.mesh(*q)))
+    return np.array(out)
+
+
+def test_inverting_step_is_cut_never_accepted():
+    """A single full-load Newton step towards λ1 = 0.2 would invert the square: the guard cuts
+    the step; every accepted iterate has det F > 0; the solution is the closed form."""
+    stretch = 0.2
+    P11 = MU * (stretch - 1 / stretch) + LAM * np.log(stretch) / stretch
+    mesh, mech = compressed_square(neohookean_energy, P11, NewtonSettings(rtol=1e-12, initial_increment=1.0))
+    verdicts, accepted_J = [], []
+    guard = mech.admissible
+    mech.admissible = lambda v: verdicts.append(guard(v)) or verdicts[-1]
+    assemble = mech.assemble_tangent
+
+    def record(vec, load):  # the tangent is assembled at every accepted iterate
+        accepted_J.append(vertex_jacobians(mech).min())
+        assemble(vec, load)
+
+    mech.assemble_tangent = record
+    # the undamped first step (the linear solution) inverts the material
+    lin_stretch = 1.0 + P11 / (LAM + 2 * MU)
+    assert lin_stretch < 0.0
+    mech.forward(np.ones(mesh.ne))
+    assert mech.result.converged and mech.result.steps == 1
+    assert verdicts[:1] == [False]  # the full step was rejected ...
+    assert sum(not v for v in verdicts) >= 1 and verdicts[-1]
+    assert min(accepted_J) > 0.0  # ... and nothing inverted was ever accepted
+    assert mech.gfu(mesh(1.0, 0.5))[0] == pytest.approx(stretch - 1.0, rel=1e-9)
+
+
+def test_unreachable_load_fails_with_load_reached_and_reason():
+    """St Venant–Kirchhoff with the J > 0 guard cannot carry more than (λ+2μ)/(3√3) in
+    confined compression: asking 1.2 times that fails, reports how far it got (just below
+    1/1.2 of the target) and why, and Mechanics.forward raises NewtonFailure."""
+    P_limit = -(LAM + 2 * MU) / (3 * np.sqrt(3))
+    settings = NewtonSettings(rtol=1e-12, initial_increment=0.25, min_increment=1.0 / 256,
+                              max_iter=15)
+    mesh, mech = compressed_square(svk_energy, 1.2 * P_limit, settings)
+    with pytest.raises(NewtonFailure) as info:
+        mech.forward(np.ones(mesh.ne))
+    res = info.value.result
+    assert res is mech.result
+    assert not res.converged
+    assert 0.0 < res.load_reached < 1.0
+    assert res.load_reached == pytest.approx(1.0 / 1.2, abs=0.02)
+    assert res.load_reached <= 1.0 / 1.2 + 1e-9
+    assert res.reason
+    assert res.reason in str(info.value)
+    # the state kept is the last equilibrium, with J > 0
+    assert vertex_jacobians(mech).min() > 0.0
+    ux = mech.gfu(mesh(1.0, 0.5))[0]
+    s = 1.0 + ux
+    assert (LAM + 2 * MU) * s * (s * s - 1) / 2 == pytest.approx(res.load_reached * 1.2 * P_limit, rel=1e-8)
+
+
+def test_without_guard_svk_jumps_to_the_inverted_branch():
+    """The same load without the guard 'converges' to an inverted state (λ1 < 0): the guard is
+    what keeps such states out."""
+    P_limit = -(LAM + 2 * MU) / (3 * np.sqrt(3))
+    mesh = square()
+    mech = Mechanics(mesh, order=1, energy=lambda G, c: svk_energy(G, E, NU),
+                     supports=Supports(fix_x=("left",), fix_y=("bottom", "top")),
+                     loads=(PointLoad("right", (1.2 * P_limit * T, 0.0)),), thickness=T,
+                     newton=NewtonSettings(rtol=1e-12, initial_increment=0.25))
+    mech.forward(np.ones(mesh.ne))
+    assert 1.0 + mech.gfu(mesh(1.0, 0.5))[0] < 0.0
+
+
+def test_failure_reasons_of_the_continuation():
+    """Non-finite loads and the step cap are reported, with the load reached."""
+    from ngsolve.la import CreateVVector
+
+    class Scalar:
+        """R(u) = atan(u) - s f: equilibria exist only for |s f| < π/2."""
+
+        free = np.array([True])
+
+        def __init__(self, f):
+            self.f = f
+
+        def residual(self, vec, out, load):
+            out.FV().NumPy()[:] = np.arctan(vec.FV().NumPy()) - load * self.f
+
+        def assemble_tangent(self, vec, load):
+            x = float(np.clip(vec.FV().NumPy()[0], -1e150, 1e150))
+            self.k = 1.0 / (1.0 + x * x)
+
+        def solve_tangent(self, rhs, out):
+            out.FV().NumPy()[:] = rhs.FV().NumPy() / self.k
+
+        def admissible(self, vec):
+            return bool(np.all(np.isfinite(vec.FV().NumPy())))
+
+        def load_norm(self, load):
+            return abs(load * self.f)
+
+    u = CreateVVector(1)
+    u[:] = 0.0
+    res = solve_with_continuation(Scalar(1.0), u, 1.0, NewtonSettings(), warm=False)
+    assert res.converged and u.FV().NumPy()[0] == pytest.approx(np.tan(1.0), rel=1e-9)
+    res = solve_with_continuation(Scalar(2.0), u, 1.0, NewtonSettings(initial_increment=0.5),
+                                  warm=False)
+    assert not res.converged and res.reason
+    assert res.load_reached < np.pi / 4 and res.load_reached > 0.5  # atan < π/2 bounds s f
+    res = solve_with_continuation(Scalar(float("nan")), u, 1.0, NewtonSettings(), warm=False)
+    assert not res.converged and res.load_reached == 0.0 and "non-finite" in res.reason
+    res = solve_with_continuation(Scalar(1.0), u, 1.0, NewtonSettings(initial_increment=0.01,
+                                  grow=1.0, max_steps=10), warm=False)
+    assert not res.converged and res.load_reached == pytest.approx(0.1)
+    assert "load steps" in res.reason
+    # an equilibrium rejected by the caller counts as a failed increment
+    seen = []
+    res = solve_with_continuation(Scalar(1.0), u, 1.0, NewtonSettings(initial_increment=0.25),
+                                  warm=False, accept=lambda s, v: "too far" if s > 0.6 else "",
+                                  on_step=lambda s, v: seen.append(s))
+    assert not res.converged and 0.5 <= res.load_reached <= 0.6 and "too far" in res.reason
+    assert seen == [h[0] for h in res.history] and max(seen) == res.load_reached
+
+
+def test_settings_validation():
+    with pytest.raises(ValueError):
+        NewtonSettings(line_search="wolfe")
+    with pytest.raises(ValueError):
+        NewtonSettings(initial_increment=0.0)
+
+
+def test_guard_line_search_needs_fewer_iterations_than_residual_backtracking():
+    """Neo-Hookean cantilever, 2e5 N in one step: both searches find the same equilibrium; the
+    guard-only search takes fewer Newton iterations (measured 5 against 19 on 1410 triangles,
+    see newton.py)."""
+    mesh = cantilever_mesh("trig")
+    rho = np.ones(mesh.ne)
+    out = {}
+    for ls in ("guard", "residual"):
+        mech = cantilever(mesh, "neohookean", 2, load=2e5,
+                          newton=NewtonSettings(rtol=1e-12, initial_increment=1.0, line_search=ls))
+        u = mech.forward(rho)
+        out[ls] = (u.FV().NumPy().copy(), mech.result.iterations)
+    a, b = out["guard"][0], out["residual"][0]
+    assert np.linalg.norm(a - b) <= 1e-9 * np.linalg.norm(a)
+    assert out["guard"][1] < out["residual"][1]
