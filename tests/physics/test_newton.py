@@ -16,6 +16,19 @@ from pacto_ng.physics.materials import jacobian, lame, neohookean_energy, svk_en
 from pacto_ng.physics.mechanics import Mechanics, NewtonFailure, Supports
 from pacto_ng.physics.newton import NewtonSettings, solve_with_continuation
 
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_thread():
+    """These systems have a few hundred unknowns: one thread.  Measured here, two threads
+    outside a TaskManager make each sparse-Cholesky refactorisation 0.2 ms -> 16-30 ms when the
+    machine is busy (and a TaskManager is slower still under load)."""
+    from ngsolve import SetNumThreads
+
+    SetNumThreads(1)
+    yield
+    SetNumThreads(2)
+
+
 E, NU, T = 2.0e6, 0.4, 0.1
 MU, LAM = lame(E, NU)
 
