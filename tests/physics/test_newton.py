@@ -34,8 +34,9 @@ MU, LAM = lame(E, NU)
 
 
 def square():
-    lay = Layout(1.0, 1.0, segments=(Segment("left", (0, 0), (0, 1)), Segment("right", (1, 0), (1, 1)),
-                                      Segment("bottom", (0, 0), (1, 0)), Segment("top", (0, 1), (1, 1))))
+    lay = Layout(1.0, 1.0, segments=(
+        Segment("left", (0, 0), (0, 1)), Segment("right", (1, 0), (1, 1)),
+        Segment("bottom", (0, 0), (1, 0)), Segment("top", (0, 1), (1, 1))))
     return structured_mesh(lay, 3, 3)
 
 
@@ -69,7 +70,8 @@ def test_inverting_step_is_cut_never_accepted():
     the step; every accepted iterate has det F > 0; the solution is the closed form."""
     stretch = 0.2
     P11 = MU * (stretch - 1 / stretch) + LAM * np.log(stretch) / stretch
-    mesh, mech = compressed_square(neohookean_energy, P11, NewtonSettings(rtol=1e-12, initial_increment=1.0))
+    settings = NewtonSettings(rtol=1e-12, initial_increment=1.0)
+    mesh, mech = compressed_square(neohookean_energy, P11, settings)
     verdicts, accepted_J = [], []
     guard = mech.admissible
     mech.admissible = lambda v: verdicts.append(guard(v)) or verdicts[-1]
@@ -113,7 +115,8 @@ def test_unreachable_load_fails_with_load_reached_and_reason():
     assert vertex_jacobians(mech).min() > 0.0
     ux = mech.gfu(mesh(1.0, 0.5))[0]
     s = 1.0 + ux
-    assert (LAM + 2 * MU) * s * (s * s - 1) / 2 == pytest.approx(res.load_reached * 1.2 * P_limit, rel=1e-8)
+    P_reached = res.load_reached * 1.2 * P_limit
+    assert (LAM + 2 * MU) * s * (s * s - 1) / 2 == pytest.approx(P_reached, rel=1e-8)
 
 
 def test_without_guard_svk_jumps_to_the_inverted_branch():

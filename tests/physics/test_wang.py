@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from nonlinear_setup import E0, E1, NU, cantilever, cantilever_mesh
+from nonlinear_setup import cantilever, cantilever_mesh
 from pacto_ng.physics.wang import WangModel, wang_energy, wang_gamma_cf, wang_model
 
 
@@ -94,18 +94,21 @@ def _app_e2(uX, uY, vX, vY, g, E, nu):
     lam = E * nu / ((1 + nu) * (1 - 2 * nu))
     # strains (E.2 lines 163-171): E_W1
     eXX = uX - g * uX + (g * uX + 1) ** 2 / 2 + g ** 2 * vX ** 2 / 2 - 0.5
-    eXY = uY / 2 + vX / 2 - g * uY / 2 - g * vX / 2 + g * uY * (g * uX + 1) / 2 + g * vX * (g * vY + 1) / 2
+    eXY = (uY / 2 + vX / 2 - g * uY / 2 - g * vX / 2 + g * uY * (g * uX + 1) / 2
+           + g * vX * (g * vY + 1) / 2)
     eYY = vY - g * vY + g ** 2 * uY ** 2 / 2 + (g * vY + 1) ** 2 / 2 - 0.5
     ew1 = np.array([[eXX, eXY], [eXY, eYY]])
     # eq. 5.5: E_W2
-    ew2 = np.array([[0.5 * (2 * uX + (uX ** 2 + vX ** 2) * g), 0.5 * (uY + vX + (uX * uY + vX * vY) * g)],
-                    [0.5 * (uY + vX + (uX * uY + vX * vY) * g), 0.5 * (2 * vY + (uY ** 2 + vY ** 2) * g)]])
+    e12 = 0.5 * (uY + vX + (uX * uY + vX * vY) * g)
+    ew2 = np.array([[0.5 * (2 * uX + (uX ** 2 + vX ** 2) * g), e12],
+                    [e12, 0.5 * (2 * vY + (uY ** 2 + vY ** 2) * g)]])
     # energy (E.2 lines 54-66): phi_HE(γu) - phi_L(γu) + phi_L(u)
     F11, F12, F21, F22 = 1 + uX * g, uY * g, vX * g, 1 + vY * g
     C11, C12, C22 = F11 ** 2 + F21 ** 2, F11 * F12 + F21 * F22, F12 ** 2 + F22 ** 2
     Jg = math.sqrt(C11 * C22 - C12 ** 2)
     phi_he = 0.5 * mu * (C11 + C22 + 1 - 3) - mu * math.log(Jg) + 0.5 * lam * math.log(Jg) ** 2
-    phi_l = lambda a, b, c, d: lam * (a + d) ** 2 / 2 + mu * (2 * (b / 2 + c / 2) ** 2 + a ** 2 + d ** 2)
+    phi_l = lambda a, b, c, d: (lam * (a + d) ** 2 / 2
+                                + mu * (2 * (b / 2 + c / 2) ** 2 + a ** 2 + d ** 2))
     phi = phi_he - phi_l(g * uX, g * uY, g * vX, g * vY) + phi_l(uX, uY, vX, vY)
     # stress (E.2 lines 69-131): S = S_NL(γu) - S_L(γu) + S_L(u), S_NL = μ (I - C⁻¹) + λ ln J C⁻¹
     Ci = np.linalg.inv(np.array([[C11, C12], [C12, C22]]))
