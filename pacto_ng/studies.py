@@ -83,11 +83,14 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
       linear and may invert harmlessly.  The guard alone sees only integration points, where
       a bilinear or quadratic element can still be folded at its corners.
 
-    Measured (quads 10 x 10, λ_max = 12, first step 0.05): Neo-Hookean 1.40 (Q1), 0.66 (Q2);
-    P2 triangles (h = 1) 1.17; Wang reaches λ_max for all of them (also λ = 500).  The
-    Neo-Hookean value depends on the load path by a factor up to ~2 (first step 0.01-0.2:
-    0.55-1.52); with P1 triangles (constant det F) no element inverts and Neo-Hookean also
-    reaches λ = 20.  The thesis's Neo-Hookean limit f1 = 0.0009 N is λ = 0.45.
+    Measured (h = 1, λ_max = 12, first step 0.05): Neo-Hookean 1.40 (Q1), 0.66 (Q2), 0.55
+    (P2 triangles); Wang reaches λ_max with every element (and λ = 500).  The Neo-Hookean
+    value depends on the load path (first step 0.01-0.2, λ_max 12 or 20, h 0.37-1: 0.44-1.52),
+    the crushed void having many near-equivalent configurations.  With P1 triangles (constant
+    det F) no element inverts and Neo-Hookean also reaches λ_max.  With the guard alone
+    (``stop_at_inversion=False``) Neo-Hookean goes on to λ = 312 (Q1), 51 (Q2), 34 (P2
+    triangles) with folded void elements.  The thesis's Neo-Hookean limit f1 = 0.0009 N is
+    λ = 0.45.
     Parameters
     ----------
     model : {"linear", "gnl", "neohookean", "wang"}
