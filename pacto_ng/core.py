@@ -84,6 +84,7 @@ class Chain:
         are skipped.
         """
         vals = dict(inputs)
+        self.values = vals  # kept as it fills: after a failure the values before it are there
         for b in self.blocks:
             if b.output in vals or any(n not in vals for n in b.inputs):
                 continue

@@ -71,8 +71,9 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         try:
             f0, f, df0, df = problem.evaluate(x)
         except NewtonFailure as err:
-            return LoopResult(state, False, "newton",
-                              f"iteration {k}: {err}; the last good design (iteration {k - 1}) is saved")
+            kept = (f"the last good design (iteration {k - 1}) is saved" if k > 0 else
+                    "no design could be analysed at this load; the initial design is saved")
+            return LoopResult(state, False, "newton", f"iteration {k}: {err}; {kept}")
         state.last_good = x.copy()
         if state.scale is None:  # fix the objective normalisation once (kept on resume)
             state.scale = 10.0 / max(abs(f0), 1e-300)

@@ -39,6 +39,7 @@ class NewtonSettings:
     grow: float = 1.5
     easy: int = 4  # a step converging in <= easy iterations lets the increment grow
     max_steps: int = 200
+    max_total_iter: int = 1000  # Newton iterations per solve, over all load steps and retries
     line_search: str = "guard"  # "guard" (admissibility only) or "residual" (Armijo on |R|)
 
     def __post_init__(self):
@@ -159,6 +160,10 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
     while load < target * (1 - 1e-12):
         if result.steps >= s.max_steps:
             result.reason = f"more than {s.max_steps} load steps"
+            break
+        if result.iterations >= s.max_total_iter:
+            result.reason = (f"more than {s.max_total_iter} Newton iterations in all (load factor "
+                             f"{load:.6g} of {target:.6g} reached; last failure: {result.reason or 'none'})")
             break
         trial_load = min(load + inc, target)
         saved.data = u
