@@ -108,8 +108,11 @@ def _default_out(args, params):
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    from .threads import compute
+
     try:
-        return _main(argv)
+        with compute():
+            return _main(argv)
     except InputError as err:
         print(f"pacto: error: {err}", file=sys.stderr)
         return 2
