@@ -17,6 +17,11 @@ Every element is treated as a porous medium.  With the smoothed Heaviside
   deformation independent (SPEC §4).  :func:`darcy_body` gives it to
   :class:`~pacto_ng.physics.mechanics.Mechanics`, whose load factor multiplies it; the pressure
   is linear in ``(P_in, p_out)``, so the load factor scales the pressure itself.
+* follower load (SPEC §4, beyond the thesis): the spatial body force ``-∇_x p`` acting on the
+  deformed body, pulled back to the reference configuration, ``-J F⁻ᵀ ∇_X p`` per unit
+  reference volume (:func:`darcy_follower`).  It has no potential: it is a residual term of
+  :class:`~pacto_ng.physics.mechanics.Mechanics` with an unsymmetric tangent (the load
+  stiffness) and enters the sensitivity through ``λᵀ ∂R/∂p``.
 
 Sensitivities (discrete adjoint, backward pass of :class:`DarcyPressure`).  With the residual
 ``R(p, ρ̄) = A(ρ̄) p - f(ρ̄)`` on the free dofs and the Dirichlet values fixed,
@@ -39,8 +44,8 @@ import numpy as np
 from ..interpolation import heaviside_deriv_np, heaviside_np
 from .mechanics import Field, integration_rules
 
-__all__ = ["DarcyPressure", "darcy_body", "pressure_field", "Compliance", "DarcyCompliance",
-           "for_case"]
+__all__ = ["DarcyPressure", "darcy_body", "darcy_follower", "pressure_field", "Compliance",
+           "DarcyCompliance", "for_case"]
 
 
 def _names(value, what: str) -> tuple[str, ...]:
@@ -288,11 +293,54 @@ def darcy_body(p_name: str = "p"):
     return body
 
 
+def darcy_follower(p_name: str = "p"):
+    r"""The ``residual_density`` of :class:`~pacto_ng.physics.mechanics.Mechanics` for the
+    Darcy pressure as a follower load (SPEC §4).
+
+    The body force ``b = -∇_x p`` acts in the deformed configuration; per unit reference
+    volume it is ``b₀ = J b = -J F⁻ᵀ ∇_X p = -cof(F) ∇_X p`` with ``F = I + ∇u`` (``p`` is
+    carried with the material points: it is the Darcy field of the reference design).  The
+    external work is ``s t ∫ b₀·v dΩ₀``, so the returned density, *added to the residual*
+    ``R = ∂Π/∂u + ...`` (internal minus external forces), is
+
+        ``r(u, v) = -s b₀·v = s cof(F) ∇_X p · v``,
+
+    which equals the fixed load's contribution (:func:`darcy_body`) at ``u = 0``.  Mechanics
+    multiplies it by the thickness; ``s`` is its load-factor Parameter.
+
+    The cofactor ``cof(F) = J F⁻ᵀ`` is used rather than ``det F · F⁻ᵀ``: it is polynomial in
+    ``∇u`` (affine in 2D: ``cof(I + G) = I + cof(G)``), defined for every ``F`` (also where the
+    fictitious void is inverted) and differentiated by NGSolve without a division.  Because it
+    is affine in 2D, a *linear* material with this load still has a residual that is affine in
+    ``u``: one Newton step is exact.  In plane stress the change of the out-of-plane thickness
+    is not included in the load (the pressure acts on the reference thickness).
+
+    Returns
+    -------
+    callable ``(u, v, coeffs, load) -> CF``
+        ``load * cof(I + ∇u) ∇p · v`` with ``p = coeffs[p_name]``.
+    """
+    def density(u, v, coeffs, load):
+        from ngsolve import Cof, Grad, Id, InnerProduct, grad
+
+        if p_name not in coeffs:
+            raise ValueError(f"p_name: '{p_name}' is not a field of the mechanics block "
+                             f"(fields: {', '.join(coeffs)})")
+        G = Grad(u)
+        F = Id(G.dims[0]) + G
+        return load * InnerProduct(Cof(F) * grad(coeffs[p_name]), v)
+
+    return density
+
+
 class Compliance:
     r"""Compliance with the design-dependent load: block ``(u, p) -> J``.
 
     ``J = f(p)·u = t ∫ -∇p·u dΩ + Σ F_i·u_i`` (the Darcy load and any point/edge loads of the
-    mechanics block, at unit load factor, as :func:`pacto_ng.responses.compliance`).
+    mechanics block, at unit load factor, as :func:`pacto_ng.responses.compliance`).  This is
+    the (end) compliance of the *deformation-independent* load only: with a follower load the
+    load vector depends on ``u`` and no compliance is defined (:func:`pacto_ng.case.build_problem`
+    rejects that combination; use the strain energy or a mechanism objective).
 
     Backward: ``∂J/∂u`` and ``∂J/∂p`` (≠ 0: the load depends on the design through p) as
     LinearForms from ``Diff``; the ``p`` part flows back through :class:`DarcyPressure`.
@@ -360,17 +408,25 @@ DarcyCompliance = Compliance
 
 
 def for_case(mesh, params, pressure, rho_name: str = "rho_bar", *, order: int = 1,
-             output: str = "p"):
-    """Build the Darcy part of a case: ``(DarcyPressure block, Field for Mechanics, body)``.
+             output: str = "p", load_type: str | None = None):
+    """Build the Darcy part of a case: ``(DarcyPressure block, Field for Mechanics, load)``.
 
     ``pressure`` has ``inlet`` and ``zero`` (boundary names); ``params`` supplies
-    ``load`` (= P_in), Kv, Ks, eta_k, beta_k, eta_h, beta_h, r, delta_s, p_out and
-    load_sensitivity (SPEC §2 defaults in :class:`~pacto_ng.params.Parameters`).
+    ``load`` (= P_in), Kv, Ks, eta_k, beta_k, eta_h, beta_h, r, delta_s, p_out,
+    load_sensitivity and load_type (SPEC §2 defaults in :class:`~pacto_ng.params.Parameters`).
+    ``load_type`` (default ``params.load_type``) chooses the third item: ``"fixed"`` gives
+    :func:`darcy_body` (``Mechanics(body=...)``), ``"follower"`` gives :func:`darcy_follower`
+    (``Mechanics(residual_density=...)``).
     """
+    load_type = params.load_type if load_type is None else load_type
+    if load_type not in ("fixed", "follower"):
+        raise ValueError(f"load_type: must be fixed or follower (got '{load_type}')")
     block = DarcyPressure(mesh, inlet=pressure.inlet, zero=pressure.zero, p_in=params.load,
                           order=order, Kv=params.Kv, Ks=params.Ks, eta_k=params.eta_k,
                           beta_k=params.beta_k, eta_h=params.eta_h, beta_h=params.beta_h,
                           r=params.r, delta_s=params.delta_s, p_out=params.p_out,
                           sensitivity=params.load_sensitivity, inputs=(rho_name,),
                           output=output)
-    return block, block.field(), darcy_body(output)
+    load = darcy_body(output) if load_type == "fixed" else darcy_follower(output)
+    return block, block.field(), load
+

@@ -8,14 +8,28 @@ with thickness ``t`` and load factor ``s``.  The residual ``R = ∂Π/∂u`` and
 NGSolve's ``Variation`` (automatic differentiation).  Equilibrium is found by
 :func:`~pacto_ng.physics.newton.solve_with_continuation`.
 
-Backward pass (discrete adjoint): with ``K λ = ∂J/∂u`` (K the tangent at the converged state,
+Loads that are not the derivative of a potential (follower loads) enter the residual directly:
+
+    R(u) = ∂Π/∂u + t ∫ r(u, v; fields, s) dΩ + (residual_terms),
+
+with ``r`` a *residual density* (linear in the test function ``v``, per unit reference volume)
+and ``residual_terms`` a sum of integrals (e.g. on a boundary).  The tangent of either comes
+from ``AssembleLinearization`` and is unsymmetric in general; the adjoint then solves
+``Kᵀ λ = ∂J/∂u``.
+
+Backward pass (discrete adjoint): with ``Kᵀ λ = ∂J/∂u`` (K the tangent at the converged state,
 factorised once and reused for every response),
 
     dJ/dρ = ∂J/∂ρ - λᵀ ∂R/∂ρ,
+    λᵀ ∂R/∂ρ = ∂/∂ρ [ t ∫ ∂φ/∂u[λ] - s b·λ + r(u, λ; fields, s) dΩ ],
 
-and ``λᵀ ∂R/∂ρ`` is one LinearForm on the field's own space:
-``(density(u).Diff(u, λ)).Diff(ρ, q)``.  The same quadrature rule is pinned in the residual,
-tangent and sensitivity forms (see docs: a mismatch gives 1e-2 adjoint errors at order 2).
+one LinearForm on the field's own space:
+``(density(u).Diff(u, λ) + t r(u, λ)).Diff(ρ, q)``.  The residual density is built once with the
+trial/test functions (residual, tangent) and once with ``(u, λ)`` as GridFunctions
+(sensitivity), so its field dependence is differentiated by NGSolve too.  ``residual_terms``
+must not depend on the fields (they are left out of ``∂R/∂ρ``).  The same quadrature rule is
+pinned in the residual, tangent and sensitivity forms (see docs: a mismatch gives 1e-2 adjoint
+errors at order 2).
 """
 from __future__ import annotations
 
@@ -80,16 +94,27 @@ class Mechanics:
     guard : callable ``(G, coeffs) -> CF`` or None
         A CF that must stay positive at every integration point (``det F``), or None.
     linear : bool
-        The residual is linear in u (one Newton step; the tangent does not depend on u).
+        The whole residual (residual density and terms included) is linear in u (one Newton
+        step; the tangent does not depend on u).
     residual_terms : callable ``(u, v, load) -> integral`` or None
         Extra residual terms that are not the derivative of a potential (e.g. a follower
         pressure): the returned sum of integrals, linear in the test function ``v``, is *added
         to the residual* ``R(u)``; ``load`` is the load-factor Parameter, which the terms must
         include themselves (and the thickness).  Their tangent comes from
         ``AssembleLinearization``, so it is unsymmetric in general.  They must not depend on
-        the block's fields: the backward pass leaves them out of ``∂R/∂ρ``.
+        the block's fields: the backward pass leaves them out of ``∂R/∂ρ`` (use
+        ``residual_density`` for volume terms that do).
+    residual_density : callable ``(u, v, coeffs, load) -> CF`` or None
+        A non-conservative volume term ``r(u, v)`` per unit reference volume, linear in ``v``:
+        ``t ∫ r dΩ`` is *added to the residual* (integrated with the block's rule
+        :attr:`DX`, multiplied by the thickness here).  ``load`` is the load-factor Parameter,
+        which ``r`` must include itself; ``coeffs`` maps field names to GridFunctions and ``r``
+        may depend on them: its ``∂R/∂field`` is part of the backward pass.  ``u`` and ``v`` are
+        trial/test functions for the residual and tangent, GridFunctions ``(u, λ)`` for the
+        sensitivity.  Example: :func:`pacto_ng.physics.darcy.darcy_follower`.
     symmetric : bool or None
-        Whether the tangent is symmetric; default: ``residual_terms is None``.
+        Whether the tangent is symmetric; default: neither ``residual_terms`` nor
+        ``residual_density`` given.
     inverse : str or None
         Direct solver of the tangent; default ``sparsecholesky`` for a symmetric tangent and
         ``umfpack`` otherwise.  With an unsymmetric tangent the adjoint solves ``Kᵀ λ = ∂J/∂u``.
@@ -100,7 +125,8 @@ class Mechanics:
                  thickness: float = 1.0, guard: Callable | None = None, linear: bool = False,
                  newton: NewtonSettings = NewtonSettings(), output: str = "u",
                  inverse: str | None = None, intorder: int | None = None,
-                 residual_terms: Callable | None = None, symmetric: bool | None = None):
+                 residual_terms: Callable | None = None, symmetric: bool | None = None,
+                 residual_density: Callable | None = None):
         from ngsolve import (L2, BilinearForm, GridFunction, Grad, LinearForm, Parameter,
                              VectorH1, Variation, dx)
 
@@ -109,7 +135,8 @@ class Mechanics:
         if thickness <= 0:
             raise ValueError("thickness must be positive")
         self.mesh, self.order, self.thickness = mesh, order, float(thickness)
-        self.symmetric = residual_terms is None if symmetric is None else bool(symmetric)
+        conservative = residual_terms is None and residual_density is None
+        self.symmetric = conservative if symmetric is None else bool(symmetric)
         if inverse is None:
             inverse = "sparsecholesky" if self.symmetric else "umfpack"
         self.linear, self.settings, self.inverse_type = linear, newton, inverse
@@ -143,12 +170,15 @@ class Mechanics:
         self.rules = integration_rules(intorder or 2 * order)
         self.DX = dx(intrules=self.rules)
         self._energy, self._body, self._guard = energy, body, guard
+        self._rdens = residual_density
         self.loads, self.springs = tuple(loads), tuple(springs)
 
         u = self.fes.TrialFunction()
         self.gfu = GridFunction(self.fes)
         self.a = BilinearForm(self.fes, symmetric=self.symmetric)
         self.a += Variation(self.potential(u))
+        if residual_density is not None:
+            self.a += self.residual_density(u, self.fes.TestFunction()).Compile() * self.DX
         if residual_terms is not None:
             self.a += residual_terms(u, self.fes.TestFunction(), self.load)
         # vector of the external load at unit load factor (for norms)
@@ -164,6 +194,8 @@ class Mechanics:
         # adjoint state and sensitivity forms (built once)
         self.lam = GridFunction(self.fes)
         dens = self.volume_density(self.gfu).Diff(self.gfu, self.lam)
+        if residual_density is not None:
+            dens = dens + self.residual_density(self.gfu, self.lam)  # λᵀ R_nc, linear in λ
         self._sens = {}
         for f in self.fields:
             q = f.space.TestFunction()
@@ -173,7 +205,7 @@ class Mechanics:
         self._rhs = self.gfu.vec.CreateVector()
         self._ext = self.gfu.vec.CreateVector()
         # with only design-independent loads the load vector is fixed: its norm is computed once
-        self._fixed_loads = body is None and residual_terms is None
+        self._fixed_loads = body is None and conservative
         self._unit_load_norm = None
 
     # -- the energy ------------------------------------------------------------------------
@@ -185,6 +217,10 @@ class Mechanics:
         if self._body is not None:
             dens = dens - self.load * self.thickness * self._body(u, self.coeffs)
         return dens
+
+    def residual_density(self, u, v):
+        """The non-conservative volume term ``t r(u, v; fields, s)`` (a CF, per unit area)."""
+        return self.thickness * self._rdens(u, v, self.coeffs, self.load)
 
     def potential(self, u):
         """Π(u) as a sum of integrals."""
