@@ -341,13 +341,12 @@ def run_one(case_name: str, params: dict, folder: str, resume: bool) -> dict:
     """
     import contextlib
     import io
-
-    from ngsolve import SetNumThreads
+    import os
 
     from .case import get_case
     from .run import run_case
 
-    SetNumThreads(1)
+    os.environ["PACTO_THREADS"] = "1"  # one NGSolve thread per worker (run_case sets it)
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
         code = run_case(get_case(case_name), Parameters(**params), folder, quiet=True,
