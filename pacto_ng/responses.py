@@ -67,14 +67,14 @@ class StrainEnergy:
         self.output = output
         self.gfu = GridFunction(mech.fes)
         dens = mech.thickness * mech._energy(Grad(self.gfu), mech.coeffs)
-        self._dens = dens
+        self._dens = dens.Compile()
         v = mech.fes.TestFunction()
         self._du = LinearForm(mech.fes)
-        self._du += dens.Diff(self.gfu, v) * mech.DX
+        self._du += dens.Diff(self.gfu, v).Compile() * mech.DX
         self._dfield = {}
         for f in mech.fields:
             lf = LinearForm(f.space)
-            lf += dens.Diff(f.gf, f.space.TestFunction()) * mech.DX
+            lf += dens.Diff(f.gf, f.space.TestFunction()).Compile() * mech.DX
             self._dfield[f.name] = lf
         self._integrate = Integrate
 
