@@ -9,6 +9,10 @@
     pacto resume DIR [--quiet]
     pacto sweep CASE --loads L1,L2,... [--models M1,M2] [--scheduler ADDRESS] [--workers N]
                 [run options but --model/--load]
+    pacto analyse DIR [--pressures P1,P2,...] [--threshold T] [--maxh H] [--order K]
+                  [--kinds darcy,fixed,follower] [--quiet]
+    pacto export DIR --format stl|vtk|msh [--out FILE] [--threshold T] [--maxh H]
+    pacto compare DIR1 DIR2 ... [--out FILE.png]
 
 Bad input gives a one-line error on stderr and exit code 2; a run stopped by a Newton failure
 exits with 1 after saving the last good design.
@@ -59,6 +63,7 @@ def build_parser() -> argparse.ArgumentParser:
     _case_options(g)
     g.add_argument("--tol", type=float, default=1e-5, help="largest relative error accepted")
     g.add_argument("--seed", type=int, default=0)
+    _post_parsers(sub)
     s = sub.add_parser("resume", help="continue a run from its checkpoint")
     s.add_argument("dir")
     s.add_argument("--quiet", action="store_true")
@@ -75,6 +80,58 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--out", help="sweep folder (default: output/sweep-CASE)")
     w.add_argument("--quiet", action="store_true", help="no progress lines")
     return ap
+
+
+def _post_parsers(sub):
+    """analyse, export, compare: from a finished run to a part (pacto_ng.post.cli_commands)."""
+    a = sub.add_parser("analyse", help="threshold, remesh and re-analyse a finished run "
+                       "(pressure cases)", description="Threshold the final design of a finished "
+                       "run, remesh it with named boundaries and run Neo-Hookean analyses over a "
+                       "pressure sweep: the Darcy pressure of the thresholded design and the "
+                       "pressure on the wetted boundary, fixed and follower; writes DIR/analysis/ "
+                       "(analysis.json, analysis.png, deformed.png, report.md, design.stl, "
+                       "remeshed.vtu, deformed.vtu).  Pressure cases with one material only: for "
+                       "the other cases (cantilever, inverter, mm-gripper) it stops with a one-line "
+                       "error; 'pacto export' writes their part.")
+    a.add_argument("dir", help="a finished run folder")
+    a.add_argument("--pressures", help="comma-separated inlet pressures in Pa (default: 5 "
+                   "log-spaced values from load/100 to the run's load)")
+    a.add_argument("--threshold", type=float, default=0.5, help="density threshold in (0, 1)")
+    a.add_argument("--maxh", type=float, help="element size of the new mesh (default: half the "
+                   "run's)")
+    a.add_argument("--order", type=int, default=2, help="displacement order of the re-analysis")
+    a.add_argument("--kinds", default="darcy,fixed,follower",
+                   help="analyses to run (darcy, fixed, follower)")
+    a.add_argument("--quiet", action="store_true", help="no progress output")
+    x = sub.add_parser("export", help="the thresholded, remeshed part of a run as STL, VTK or MSH")
+    x.add_argument("dir", help="a finished run folder")
+    x.add_argument("--format", required=True, choices=("stl", "vtk", "msh"),
+                   help="stl: extruded by the thickness (closed); vtk: 2D triangles; msh: Gmsh "
+                   "2.2 with the boundary names as physical groups")
+    x.add_argument("--out", help="output file (default DIR/export/design.FORMAT)")
+    x.add_argument("--threshold", type=float, help="density threshold in (0, 1) (default: the "
+                   "analysis's, else 0.5)")
+    x.add_argument("--maxh", type=float, help="element size (default: the analysis's, else half "
+                   "the run's)")
+    x.add_argument("--quiet", action="store_true")
+    c = sub.add_parser("compare", help="designs side by side and their analysis curves")
+    c.add_argument("dirs", nargs="+", help="finished run folders")
+    c.add_argument("--out", help="picture (default compare.png)")
+    c.add_argument("--quiet", action="store_true")
+
+
+def _post_command(args) -> int:
+    from .post import cli_commands as pc
+
+    if args.command == "analyse":
+        pressures = pc.parse_pressures(args.pressures) if args.pressures is not None else None
+        kinds = tuple(k.strip() for k in args.kinds.split(",") if k.strip())
+        return pc.analyse_run(args.dir, pressures=pressures, threshold_value=args.threshold,
+                              maxh=args.maxh, order=args.order, kinds=kinds, quiet=args.quiet)
+    if args.command == "export":
+        return pc.export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
+                             maxh=args.maxh, quiet=args.quiet)
+    return pc.compare_runs(args.dirs, out=args.out, quiet=args.quiet)
 
 
 def params_from_args(case, args) -> Parameters:
@@ -134,6 +191,8 @@ def _main(argv) -> int:
             kind = "analysis" if c.analysis_only else "optimisation"
             print(f"{c.name:12s} {c.summary}  [{kind}; load in {c.load_unit}]")
         return 0
+    if args.command in ("analyse", "export", "compare"):
+        return _post_command(args)
     if args.command == "resume":
         from .run import resume_run
 

@@ -246,7 +246,8 @@ _STYLE = {"expected": ("o", "expected (optimisation)"),
           "darcy": ("D", "Darcy pressure (deformation independent)")}
 
 
-def plot_sweeps(path, sweeps, *, expected=None, title: str | None = None, dpi: int = 150):
+def plot_sweeps(path, sweeps, *, expected=None, title: str | None = None, dpi: int = 150,
+                log: bool = False):
     """``analysis.png``: output displacement Δ against pressure.
 
     Parameters
@@ -255,6 +256,8 @@ def plot_sweeps(path, sweeps, *, expected=None, title: str | None = None, dpi: i
         Non-converged points are left out.
     expected : tuple ``(pressures, deltas)``, optional
         The displacements the optimisation predicted.
+    log : bool
+        Logarithmic pressure axis, and logarithmic Δ axis when every plotted Δ is positive.
     """
     fig = _figure((6.5, 4.5))
     ax = fig.add_subplot()
@@ -267,6 +270,11 @@ def plot_sweeps(path, sweeps, *, expected=None, title: str | None = None, dpi: i
         ok = sw.converged.astype(bool)
         m, lab = _STYLE.get(sw.kind, ("x", sw.kind))
         ax.plot(sw.pressures[ok], sw.delta[ok], marker=m, label=lab)
+    if log:
+        ax.set_xscale("log")
+        ys = np.concatenate([ln.get_ydata() for ln in ax.get_lines()] or [np.zeros(0)])
+        if ys.size and np.all(ys > 0):
+            ax.set_yscale("log")
     ax.set_xlabel("pressure (Pa)")
     ax.set_ylabel("output displacement Δ (m)")
     ax.grid(True, alpha=0.3)

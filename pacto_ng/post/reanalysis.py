@@ -280,6 +280,12 @@ class Reanalysis:
     def solve(self, pressure: float) -> SweepPoint:
         """Equilibrium at ``pressure`` (warm-started from the previous converged state)."""
         self.P.Set(float(pressure))
+        # The pressure is a Parameter inside the load, outside Mechanics' load factor: the norm
+        # of the unit load that Mechanics caches for fixed loads (the reference of Newton's
+        # relative tolerance) belongs to the previous pressure.  Without this reset a sweep
+        # 1 -> 10 -> 100 Pa judged the residual at 100 Pa against the load at 1 Pa, asked for
+        # a 100x smaller residual than rtol and failed at the round-off floor.
+        self.mech._unit_load_norm = None
         try:
             self.mech.forward()
             ok = True

@@ -92,6 +92,7 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
     rm = remesh(th, th.h if maxh is None else maxh, clamp=clamp, pressure=pressure, p_in=p_in,
                 wet_fraction=wet_fraction, wet_boundaries=wet_boundaries)
     supports = Supports(clamp=tuple(clamp)) if supports is None else supports
+    supports = _present(supports, rm.mesh)
     kw = dict(E=E, nu=nu, thickness=thickness, supports=supports, output=output, order=order,
               newton=newton)
     sweeps = {}
@@ -135,6 +136,9 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         "ports": {k: {"source": list(map(float, a)), "new": list(map(float, b))}
                   for k, (a, b) in rm.ports.items()},
         "elements": rm.mesh.ne, "order": order, "E": E, "nu": nu, "thickness": thickness,
+        "supports": {"clamp": list(supports.clamp), "fix_x": list(supports.fix_x),
+                     "fix_y": list(supports.fix_y)},
+        "wet_boundaries": list(wet_boundaries),
         "output": {"region": output.region, "direction": list(output.direction),
                    "stiffness": output.stiffness},
         "deformed_state": shown,
@@ -143,6 +147,16 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
     }
     files["json"].write_text(json.dumps(summary, indent=2))
     return PostResult(th, rm, sweeps, files, summary)
+
+
+def _present(supports: Supports, mesh) -> Supports:
+    """The supports restricted to the boundaries and points the remeshed solid has: a thresholded
+    design need not touch every support of its domain (e.g. a symmetry line); the clamp is
+    guaranteed by :func:`~.remesh.remesh`."""
+    names = set(mesh.GetBoundaries()) | set(mesh.GetBBoundaries())
+    keep = lambda group: tuple(n for n in group if n in names)
+    return Supports(clamp=keep(supports.clamp), fix_x=keep(supports.fix_x),
+                    fix_y=keep(supports.fix_y))
 
 
 def _jsonable(row: dict) -> dict:
