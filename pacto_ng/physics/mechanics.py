@@ -66,6 +66,26 @@ def integration_rules(order: int):
     return {TRIG: IntegrationRule(TRIG, order), QUAD: IntegrationRule(QUAD, order)}
 
 
+#: reference-element points where ``det F`` is checked besides the quadrature points:
+#: vertices, edge midpoints and centroid ("J <= 0 anywhere is rejected", SPEC §3) — an
+#: element can fold at a corner while every Gauss point still sees J > 0
+_EXTRA_GUARD_POINTS = {
+    "TRIG": [(0, 0), (1, 0), (0, 1), (0.5, 0), (0.5, 0.5), (0, 0.5), (1 / 3, 1 / 3)],
+    "QUAD": [(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0), (1, 0.5), (0.5, 1), (0, 0.5), (0.5, 0.5)],
+}
+
+
+def guard_rules(rules):
+    """The quadrature points of ``rules`` plus vertices, edge midpoints and centroid."""
+    from ngsolve import QUAD, TRIG, IntegrationRule
+
+    out = {}
+    for et, key in ((TRIG, "TRIG"), (QUAD, "QUAD")):
+        pts = [tuple(p[:2]) for p in rules[et].points] + _EXTRA_GUARD_POINTS[key]
+        out[et] = IntegrationRule(pts, [0.0] * len(pts))
+    return out
+
+
 @dataclass
 class Field:
     """A coefficient the energy depends on: element-wise (L2-0, numpy input) or a given space."""
@@ -189,8 +209,7 @@ class Mechanics:
         if guard is not None:
             from ngsolve import QUAD, TRIG, VOL, IntegrationRule
             self._guard_cf = guard(Grad(self._gtrial), self.coeffs)
-            self._guard_pts = mesh.MapToAllElements(
-                {TRIG: self.rules[TRIG], QUAD: self.rules[QUAD]}, VOL)
+            self._guard_pts = mesh.MapToAllElements(guard_rules(self.rules), VOL)
         # adjoint state and sensitivity forms (built once)
         self.lam = GridFunction(self.fes)
         dens = self.volume_density(self.gfu).Diff(self.gfu, self.lam)
