@@ -776,8 +776,8 @@ def compare_runs(folders, *, out=None, quiet: bool = False) -> int:
             t = Triangulation(pts[:, 0], pts[:, 1], tri)
             nod = np.zeros(len(pts))
             cnt = np.zeros(len(pts))
-            area = 0.5 * np.abs(np.cross(pts[tri[:, 1]] - pts[tri[:, 0]],
-                                         pts[tri[:, 2]] - pts[tri[:, 0]]))
+            e1, e2 = pts[tri[:, 1]] - pts[tri[:, 0]], pts[tri[:, 2]] - pts[tri[:, 0]]
+            area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
             for k in range(3):
                 np.add.at(nod, tri[:, k], area * rho)
                 np.add.at(cnt, tri[:, k], area)
