@@ -96,6 +96,8 @@ def main(argv=None) -> int:
                     **{f"delta_{k}": last[k]["delta"] for k in ("darcy", "fixed", "follower")},
                     **{f"gap_{k}": ana["gap_at_largest_pressure"][k]
                        for k in ("darcy", "fixed", "follower")},
+                    **{f"gap0_{k}": ana["gap_at_smallest_pressure"][k]
+                       for k in ("darcy", "fixed", "follower")},
                     sweep=[{"pressure": r["pressure"], "expected": r["expected"],
                             **{k: r[k]["delta"] for k in ("darcy", "fixed", "follower")}}
                            for r in ana["pressures"]],
