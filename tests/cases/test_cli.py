@@ -128,3 +128,25 @@ def test_resume_after_kill_gives_the_same_design(tmp_path):
     assert np.allclose(a["objective_history"], b["objective_history"], rtol=1e-9, atol=0)
     with np.load(full / "checkpoint.npz") as fa, np.load(part / "checkpoint.npz") as fb:
         assert np.max(np.abs(fa["x"] - fb["x"])) < 1e-9
+
+
+@pytest.mark.parametrize("args", [
+    ["mbb"], ["cantilever"], ["cantilever", "--model", "neohookean", "--load", "1e5"],
+    ["cantilever", "--model", "wang", "--load", "1e5"], ["inverter"],
+    ["inverter", "--model", "gnl", "--load", "0.05"],
+])
+def test_check_gradients_passes(args, capsys):
+    assert main(["check-gradients", *args, "--tol", "1e-5"]) == 0
+    out = capsys.readouterr().out
+    assert "pass" in out and "worst relative error" in out
+
+
+def test_check_gradients_fails_on_a_wrong_gradient(monkeypatch, capsys):
+    """The check has teeth: a deliberately broken backward pass is caught (exit 1)."""
+    from pacto_ng import filters
+
+    real = filters.HeavisideProjection.backward
+    monkeypatch.setattr(filters.HeavisideProjection, "backward",
+                        lambda self, g: (1.01 * real(self, g)[0],))
+    assert main(["check-gradients", "cantilever", "--tol", "1e-5"]) == 1
+    assert "FAIL" in capsys.readouterr().out
