@@ -226,6 +226,7 @@ class Mechanics:
         # with only design-independent loads the load vector is fixed: its norm is computed once
         self._fixed_loads = body is None and conservative
         self._unit_load_norm = None
+        self.adjoint_solves_skipped = 0
 
     # -- the energy ------------------------------------------------------------------------
     def volume_density(self, u):
@@ -283,6 +284,10 @@ class Mechanics:
             self._ext[:] = 0.0
             self.residual(self._ext, self._rhs, 1.0)
             self._unit_load_norm = float(np.linalg.norm(self._rhs.FV().NumPy()[self.free]))
+            # the unit external load vector f (R(0) = -f), kept for the self-adjoint shortcut
+            self._f_unit = self._rhs.FV().NumPy().copy()
+            self._f_unit[~self.free] = 0.0
+            self._f_unit *= -1.0
             return abs(load) * self._unit_load_norm
         self._ext[:] = 0.0
         self.residual(self._ext, self._rhs, load)
@@ -323,9 +328,26 @@ class Mechanics:
         self._adjoint_ready = True
 
     def adjoint(self, dJdu):
-        """Solve ``Kᵀ λ = dJ/du`` with the tangent at the solution; returns λ (a vector)."""
-        self._ensure_tangent()
+        """Solve ``Kᵀ λ = dJ/du`` with the tangent at the solution; returns λ (a vector).
+
+        Self-adjoint shortcut: for a linear problem with design-independent loads, when
+        ``dJ/du = c f`` (compliance) the adjoint is ``λ = (c / s) u`` with no solve at all
+        (``K u = s f``).  ``adjoint_solves_skipped`` counts the shortcuts.
+        """
         lam = self.gfu.vec.CreateVector()
+        f = getattr(self, "_f_unit", None)
+        if self.linear and self._fixed_loads and self.symmetric and f is not None and self.target != 0:
+            g = dJdu.FV().NumPy()
+            ff = float(f @ f)
+            c = float(g[self.free] @ f[self.free]) / ff if ff > 0 else 0.0
+            resid = g.copy()
+            resid[self.free] -= c * f[self.free]
+            resid[~self.free] = 0.0
+            if ff > 0 and float(resid @ resid) <= 1e-24 * max(float(g[self.free] @ g[self.free]), 1e-300):
+                lam.data = (c / self.target) * self.gfu.vec
+                self.adjoint_solves_skipped += 1
+                return lam
+        self._ensure_tangent()
         lam.data = (self._inv if self.symmetric else self._inv.T) * dJdu
         return lam
 
