@@ -60,7 +60,7 @@ class StrainEnergy:
     """Stored strain energy ``SE = t ∫ φ(∇u; fields) dΩ`` (the springs are not part of it)."""
 
     def __init__(self, mech, output="se"):
-        from ngsolve import GridFunction, Grad, Integrate, LinearForm
+        from ngsolve import BilinearForm, GridFunction, Grad, Integrate, LinearForm, Variation
 
         self.mech = mech
         self.inputs = ("u",) + mech.inputs
@@ -68,9 +68,14 @@ class StrainEnergy:
         self.gfu = GridFunction(mech.fes)
         dens = mech.thickness * mech._energy(Grad(self.gfu), mech.coeffs)
         self._dens = dens.Compile()
-        v = mech.fes.TestFunction()
-        self._du = LinearForm(mech.fes)
-        self._du += dens.Diff(self.gfu, v).Compile() * mech.DX
+        # ∂SE/∂u as the residual of the energy alone, Apply of a Variation form: the same
+        # integrand and quadrature as a LinearForm of dens.Diff(u, v) (equal to 1e-14), but
+        # 1.6-3.7x faster to evaluate (measured, benchmarks/profile_nonlinear.py)
+        u = mech.fes.TrialFunction()
+        self._energy_form = BilinearForm(mech.fes, symmetric=True)
+        self._energy_form += Variation(
+            (mech.thickness * mech._energy(Grad(u), mech.coeffs)).Compile() * mech.DX)
+        self._du_vec = self.gfu.vec.CreateVector()
         self._dfield = {}
         for f in mech.fields:
             lf = LinearForm(f.space)
@@ -84,9 +89,9 @@ class StrainEnergy:
         return float(self._integrate(self._dens * self.mech.DX, self.mech.mesh))
 
     def backward(self, g):
-        self._du.Assemble()
-        du = self._du.vec.CreateVector()
-        du.data = float(g) * self._du.vec
+        self._energy_form.Apply(self.gfu.vec, self._du_vec)
+        du = self._du_vec.CreateVector()
+        du.data = float(g) * self._du_vec
         out = [du]
         for f in self.mech.fields:
             lf = self._dfield[f.name]

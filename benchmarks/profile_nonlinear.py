@@ -1,0 +1,174 @@
+"""Where the time of a nonlinear pressure-actuated optimisation iteration goes.
+
+    python -m benchmarks.profile_nonlinear [--case pa-inverter] [--model neohookean]
+        [--load 1e6] [--iterations 4] [--maxh 0.004] [--order 1]
+
+Runs a short optimisation of the case (its defaults, the chosen model) under cProfile and
+charges the time of NGSolve's built-in calls to what calls them: the Darcy solve (assembly,
+factorisation, solve), the Newton iterations (residual, tangent assembly, factorisation, J
+guard), the adjoint solves and sensitivity forms of the mechanics block, the responses
+(strain energy and its derivatives), the filter, MMA.  Iteration 1 (Newton from u = 0) is
+included; the table reports per-iteration means over all iterations.
+"""
+from __future__ import annotations
+
+import argparse
+import cProfile
+import pstats
+import time
+
+# (category, file fragment, function name) -> first match wins; order matters
+CATEGORIES = [
+    ("Darcy: assembly + factorisation + solve", "darcy.py", "forward"),
+    ("Darcy: adjoint + sensitivity", "darcy.py", "backward"),
+    ("Newton: residual (Apply)", "newton.py", "residual"),
+    ("load norm (Apply at u = 0)", "mechanics.py", "load_norm"),
+    ("Newton: tangent assembly + factorisation", "newton.py", "assemble_tangent"),
+    ("adjoint: tangent at the converged state (assembly + factorisation)", "mechanics.py",
+     "_ensure_tangent"),
+    ("Newton: det F guard", "mechanics.py", "admissible"),
+    ("Newton: linear solves", "mechanics.py", "solve_tangent"),
+    ("mechanics adjoint solve", "mechanics.py", "adjoint"),
+    ("mechanics sensitivity forms (λᵀ∂R/∂ρ)", "mechanics.py", "backward"),
+    ("strain energy: value", "responses.py", "forward"),
+    ("strain energy: ∂SE/∂u, ∂SE/∂ρ", "responses.py", "backward"),
+    ("filter (Helmholtz)", "filters.py", ""),
+    ("MMA update", "mma.py", "update"),
+]
+
+
+def _inclusive(stats, frag, name):
+    """Cumulative time of ``name`` in a file matching ``frag``; for the mechanics methods
+    ``residual`` and ``assemble_tangent`` only the calls made from the file ``frag``."""
+    tot = 0.0
+    for (fn, _line, func), (_cc, _nc, _tt, ct, callers) in stats.stats.items():
+        if name in ("residual", "assemble_tangent") and fn.endswith("mechanics.py") \
+                and func == name:
+            tot += sum(v[3] for (cf, _l, _f), v in callers.items() if frag in cf)
+        elif name not in ("residual", "assemble_tangent") and frag in fn \
+                and (not name or func == name):
+            tot += ct
+    return tot
+
+
+def profile(case_name="pa-inverter", model="neohookean", load=1e6, iterations=4, maxh=0.004,
+            order=1, threads=2):
+    from ngsolve import SetNumThreads, TaskManager
+
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.optimize.driver import LoopState, optimize
+    from pacto_ng.run import initial_design, schedule_of
+
+    SetNumThreads(threads)
+    case = get_case(case_name)
+    params = case.defaults.with_overrides({"model": model, "load": str(load), "maxh": str(maxh),
+                                           "order": str(order), "iterations": str(iterations)})
+    with TaskManager():
+        problem = build_problem(case, params)
+        state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
+        prof = cProfile.Profile()
+        t0 = time.perf_counter()
+        prof.enable()
+        res = optimize(problem, schedule_of(params), iterations=iterations, tol=0.0,
+                       method="mma", move=params.move, state=state)
+        prof.disable()
+        wall = time.perf_counter() - t0
+    stats = pstats.Stats(prof)
+    # the forward/backward functions nest (assemble_tangent inside Newton inside forward):
+    # use leaf-level categories; the mechanics "backward" includes its adjoint, subtract it
+    rows = {c: _inclusive(stats, f, n) for c, f, n in CATEGORIES}
+    rows["mechanics sensitivity forms (λᵀ∂R/∂ρ)"] -= rows["mechanics adjoint solve"]
+    rows["mechanics adjoint solve"] -= rows[
+        "adjoint: tangent at the converged state (assembly + factorisation)"]
+    n = len(state.history)
+    newton = sum(h["newton"] for h in state.history)
+    out = dict(case=case_name, model=model, load=load, iterations=n, wall=wall,
+               per_iteration=wall / n, newton_per_iteration=newton / n,
+               elements=problem.mesh.ne, dofs=problem.mech.fes.ndof, stopped=res.stopped,
+               rows={k: v / n for k, v in rows.items()})
+    out["other"] = out["per_iteration"] - sum(out["rows"].values())
+    return out
+
+
+def markdown(r):
+    lines = [f"{r['case']}, {r['model']}, load {r['load']:g}, {r['elements']} elements, "
+             f"{r['dofs']} displacement dofs: {r['iterations']} iterations, "
+             f"{r['per_iteration']:.3f} s per iteration (mean), "
+             f"{r['newton_per_iteration']:.1f} Newton iterations per optimisation iteration.", "",
+             "| part | s per iteration | share |", "|---|---|---|"]
+    items = sorted(r["rows"].items(), key=lambda kv: -kv[1]) + [("other (chain, numpy, I/O)",
+                                                                 r["other"])]
+    for k, v in items:
+        lines.append(f"| {k} | {v:.3f} | {100 * v / r['per_iteration']:.0f} % |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", default="pa-inverter")
+    ap.add_argument("--model", default="neohookean")
+    ap.add_argument("--load", type=float, default=1e6)
+    ap.add_argument("--iterations", type=int, default=4)
+    ap.add_argument("--maxh", type=float, default=0.004)
+    ap.add_argument("--order", type=int, default=1)
+    args = ap.parse_args(argv)
+    r = profile(args.case, args.model, args.load, args.iterations, args.maxh, args.order)
+    print(markdown(r))
+    return r
+
+
+if __name__ == "__main__":
+    main()
+
+
+def strain_energy_ab(overrides_list, repeat=7):
+    """Before/after of the one library change this study made: ∂SE/∂u of the strain-energy
+    response as a LinearForm of ``dens.Diff(u, v)`` (before) against ``Apply`` of a
+    ``Variation`` form of the same energy (after, pacto_ng/responses.py), timed interleaved in
+    one process on the same state; also their largest relative difference."""
+    import statistics
+
+    import numpy as np
+    from ngsolve import Grad, LinearForm, SetNumThreads, TaskManager
+
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.run import initial_design
+
+    SetNumThreads(2)
+    case = get_case("pa-inverter")
+    out = []
+    for label, over in overrides_list:
+        with TaskManager():
+            problem = build_problem(case, case.defaults.with_overrides(over))
+            problem.evaluate(initial_design(problem))
+            mech = problem.mech
+            se = next(b for b in problem.chain.blocks if type(b).__name__ == "StrainEnergy")
+            dens = mech.thickness * mech._energy(Grad(se.gfu), mech.coeffs)
+            old = LinearForm(mech.fes)
+            old += dens.Diff(se.gfu, mech.fes.TestFunction()).Compile() * mech.DX
+            old.Assemble()
+            se._energy_form.Apply(se.gfu.vec, se._du_vec)
+            a, b = old.vec.FV().NumPy(), se._du_vec.FV().NumPy()
+            diff = float(np.max(np.abs(a - b)) / np.max(np.abs(a)))
+            t_old, t_new = [], []
+            for _ in range(repeat):
+                t0 = time.perf_counter()
+                old.Assemble()
+                t_old.append(time.perf_counter() - t0)
+                t0 = time.perf_counter()
+                se._energy_form.Apply(se.gfu.vec, se._du_vec)
+                t_new.append(time.perf_counter() - t0)
+        out.append(dict(label=label, elements=problem.mesh.ne, dofs=mech.fes.ndof,
+                        before=statistics.median(t_old), after=statistics.median(t_new),
+                        diff=diff))
+    return out
+
+
+def ab_markdown(rows):
+    lines = ["| problem | elements | dofs | ∂SE/∂u before (LinearForm of Diff) [s] | "
+             "after (Variation Apply) [s] | speed-up | max rel. difference |",
+             "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['label']} | {r['elements']} | {r['dofs']} | {r['before']:.4f} | "
+                     f"{r['after']:.4f} | {r['before'] / r['after']:.2f}x | {r['diff']:.1e} |")
+    return "\n".join(lines)

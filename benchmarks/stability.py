@@ -1,0 +1,125 @@
+"""Stability map: the largest pressure an analysis completes, per model and parameter.
+
+    python -m benchmarks.stability [--quick]
+
+A fixed representative design (the pa-inverter design of :mod:`benchmarks.trade`: the physical
+density after 20 optimisation iterations, a pixel image) is analysed with sensitivities
+(``problem.evaluate``) at increasing inlet pressures ``LOADS`` (load factor on the case's
+1e6 Pa), one parameter varied at a time from the base (Netgen mesh maxh 0.004, order 1,
+E0/E1 = 1e-6, ν = 0.4, no filter and no projection except in the β rows, where the Helmholtz
+filter and a projection of sharpness β act on the image).  The sweep stops at the first failure;
+reported: the largest load completed and why the next one failed (Newton's own reason: the
+load increment fell below its minimum, too many iterations, or every step inverted an
+element).  A completed analysis must also give a finite objective and gradient.  Newton's
+budget is cut to ``MAX_ITER`` iterations per load step and ``MAX_TOTAL_ITER`` per analysis.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import replace
+
+import numpy as np
+
+LOADS = (1e6, 3e6, 1e7)
+BASE = {"maxh": "0.004", "order": "1", "filter": "none", "beta": "0", "beta_max": "0",
+        "penal_start": "0", "E0": "3e3", "nu": "0.4"}
+
+STUDIES = [  # (parameter label, value label, overrides); the base row is model=neohookean
+    *[("model", m, {"model": m}) for m in ("linear", "gnl", "neohookean", "wang")],
+    ("E0/E1 (neohookean)", "1e-09", {"model": "neohookean", "E0": str(3e9 * 1e-9)}),
+    ("projection β (neohookean)", "128", {"model": "neohookean", "filter": "helmholtz",
+                                          "beta": "128", "beta_max": "128"}),
+    ("ν (neohookean)", "0.49", {"model": "neohookean", "nu": "0.49"}),
+]
+#: Newton budget of the sweep (the library defaults are 30 per load step, 1000 per analysis):
+#: a failing analysis otherwise spends minutes halving its load increment
+MAX_ITER, MAX_TOTAL_ITER = 30, 100
+QUICK = [("model", m, {"model": m}) for m in ("linear", "neohookean")]
+
+
+def classify(reason: str) -> str:
+    r = reason.lower()
+    if "det f" in r or "invert" in r:
+        return "inversion (det F <= 0 at every step length)"
+    if "increment fell below" in r:
+        return "Newton (load increment below minimum)"
+    if "iterations" in r:
+        return "Newton (iteration budget)"
+    if "finite" in r or "nan" in r:
+        return "non-finite values"
+    return reason[:80]
+
+
+def sweep(overrides, design, loads=LOADS):
+    from ngsolve import SetNumThreads, TaskManager
+
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.physics.mechanics import NewtonFailure
+    from benchmarks.trade import sample
+
+    SetNumThreads(2)
+    case = get_case("pa-inverter")
+    params = case.defaults.with_overrides({**BASE, **overrides, "load": str(loads[0])})
+    image, W, H = design
+    done, failure, newton, t_total = None, "", [], 0.0
+    with TaskManager():
+        problem = build_problem(case, params)
+        problem.mech.settings = replace(problem.mech.settings, max_iter=MAX_ITER,
+                                        max_total_iter=MAX_TOTAL_ITER)
+        x = sample(image, W, H, problem.field.centroids()[problem.field.design_index])
+        beta = float(params.beta)
+        for load in loads:
+            problem.apply_schedule(float(params.penal), beta, load / loads[0])
+            t0 = time.perf_counter()
+            try:
+                f0, f, df0, df = problem.evaluate(x)
+            except NewtonFailure as err:
+                failure = classify(err.result.reason)
+                t_total += time.perf_counter() - t0
+                break
+            t_total += time.perf_counter() - t0
+            if not (np.isfinite(f0) and np.all(np.isfinite(df0))):
+                failure = "non-finite objective or gradient"
+                break
+            done = load
+            newton.append(problem.mech.result.iterations)
+    return dict(done=done, failure=failure or f"none up to {loads[-1]:.0e} Pa",
+                newton=newton, time=t_total)
+
+
+def study(quick=False, log=print):
+    from benchmarks.trade import STUDIES as TRADE, fixed_design
+
+    _, grid, _, _ = TRADE["pa-inverter"]
+    design = fixed_design("pa-inverter", grid, 8 if quick else 20)
+    rows = []
+    for label, value, over in (QUICK if quick else STUDIES):
+        r = sweep(over, design, LOADS[:2] if quick else LOADS)
+        r.update(parameter=label, value=value)
+        rows.append(r)
+        log(f"  stability {label}={value}: largest load {r['done']}, next: {r['failure']}")
+    return rows
+
+
+def markdown(rows):
+    out = ["| parameter | value | largest load completed [Pa] | what failed at the next load | "
+           "Newton iterations per completed load | time [s] |", "|---|---|---|---|---|---|"]
+    for r in rows:
+        done = "none" if r["done"] is None else f"{r['done']:.0e}"
+        out.append(f"| {r['parameter']} | {r['value']} | {done} | {r['failure']} | "
+                   f"{', '.join(map(str, r['newton'])) or '–'} | {r['time']:.1f} |")
+    return "\n".join(out)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args(argv)
+    rows = study(args.quick)
+    print(markdown(rows))
+    return rows
+
+
+if __name__ == "__main__":
+    main()
