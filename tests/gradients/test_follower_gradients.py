@@ -13,6 +13,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from small_cases import small_pa_layout, small_pa_mesh
 from pacto_ng.core import Chain, check_gradient
 from pacto_ng.design import DesignField, Embed, FixPassive
 from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
@@ -30,19 +31,11 @@ L, H = 0.02, 0.01  # the small pa-inverter of tests/gradients/test_darcy_gradien
 
 
 def _layout():
-    return Layout(L, H, segments=(Segment("inlet", (0, H), (0, 0)),
-                                  Segment("fixed", (0, H), (L / 10, H)),
-                                  Segment("zero", (L / 10, H), (L, H)),
-                                  Segment("zero", (L, 0), (L, H)),
-                                  Segment("symmetry", (0, 0), (L, 0))),
-                  regions=(Region("block", "solid", 0, 0.9 * H, L / 10, H),),
-                  points=(("output", (L, 0)),))
+    return small_pa_layout()
 
 
 def _mesh(kind):
-    if kind == "trig":
-        return netgen_mesh(_layout(), 0.0012)
-    return structured_mesh(_layout(), 20, 10)
+    return small_pa_mesh(kind)
 
 
 def _model(name):

@@ -19,16 +19,7 @@ from pacto_ng.physics.newton import NewtonSettings
 from pacto_ng.responses import StrainEnergy, compliance
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """These systems have a few hundred unknowns: one thread.  Measured here, two threads
-    outside a TaskManager make each sparse-Cholesky refactorisation 0.2 ms -> 16-30 ms when the
-    machine is busy (and a TaskManager is slower still under load)."""
-    from ngsolve import SetNumThreads
-
-    SetNumThreads(1)
-    yield
-    SetNumThreads(2)
+pytestmark = pytest.mark.usefixtures("one_thread")
 
 
 TOL = 1e-6

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from small_cases import small_pa_layout, small_pa_mesh
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
 from pacto_ng.physics.darcy import DarcyPressure, darcy_body, darcy_follower
@@ -22,17 +23,11 @@ L, H, T = 0.02, 0.01, 1e-3  # the small pa-inverter of the gradient tests
 
 
 def _layout():
-    return Layout(L, H, segments=(Segment("inlet", (0, H), (0, 0)),
-                                  Segment("fixed", (0, H), (L / 10, H)),
-                                  Segment("zero", (L / 10, H), (L, H)),
-                                  Segment("zero", (L, 0), (L, H)),
-                                  Segment("symmetry", (0, 0), (L, 0))),
-                  regions=(Region("block", "solid", 0, 0.9 * H, L / 10, H),),
-                  points=(("output", (L, 0)),))
+    return small_pa_layout()
 
 
 def _mesh(kind):
-    return netgen_mesh(_layout(), 0.0012) if kind == "trig" else structured_mesh(_layout(), 20, 10)
+    return small_pa_mesh(kind)
 
 
 def _energy(model):

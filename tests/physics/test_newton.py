@@ -17,16 +17,7 @@ from pacto_ng.physics.mechanics import Mechanics, NewtonFailure, Supports
 from pacto_ng.physics.newton import NewtonSettings, solve_with_continuation
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_thread():
-    """These systems have a few hundred unknowns: one thread.  Measured here, two threads
-    outside a TaskManager make each sparse-Cholesky refactorisation 0.2 ms -> 16-30 ms when the
-    machine is busy (and a TaskManager is slower still under load)."""
-    from ngsolve import SetNumThreads
-
-    SetNumThreads(1)
-    yield
-    SetNumThreads(2)
+pytestmark = pytest.mark.usefixtures("one_thread")
 
 
 E, NU, T = 2.0e6, 0.4, 0.1

@@ -1,0 +1,23 @@
+"""Small shared set-ups of the tests."""
+from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
+
+#: a small pa-inverter (Δs = 0.002 is resolved by the meshes of :func:`small_pa_mesh`)
+PA_L, PA_H = 0.02, 0.01
+
+
+def small_pa_layout() -> Layout:
+    L, H = PA_L, PA_H
+    return Layout(L, H, segments=(Segment("inlet", (0, H), (0, 0)),
+                                  Segment("fixed", (0, H), (L / 10, H)),
+                                  Segment("zero", (L / 10, H), (L, H)),
+                                  Segment("zero", (L, 0), (L, H)),
+                                  Segment("symmetry", (0, 0), (L, 0))),
+                  regions=(Region("block", "solid", 0, 0.9 * H, L / 10, H),),
+                  points=(("output", (L, 0)),))
+
+
+def small_pa_mesh(kind: str):
+    """``"netgen"``/``"trig"``: Netgen triangles of size 1.2 mm; otherwise 20 x 10 quads."""
+    if kind in ("netgen", "trig"):
+        return netgen_mesh(small_pa_layout(), 0.0012)
+    return structured_mesh(small_pa_layout(), 20, 10)
