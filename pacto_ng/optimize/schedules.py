@@ -56,7 +56,8 @@ class Schedule:
         k0 = self.penal_done()
         if k < k0:
             return self.beta_start
-        return min(self.beta_max, self.beta_start * 2.0 ** ((k - k0) // self.beta_every))
+        doublings = min((k - k0) // self.beta_every, 1000)  # no float overflow for huge k
+        return min(self.beta_max, self.beta_start * 2.0 ** doublings)
 
     def load(self, k: int) -> float:
         if self.load_ramp <= 0:

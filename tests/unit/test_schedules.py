@@ -10,7 +10,7 @@ def test_wang_2014_schedule():
     assert abs(s.penalty(20) - 2.0) < 1e-12
     assert s.penal_done() == 40 and s.penalty(40) == 3.0 and s.penalty(100) == 3.0
     assert s.beta(39) == 4.0 and s.beta(40) == 4.0 and s.beta(50) == 8.0 and s.beta(80) == 64.0
-    assert s.beta(500) == 64.0
+    assert s.beta(500) == 64.0 and s.beta(10 ** 9) == 64.0  # the final value, no overflow
     assert not s.settled(60) and s.settled(81)
 
 
