@@ -70,7 +70,7 @@ class StrainEnergy:
         self._dens = dens.Compile()
         # ∂SE/∂u as the residual of the energy alone, Apply of a Variation form: the same
         # integrand and quadrature as a LinearForm of dens.Diff(u, v) (equal to 1e-14), but
-        # 1.6-3.7x faster to evaluate (measured, benchmarks/profile_nonlinear.py)
+        # 2-5x faster to evaluate (measured: benchmarks/profile_nonlinear.py strain_energy_ab)
         u = mech.fes.TrialFunction()
         self._energy_form = BilinearForm(mech.fes, symmetric=True)
         self._energy_form += Variation(

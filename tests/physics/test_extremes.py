@@ -1,0 +1,163 @@
+"""Runs at the extremes of the parameters (issue "speed against accuracy, stability at the
+extremes"): void stiffness E0/E1 = 1e-9, projection β = 128, ν = 0.49, solid flow coefficient
+Ks/Kv = 1e-9, and pressures at and far past what Neo-Hookean reaches.
+
+Each run either works (exit code 0, finite objective, volume and output displacement) or stops
+by the reliability rules (a Newton failure: exit code 1, a one-line ``run stopped: ...``
+message, the outputs of the last good design written).  In both cases no NaN or inf reaches
+a written file: summary.json, history.csv and every array of design.vtu are checked.
+The fast tests run 2 iterations on a coarse mesh; ``-m slow`` runs longer ones.
+"""
+from __future__ import annotations
+
+import csv
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+COARSE = ["--maxh", "0.01"]
+
+
+class _Proc:
+    """What a finished CLI run left: exit code, stdout, stderr."""
+
+    def __init__(self, returncode, stdout, stderr):
+        self.returncode, self.stdout, self.stderr = returncode, stdout, stderr
+
+
+def run_cli(*args, capsys=None):
+    """Run ``pacto`` in this process (captured by ``capsys``) or, without it, in a subprocess."""
+    if capsys is not None:
+        from pacto_ng.cli import main
+
+        capsys.readouterr()
+        code = main(list(args))
+        cap = capsys.readouterr()
+        return _Proc(code, cap.out, cap.err)
+    return subprocess.run([sys.executable, "-m", "pacto_ng.cli", *args], capture_output=True,
+                          text=True, timeout=600)
+
+
+def _all_finite_json(obj, where="summary.json"):
+    """Every number in a JSON document is finite (json writes NaN/Infinity as bare words)."""
+    if isinstance(obj, float):
+        assert math.isfinite(obj), f"non-finite number in {where}"
+    elif isinstance(obj, dict):
+        for k, v in obj.items():
+            _all_finite_json(v, f"{where}:{k}")
+    elif isinstance(obj, list):
+        for i, v in enumerate(obj):
+            _all_finite_json(v, f"{where}[{i}]")
+
+
+def check_outputs(out):
+    """summary.json, history.csv and design.vtu exist and hold finite numbers only."""
+    text = (out / "summary.json").read_text()
+    for word in ("NaN", "Infinity"):
+        assert word not in text, f"summary.json contains {word}"
+    summ = json.loads(text)
+    _all_finite_json(summ)
+    with open(out / "history.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert rows, "history.csv has no rows"
+    for row in rows:
+        for key, val in row.items():
+            try:
+                v = float(val)
+            except (TypeError, ValueError):
+                continue
+            assert math.isfinite(v), f"history.csv: {key} = {val}"
+    import meshio
+
+    m = meshio.read(out / "design.vtu")
+    assert len(m.points) > 0 and np.all(np.isfinite(m.points))
+    names = set(m.point_data) | set(m.cell_data)
+    assert {"rho_bar", "u"} <= names, names
+    for name, arr in m.point_data.items():
+        assert np.all(np.isfinite(arr)), f"design.vtu point data {name}"
+    for name, blocks in m.cell_data.items():
+        for arr in blocks:
+            assert np.all(np.isfinite(arr)), f"design.vtu cell data {name}"
+    return summ, rows
+
+
+def check_run(proc, out, n_iterations):
+    """A run that worked, or stopped cleanly by a Newton failure."""
+    assert proc.returncode in (0, 1), proc.stderr[-2000:]
+    summ, rows = check_outputs(out)
+    if proc.returncode == 0:
+        assert len(rows) == summ["iterations"] == n_iterations
+        assert math.isfinite(summ["objective"]) and 0.0 <= summ["volume_fraction"] <= 1.0
+    else:
+        lines = [ln for ln in proc.stdout.splitlines() if ln.strip()]
+        stopped = [ln for ln in lines if ln.startswith("run stopped:")]
+        assert len(stopped) == 1, proc.stdout[-2000:]
+        assert "Newton" in stopped[0] or "newton" in stopped[0], stopped[0]
+        assert "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    return summ
+
+
+# ---- fast: each works (linear model) -------------------------------------------------------
+@pytest.mark.parametrize("name, sets", [
+    ("E0/E1=1e-9", ["E0=3"]),                                   # E1 = 3e9
+    ("beta=128", ["beta=128", "beta_max=128"]),
+    ("nu=0.49", ["nu=0.49"]),
+    ("Ks/Kv=1e-9", ["Ks=1e-9"]),
+])
+def test_linear_extremes_work(name, sets, tmp_path, capsys):
+    out = tmp_path / "run"
+    args = ["run", "pa-inverter", *COARSE, "--iterations", "2", "--out", str(out), "--quiet"]
+    for s in sets:
+        args += ["--set", s]
+    proc = run_cli(*args, capsys=capsys)
+    assert proc.returncode == 0, (name, proc.stdout[-1000:], proc.stderr[-2000:])
+    summ = check_run(proc, out, 2)
+    assert summ["parameters"][sets[0].split("=")[0]] == pytest.approx(float(sets[0].split("=")[1]))
+    # the run did something: a finite, non-zero output displacement
+    assert summ["output_displacement"] != 0.0
+
+
+@pytest.mark.xfail(strict=True, raises=FileNotFoundError,
+                   reason="found by this test: a run whose first iteration fails Newton writes "
+                          "summary.json and design.vtu but no history.csv (run.write_outputs "
+                          "skips an empty history); fix belongs in pacto_ng/run.py")
+def test_neohookean_far_past_the_limit_stops_cleanly(tmp_path, capsys):
+    """1e13 Pa on a Neo-Hookean pa-inverter (even the smallest load increment, 1/1024 of it,
+    is 1000x the thesis's limit): Newton must fail, and the run must stop with exit code 1,
+    one line, finite outputs.  A very coarse mesh and 5 Newton iterations per step keep the
+    failure quick."""
+    out = tmp_path / "run"
+    proc = run_cli("run", "pa-inverter", "--maxh", "0.02", "--model", "neohookean",
+                   "--iterations", "2", "--set", "load=1e13", "--set", "newton_max_iter=5",
+                   "--out", str(out), "--quiet", capsys=capsys)
+    assert proc.returncode == 1, (proc.stdout[-1000:], proc.stderr[-2000:])
+    summ = check_run(proc, out, 2)
+    assert summ["load_factor_reached"] < 1.0
+
+
+# ---- slow: Neo-Hookean at the extremes, and at the thesis's limit -----------------------------
+@pytest.mark.slow
+@pytest.mark.parametrize("sets", [
+    ["E0=3"], ["beta=128", "beta_max=128", "beta_every=1"], ["nu=0.49"], ["Ks=1e-9"],
+    ["load=1e7"],
+])
+def test_neohookean_extremes_work_or_stop_cleanly(sets, tmp_path):
+    out = tmp_path / "run"
+    args = ["run", "pa-inverter", *COARSE, "--model", "neohookean", "--iterations", "5",
+            "--out", str(out), "--quiet"]
+    for s in sets:
+        args += ["--set", s]
+    check_run(run_cli(*args), out, 5)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("model", ["gnl", "wang"])
+def test_other_models_at_extreme_void_work_or_stop_cleanly(model, tmp_path):
+    out = tmp_path / "run"
+    check_run(run_cli("run", "pa-inverter", *COARSE, "--model", model, "--iterations", "5",
+                      "--set", "E0=3", "--set", "load=1e7", "--out", str(out), "--quiet"),
+              out, 5)
