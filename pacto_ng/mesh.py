@@ -199,6 +199,11 @@ def structured_mesh(layout: Layout, nelx: int, nely: int):
     mat = np.zeros((nelx, nely), dtype=int)
     for k, r in enumerate(layout.regions):
         inside = r.contains(cx[:, None], cy[None, :], tol=0.0)
+        if not inside.any():
+            # a region smaller than an element: the element holding its centre represents it
+            i = min(int(0.5 * (r.x0 + r.x1) / W * nelx), nelx - 1)
+            j = min(int(0.5 * (r.y0 + r.y1) / H * nely), nely - 1)
+            inside[i, j] = True
         mat[inside & (mat == 0)] = k + 1
     for j in range(nely):
         for i in range(nelx):
