@@ -56,3 +56,97 @@ def convergence_png(path, history: list, objective_name: str):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def _triangulation(mesh):
+    """matplotlib Triangulation of the mesh vertices (quads split into two triangles)."""
+    from matplotlib.tri import Triangulation
+
+    pts = np.array([v.point for v in mesh.vertices])
+    tris = []
+    for el in mesh.Elements():
+        vs = [v.nr for v in el.vertices]
+        tris.append(vs[:3])
+        if len(vs) == 4:
+            tris.append([vs[0], vs[2], vs[3]])
+    return Triangulation(pts[:, 0], pts[:, 1], np.array(tris))
+
+
+def nodal_average(mesh, values, areas) -> np.ndarray:
+    """Area-weighted average of element values at each vertex."""
+    num = np.zeros(mesh.nv)
+    den = np.zeros(mesh.nv)
+    for el, val, a in zip(mesh.Elements(), values, areas):
+        for v in el.vertices:
+            num[v.nr] += a * val
+            den[v.nr] += a
+    return num / np.maximum(den, 1e-300)
+
+
+def pressure_png(path, problem, title: str | None = None, leakage: float | None = None,
+                 leakage_any: float | None = None):
+    """The Darcy pressure field with the ρ̄ = 0.5 contour of the design drawn on it (as thesis
+    Figs 6.9 and 6.18): colours p / P_in at the vertices, black line the contour of the
+    area-weighted nodal average of the element densities ρ̄ (the total solid for two
+    materials)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    block = problem.pressure_block
+    mesh = problem.mesh
+    rho = np.asarray(problem.values[block.inputs[0]])
+    p_in = block.p_in  # the load factor scales the body force, not p
+    pv = block.gfp.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
+    tri = _triangulation(mesh)
+    x, y = tri.x, tri.y
+    w, h = np.ptp(x), np.ptp(y)
+    fig, ax = plt.subplots(figsize=(8, max(2.0, 8 * h / w)))
+    tpc = ax.tripcolor(tri, pv, shading="gouraud", cmap="coolwarm", vmin=0.0, vmax=1.0)
+    rho_n = nodal_average(mesh, rho, problem.field.areas)
+    if rho_n.min() < 0.5 < rho_n.max():
+        ax.tricontour(tri, rho_n, levels=[0.5], colors="k", linewidths=1.0)
+    ax.set_xlim(x.min(), x.max())
+    ax.set_ylim(y.min(), y.max())
+    ax.set_aspect("equal")
+    extra = "" if leakage is None else f"\nleakage {100 * leakage:.2f} % of P_in"
+    if leakage_any is not None:
+        extra += f" (any element outside the cavity: {100 * leakage_any:.2f} %)"
+    ax.set_title(title or f"{problem.case.name} — p / P_in (P_in = {p_in:g} Pa), "
+                 f"ρ̄ = 0.5 contour{extra}", fontsize=10)
+    fig.colorbar(tpc, ax=ax, fraction=0.03, label="p / P_in")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def materials_png(path, problem, title: str | None = None):
+    """Two-material design: void white, soft material (ρ̄2 = 0) orange, stiff (ρ̄2 = 1) blue;
+    each element's colour is mixed by ρ̄2 and faded to white by ρ̄1."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+    from matplotlib.patches import Patch
+
+    r1 = np.clip(np.asarray(problem.values["rho_bar1"]), 0, 1)[:, None]
+    r2 = np.clip(np.asarray(problem.values["rho_bar2"]), 0, 1)[:, None]
+    soft, stiff = np.array([0.93, 0.55, 0.13]), np.array([0.12, 0.30, 0.70])
+    colours = (1 - r1) * 1.0 + r1 * ((1 - r2) * soft + r2 * stiff)
+    polys = element_polygons(problem.mesh)
+    allpts = np.concatenate(polys)
+    w, h = np.ptp(allpts[:, 0]), np.ptp(allpts[:, 1])
+    fig, ax = plt.subplots(figsize=(8, max(2.0, 8 * h / w)))
+    ax.add_collection(PolyCollection(polys, facecolors=colours, edgecolors="face", linewidths=0.1))
+    ax.set_xlim(allpts[:, 0].min(), allpts[:, 0].max())
+    ax.set_ylim(allpts[:, 1].min(), allpts[:, 1].max())
+    ax.set_aspect("equal")
+    ax.legend(handles=[Patch(color=soft, label="material 1 (soft)"),
+                       Patch(color=stiff, label="material 2 (stiff)")],
+              loc="upper right", fontsize=8)
+    ax.set_title(title or f"{problem.case.name} — ρ̄1 (solid) mixed by ρ̄2 (stiff fraction)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
