@@ -56,6 +56,11 @@ class Setup:
     pressure: Pressure | None = None
     materials: int = 1
     se_max: float = 0.0  # strain-energy limit (J) of objective "output_se" unless --set se_max
+    # typical magnitude of the objective; the run scales it to 10/objective_ref.  0: the
+    # driver's 10/|f0(x0)|, which fails for mechanisms whose initial design barely moves the
+    # output (f0(x0) ≈ 0: the scaled objective then grows by 100x and MMA drops the volume
+    # constraint for it)
+    objective_ref: float = 0.0
 
     def __post_init__(self):
         if self.objective not in OBJECTIVES:

@@ -8,6 +8,8 @@ DIR/summary.json       case, model, parameters, iterations, objective and its hi
 DIR/history.csv        one row per iteration
 DIR/design.vtu         x, rho_bar, u (and p) on the mesh
 DIR/design.png         the physical density
+DIR/pressure.png       pressure cases: p / P_in with the ρ̄ = 0.5 contour (leakage in summary.json)
+DIR/materials.png      two-material cases: where the soft and the stiff material are
 DIR/convergence.png    objective and volume against iteration
 """
 from __future__ import annotations
@@ -101,7 +103,16 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
 def run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
              resume: bool = False) -> int:
     """Optimise ``case`` with ``params``, writing the output folder.  Returns the exit code:
-    0 finished (converged or iteration limit), 1 stopped by a Newton failure."""
+    0 finished (converged or iteration limit), 1 stopped by a Newton failure.  Runs inside
+    NGSolve's task manager (:func:`pacto_ng.threads.compute`)."""
+    from .threads import compute
+
+    with compute():
+        return _run_case(case, params, out, quiet=quiet, resume=resume)
+
+
+def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
+              resume: bool = False) -> int:
     path = prepare_output(out)
     t_start = time.perf_counter()
     model_choice = None
@@ -123,7 +134,9 @@ def run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: b
         if not quiet:
             print(f"resuming {case.name} at iteration {state.k}")
     else:
-        state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
+        ref = problem.setup.objective_ref
+        state = LoopState(k=0, x=initial_design(problem), opt_state=None,
+                          scale=10.0 / ref if ref > 0 else None)
     if not quiet:
         print(f"{case.name}: model {params.model}, {problem.mesh.ne} elements, order {params.order}, "
               f"{problem.mech.fes.ndof} displacement dofs, {problem.field.n} design variables")
@@ -164,7 +177,7 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         return float(vals[name]) if name in vals else None
 
     newton_counts = [h["newton"] for h in history]
-    return {
+    out = {
         "case": problem.case.name,
         "model": p.model,
         "parameters": p.to_dict(),
@@ -194,6 +207,31 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "darcy_solve": problem.pressure_block is not None,
         "symmetric_half_domain": any(n == "symmetry" for n in problem.mesh.GetBoundaries()),
     }
+    out.update(pressure_and_material_summary(problem))
+    return out
+
+
+def pressure_and_material_summary(problem: Problem) -> dict:
+    """Pressure cases: ``leakage`` (fraction of P_in, see :func:`pacto_ng.physics.darcy.leakage`)
+    and its details.  Two materials: the volume fractions of the total solid, of material 1
+    (soft, ``Σ a ρ̄1 (1-ρ̄2)``) and of material 2 (stiff, ``Σ a ρ̄1 ρ̄2``) over the design
+    elements."""
+    out = {}
+    vals = problem.values
+    if problem.pressure_block is not None:
+        from .physics.darcy import leakage
+
+        blk = problem.pressure_block
+        info = leakage(blk, vals[blk.inputs[0]], problem.h)
+        out["leakage"] = info.pop("leakage")
+        out["leakage_detail"] = info
+    if problem.n_design_fields == 2:
+        w = np.where(problem.field.design, problem.field.areas, 0.0)
+        r1, r2 = np.asarray(vals["rho_bar1"]), np.asarray(vals["rho_bar2"])
+        out["material_fractions"] = {"solid": float(w @ r1 / w.sum()),
+                                     "material1_soft": float(w @ (r1 * (1 - r2)) / w.sum()),
+                                     "material2_stiff": float(w @ (r1 * r2) / w.sum())}
+    return out
 
 
 def _finite(name, arr):
@@ -202,7 +240,7 @@ def _finite(name, arr):
 
 
 def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, result, wall: float):
-    from .post.plots import convergence_png, density_png
+    from .post.plots import convergence_png, density_png, materials_png, pressure_png
 
     summ = summary_dict(problem, history, result, wall)
     for key in ("objective", "volume_fraction"):
@@ -217,6 +255,11 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
             w.writerows(history)
     write_vtu(path / "design", problem, x)
     density_png(path / "design.png", problem)
+    if problem.pressure_block is not None:
+        pressure_png(path / "pressure.png", problem, leakage=summ.get("leakage"),
+                     leakage_any=summ["leakage_detail"]["leakage_any"])
+    if problem.n_design_fields == 2:
+        materials_png(path / "materials.png", problem)
     if history:
         convergence_png(path / "convergence.png", history, problem.objective)
 
