@@ -1,9 +1,13 @@
-"""Pressure-actuated inverter and gripper, half domain (symmetry at y = 0).
+"""Pressure-actuated inverter and gripper, half domain (symmetry at y = 0), CASES.md.
 
-Pressure inlet on the left edge, zero pressure on the top and right edges; clamp on the first
-``clamp`` of the top edge with a passive solid block under it.  The gripper adds a passive void
-(the gripped object's place) over x ∈ [0.8L, L], y ∈ [0, 0.2H] and a passive solid jaw pad over
-y ∈ [0.2H, 0.25H] (CASES.md).
+Boundaries: "inlet" (the left edge), "fixed" (the first ``clamp`` of the top edge, default
+L/20, next to the left corner), "zero_pressure" (the rest of the top edge and the right edge),
+"symmetry" (the bottom edge).  Passive solid "block" (``block`` = width x height, default
+L/20 x H/20) under the clamp.  The gripper adds a passive void "jaw_void" (the gripped object's
+place) over x ∈ [0.8L, L], y ∈ [0, 0.2H] and a passive solid "jaw_pad" over x ∈ [0.8L, L],
+y ∈ [0.2H, 0.25H].  Port "output": the bottom-right corner (inverter) or the inner right corner
+of the jaw pad (L, 0.2H) (gripper).  CASES.md puts zero pressure on the whole top edge: the
+cases list "fixed" among the zero-pressure boundaries as well.
 """
 from pacto_ng.mesh import Layout, Region, Segment
 
