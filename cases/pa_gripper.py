@@ -1,0 +1,59 @@
+"""Pressure-actuated compliant gripper (thesis §6.2; Kumar, Frouws & Langelaar 2020).
+
+What it shows: a pressure-driven gripper whose jaw closes on an object.  The Darcy method
+(SPEC §2) decides where the pressure acts; the optimiser turns the inlet pressure into a jaw
+motion towards the symmetry line.
+
+The pa-inverter domain (half 0.2 x 0.1 m, inlet on the left edge, zero pressure on the top and
+right edges, clamp and passive solid block at the top-left corner) with a passive void
+x ∈ [0.8L, L], y ∈ [0, 0.2H] (the gripped object's place) and a passive solid jaw pad
+x ∈ [0.8L, L], y ∈ [0.2H, 0.25H].  Output: the inner right corner of the jaw pad (L, 0.2H),
+Δ = -u_y (the jaw closes) with an output spring k_ss = k_out = 1e4 N/m.  E1 = 3e9 Pa,
+E0 = 1e-6 E1, ν = 0.4, plane strain, t = 1e-3 m, volume fraction 0.2, triangles of 0.004 m
+(thesis Table 6.1); load 1e6 Pa by default (the thesis ran 1e5–1e7 Pa).
+
+Objective ``mechanism``: minimise -sΔ/SE (thesis eq. 3.9); ``--set objective=output_se``
+maximises Δ subject to SE <= se_max.  Structured quads and the unit-element set-up as for
+pa-inverter (see its docstring).
+"""
+from __future__ import annotations
+
+import sys
+
+from pacto_ng.case import Case, Pressure, Setup, domain_size
+from pacto_ng.params import Parameters
+from pacto_ng.physics.loads import Port, Spring
+from pacto_ng.physics.mechanics import Supports
+from pacto_ng.geometries import pa_mechanism as geo
+from pacto_ng.cases.pa_inverter import PA_DEFAULTS, objective_ref, se_default
+
+
+def _layout(p: Parameters):
+    L, H = domain_size(p, 0.2, 0.1)
+    return geo.layout(L, H, gripper=True)
+
+
+def _setup(p: Parameters) -> Setup:
+    return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",)),
+                 springs=(Spring("output", p.k_out, (0.0, 1.0)),),
+                 port=Port("output", (0.0, -1.0)), solid=("block", "jaw_pad"),
+                 void=("jaw_void",), objective="mechanism",
+                 pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
+                 se_max=se_default(p, 0.2, 0.1),
+                 objective_ref=objective_ref(p, 0.2, 0.1, 3.0))
+
+
+CASE = Case(
+    name="pa-gripper",
+    summary="pressure-actuated gripper (Darcy pressure), minimise -Δ/SE, the jaw closes",
+    source="Thesis §6.2 (Table 6.1); Kumar, Frouws & Langelaar (2020), Struct Multidisc Optim 61",
+    defaults=PA_DEFAULTS,
+    layout=_layout,
+    setup=_setup,
+    load_unit="Pa",
+)
+
+if __name__ == "__main__":
+    from pacto_ng.cli import main
+
+    sys.exit(main(["run", CASE.name] + sys.argv[1:]))

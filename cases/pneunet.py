@@ -1,0 +1,62 @@
+"""One member of a pneumatic network, PneuNet (thesis §6.3; Kumar 2023).
+
+What it shows: an *internal* pressure load.  A chamber inside the member is pressurised; the
+Darcy method (SPEC §2) carries the pressure from the chamber wall to wherever the design lets
+it go, and the optimiser shapes the member so that its free end bends down.
+
+Domain 0.1 x 0.05 m (no symmetry).  A passive void chamber x ∈ [0.02, 0.08], y ∈ [0.01, 0.02]
+whose boundary is the pressure inlet; zero pressure on the whole outer boundary (the clamped
+left edge included).  Output: the bottom-right corner, Δ = -u_y (the member bends down), with
+an output spring k_ss = k_out = 1e4 N/m (the thesis also shows 1e3).  E1 = 1e8 Pa,
+E0 = 1e-6 E1, ν = 0.4, plane strain, t = 1e-3 m, volume fraction 0.2, ηk = 0.2, ηh = 0.3,
+triangles of 0.003 m; load 1e5 Pa by default (the thesis limit).
+
+Objective ``mechanism``: minimise -sΔ/SE (thesis eq. 3.9); ``--set objective=output_se``
+maximises Δ subject to SE <= se_max.  Structured quads ``--nelx 120 --nely 60``; unit elements
+as for pa-inverter (see its docstring).
+"""
+from __future__ import annotations
+
+import sys
+
+from pacto_ng.case import Case, Pressure, Setup, domain_size
+from pacto_ng.params import Parameters
+from pacto_ng.physics.loads import Port, Spring
+from pacto_ng.physics.mechanics import Supports
+from pacto_ng.geometries import pneunet as geo
+from pacto_ng.cases.pa_inverter import objective_ref, se_default
+
+
+def _layout(p: Parameters):
+    L, H = domain_size(p, 0.1, 0.05)
+    return geo.layout(L, H, chamber=(0.2 * L, 0.2 * H, 0.8 * L, 0.4 * H))
+
+
+def _setup(p: Parameters) -> Setup:
+    return Setup(supports=Supports(clamp=("fixed",)),
+                 springs=(Spring("output", p.k_out, (0.0, 1.0)),),
+                 port=Port("output", (0.0, -1.0)), void=("chamber",), objective="mechanism",
+                 pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
+                 se_max=se_default(p, 0.1, 0.05),
+                 objective_ref=objective_ref(p, 0.1, 0.05, 0.1))
+
+
+CASE = Case(
+    name="pneunet",
+    summary="PneuNet member: internal chamber pressure (Darcy), minimise -Δ/SE, bends down",
+    source="Thesis §6.3; Kumar (2023); Liu et al. (2020) for PneuNets",
+    defaults=Parameters(model="linear", maxh=0.003, plane="strain", thickness=1e-3, E1=1e8,
+                        E0=1e2, nu=0.4, volfrac=0.2, filter="helmholtz",
+                        filter_radius=0.009, penal=3.0,
+                        penal_start=1.0, penal_step=0.04, beta=1.0, beta_max=32.0,
+                        beta_every=15, eta_k=0.2, eta_h=0.3, load=1e5, k_out=1e4,
+                        iterations=160, move=0.05, tol=0.01),
+    layout=_layout,
+    setup=_setup,
+    load_unit="Pa",
+)
+
+if __name__ == "__main__":
+    from pacto_ng.cli import main
+
+    sys.exit(main(["run", CASE.name] + sys.argv[1:]))
