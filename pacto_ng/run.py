@@ -29,6 +29,11 @@ from .params import InputError, Parameters
 from .physics.mechanics import NewtonFailure
 
 
+#: the columns of history.csv (one row per iteration), then the case's reported responses
+HISTORY_COLUMNS = ("iteration", "objective", "volume", "constraint", "change", "penal", "beta",
+                   "load", "newton", "load_steps", "time")
+
+
 def prepare_output(out: str | os.PathLike) -> Path:
     """Create the output folder or fail with a one-line InputError."""
     path = Path(out)
@@ -247,12 +252,12 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
         if summ[key] is not None and not np.isfinite(summ[key]):
             raise RuntimeError(f"{key} is not finite: nothing written")
     (path / "summary.json").write_text(json.dumps(summ, indent=1))
-    if history:
-        keys = list(history[0].keys())
-        with open(path / "history.csv", "w", newline="") as fh:
-            w = csv.DictWriter(fh, fieldnames=keys)
-            w.writeheader()
-            w.writerows(history)
+    # written even when no iteration finished (a Newton failure in the first one): a header only
+    keys = list(history[0].keys()) if history else list(HISTORY_COLUMNS) + list(problem.reports)
+    with open(path / "history.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=keys)
+        w.writeheader()
+        w.writerows(history)
     write_vtu(path / "design", problem, x)
     density_png(path / "design.png", problem)
     if problem.pressure_block is not None:
