@@ -1,3 +1,31 @@
 """pacto_ng — NGSolve-based topology optimisation of pressure-actuated soft robots and
 compliant mechanisms."""
+import importlib.util as _ilu
+import os as _os
+import sys as _sys
+
 __version__ = "0.1.0"
+
+
+def _source_subpackages():
+    """The repository's top-level ``cases/`` and ``geometries/`` are installed as
+    ``pacto_ng.cases`` and ``pacto_ng.geometries`` (pyproject package-dir).  When the package
+    is imported from a source checkout instead (e.g. ``python -m pytest`` puts the checkout
+    first on ``sys.path``), register those folders under the same names."""
+    here = _os.path.dirname(_os.path.abspath(__file__))
+    root = _os.path.dirname(here)
+    for name in ("cases", "geometries"):
+        full = f"{__name__}.{name}"
+        src = _os.path.join(root, name)
+        if full in _sys.modules or _os.path.isdir(_os.path.join(here, name)):
+            continue
+        init = _os.path.join(src, "__init__.py")
+        if not _os.path.isfile(init):
+            continue
+        spec = _ilu.spec_from_file_location(full, init, submodule_search_locations=[src])
+        module = _ilu.module_from_spec(spec)
+        _sys.modules[full] = module
+        spec.loader.exec_module(module)
+
+
+_source_subpackages()

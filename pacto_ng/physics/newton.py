@@ -120,6 +120,15 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
     return True, it, "", res
 
 
+def _attempt(problem, u, load, ref, s, linear, accept):
+    """Newton at one load factor, then the caller's acceptance test of the equilibrium."""
+    ok, it, why, res = newton_step_solve(problem, u, load, ref, s, linear)
+    if ok and accept is not None:
+        why = accept(load, u)
+        ok = not why
+    return ok, it, why, res
+
+
 def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, warm: bool,
                             linear: bool = False, on_step=None, accept=None) -> NewtonResult:
     """Bring ``u`` to equilibrium at load factor ``target``.
@@ -141,11 +150,8 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
     if warm:
         saved = u.CreateVector()
         saved.data = u
-        ok, it, why, res = newton_step_solve(problem, u, target, ref, s, linear)
+        ok, it, why, res = _attempt(problem, u, target, ref, s, linear, accept)
         result.iterations += it
-        if ok and accept is not None:
-            why = accept(target, u)
-            ok = not why
         if ok:
             result.converged, result.load_reached, result.steps, result.residual = True, target, 1, res / ref
             result.history.append((target, it))
@@ -167,11 +173,8 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
             break
         trial_load = min(load + inc, target)
         saved.data = u
-        ok, it, why, res = newton_step_solve(problem, u, trial_load, ref, s, linear)
+        ok, it, why, res = _attempt(problem, u, trial_load, ref, s, linear, accept)
         result.iterations += it
-        if ok and accept is not None:
-            why = accept(trial_load, u)
-            ok = not why
         if ok:
             load = trial_load
             result.steps += 1
