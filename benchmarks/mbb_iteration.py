@@ -16,22 +16,29 @@ import time
 import numpy as np
 
 
-def measure(nelx: int, nely: int, iterations: int = 8, repeat: int = 3):
-    from ngsolve import SetNumThreads, TaskManager
-
+def short_optimisation(case_name: str, nelx: int, nely: int, iterations: int):
+    """Build ``case_name`` on a structured nelx x nely mesh and run ``iterations`` MMA
+    iterations (no convergence stop).  Call inside a TaskManager.  Returns (problem, state)."""
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
     from pacto_ng.run import initial_design, schedule_of
 
-    SetNumThreads(2)
-    case = get_case("mbb")
+    case = get_case(case_name)
     params = case.defaults.with_overrides({"nelx": str(nelx), "nely": str(nely),
                                            "iterations": str(iterations)})
+    problem = build_problem(case, params)
+    state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
+    optimize(problem, schedule_of(params), iterations=iterations, tol=0.0, method="mma",
+             move=params.move, state=state)
+    return problem, state
+
+
+def measure(nelx: int, nely: int, iterations: int = 8, repeat: int = 3):
+    from ngsolve import SetNumThreads, TaskManager
+
+    SetNumThreads(2)
     with TaskManager():
-        problem = build_problem(case, params)
-        state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
-        optimize(problem, schedule_of(params), iterations=iterations, tol=0.0, method="mma",
-                 move=params.move, state=state)
+        problem, state = short_optimisation("mbb", nelx, nely, iterations)
         per_it = statistics.median(h["time"] for h in state.history[1:])
         # one factorisation + solve of the same matrix
         mech = problem.mech

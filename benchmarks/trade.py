@@ -50,9 +50,7 @@ def fixed_design(case_name, grid, iterations=DESIGN_ITERATIONS):
     """(image (nely, nelx), width, height): rho_bar after a short optimisation (cached)."""
     from ngsolve import SetNumThreads, TaskManager
 
-    from pacto_ng.case import build_problem, get_case
-    from pacto_ng.optimize.driver import LoopState, optimize
-    from pacto_ng.run import initial_design, schedule_of
+    from benchmarks.mbb_iteration import short_optimisation
 
     nelx, nely = grid
     path = os.path.join(_cache_dir(), f"{case_name}_{nelx}x{nely}_{iterations}.npz")
@@ -60,14 +58,8 @@ def fixed_design(case_name, grid, iterations=DESIGN_ITERATIONS):
         d = np.load(path)
         return d["image"], float(d["W"]), float(d["H"])
     SetNumThreads(2)
-    case = get_case(case_name)
-    params = case.defaults.with_overrides({"nelx": str(nelx), "nely": str(nely),
-                                           "iterations": str(iterations)})
     with TaskManager():
-        problem = build_problem(case, params)
-        state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
-        optimize(problem, schedule_of(params), iterations=iterations, tol=0.0, method="mma",
-                 move=params.move, state=state)
+        problem, _ = short_optimisation(case_name, nelx, nely, iterations)
         image = np.asarray(problem.values["rho_bar"]).reshape(nely, nelx)
         pts = np.array([v.point for v in problem.mesh.vertices])
     W, H = pts[:, 0].max(), pts[:, 1].max()
