@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from small_cases import small_pa_layout, small_pa_mesh
+from small_cases import PA_H, PA_L, small_pa_layout, small_pa_mesh
 from pacto_ng.core import Chain, check_gradient
 from pacto_ng.design import DesignField, Embed, FixPassive
 from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
@@ -21,15 +21,7 @@ from pacto_ng.physics.materials import linear_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.responses import MechanismRatio, StrainEnergy, output_displacement
 
-L, H = 0.02, 0.01  # a small pa-inverter: Δs = 0.002 is resolved by the meshes below
-
-
-def _layout():
-    return small_pa_layout()
-
-
-def _mesh(kind):
-    return small_pa_mesh(kind)
+L, H = PA_L, PA_H  # the small pa-inverter of tests/small_cases.py
 
 
 def _fd(chain, name, x0, wrt="x", **fixed):
@@ -50,7 +42,7 @@ def test_pressure_block_gradient(kind, order):
     and the inlet Dirichlet values fixed; dJ/dp by hand in the test (c + 1e-4 M p)."""
     from ngsolve import BilinearForm, dx
 
-    mesh = _mesh(kind)
+    mesh = small_pa_mesh(kind)
     block = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e4, p_out=300.0, order=order)
     rng = np.random.default_rng(0)
     c = rng.normal(size=block.fes.ndof)
@@ -76,7 +68,7 @@ def test_pressure_block_gradient(kind, order):
 
 
 def _chain(kind, order, sensitivity=True):
-    mesh = _mesh(kind)
+    mesh = small_pa_mesh(kind)
     dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e5, order=order,
                         sensitivity=sensitivity)
     energy = lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4)
@@ -110,7 +102,7 @@ def test_full_chain_gradient(kind, order, response):
 def test_two_material_chain_gradient():
     """Two design fields with the two-material SIMP law (thesis eq. 6.1), the pressure driven by
     the first (solid/void) field, as in mm-gripper: FD check with respect to each field."""
-    mesh = _mesh("quads")
+    mesh = small_pa_mesh("quads")
     field = DesignField(mesh, solid=("block",))
     dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e5, order=1, inputs=("rho1",))
     energy = lambda G, c: linear_energy(G, simp2_cf(c["rho1"], c["rho2"], 3e2, 3e8, 3e9, 3.0), 0.4)
@@ -139,7 +131,7 @@ def test_neohookean_chain_gradient():
     from pacto_ng.physics.materials import jacobian, neohookean_energy
     from pacto_ng.physics.newton import NewtonSettings
 
-    mesh = _mesh("quads")
+    mesh = small_pa_mesh("quads")
     dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=2e6, order=1)
     energy = lambda G, c: neohookean_energy(G, simp_cf(c["rho_bar"], 3e3, 3e8, 3.0), 0.4)
     mech = Mechanics(mesh, order=1, energy=energy, fields=("rho_bar", dar.field()),

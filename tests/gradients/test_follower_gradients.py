@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from small_cases import small_pa_layout, small_pa_mesh
+from small_cases import PA_H, PA_L, small_pa_layout, small_pa_mesh
 from pacto_ng.core import Chain, check_gradient
 from pacto_ng.design import DesignField, Embed, FixPassive
 from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
@@ -27,15 +27,7 @@ from pacto_ng.physics.newton import NewtonSettings
 from pacto_ng.physics.wang import wang_model
 from pacto_ng.responses import MechanismRatio, StrainEnergy, output_displacement
 
-L, H = 0.02, 0.01  # the small pa-inverter of tests/gradients/test_darcy_gradients.py
-
-
-def _layout():
-    return small_pa_layout()
-
-
-def _mesh(kind):
-    return small_pa_mesh(kind)
+L, H = PA_L, PA_H  # the small pa-inverter of tests/small_cases.py
 
 
 def _model(name):
@@ -46,7 +38,7 @@ def _model(name):
 
 
 def _chain(kind, model):
-    mesh = _mesh(kind)
+    mesh = small_pa_mesh(kind)
     dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=2e6, order=1)
     energy, guard = _model(model)
     mech = Mechanics(mesh, order=1, energy=energy, fields=("rho_bar", dar.field()),
@@ -108,7 +100,7 @@ def _case(objective="mechanism", pressure=True):
         loads=() if pressure else (PointLoad("output", (-p.load * 1e-6, 0.0)),),
         pressure=Pressure(inlet=("inlet",), zero=("zero",)) if pressure else None)
     return Case(name="follower-test", summary="small pa-inverter", source="this test",
-                defaults=defaults, layout=lambda p: _layout(), setup=setup, load_unit="Pa")
+                defaults=defaults, layout=lambda p: small_pa_layout(), setup=setup, load_unit="Pa")
 
 
 @pytest.mark.parametrize("model", ["neohookean", "wang"])

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from small_cases import small_pa_layout, small_pa_mesh
+from small_cases import PA_H, PA_L, small_pa_layout, small_pa_mesh
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
 from pacto_ng.physics.darcy import DarcyPressure, darcy_body, darcy_follower
@@ -19,15 +19,7 @@ from pacto_ng.physics.mechanics import Field, Mechanics, Supports
 from pacto_ng.physics.newton import NewtonSettings
 from pacto_ng.physics.wang import wang_model
 
-L, H, T = 0.02, 0.01, 1e-3  # the small pa-inverter of the gradient tests
-
-
-def _layout():
-    return small_pa_layout()
-
-
-def _mesh(kind):
-    return small_pa_mesh(kind)
+L, H, T = PA_L, PA_H, 1e-3  # the small pa-inverter of tests/small_cases.py
 
 
 def _energy(model):
@@ -43,7 +35,7 @@ def _energy(model):
 def _pair(kind, model="neohookean", order=1, p_in=1.0, linear=None, rtol=1e-12):
     """Mechanics with the fixed and with the follower Darcy load on the same mesh, design and
     pressure field (Darcy at inlet pressure ``p_in``); returns (fixed, follower, rho, p)."""
-    mesh = _mesh(kind)
+    mesh = small_pa_mesh(kind)
     dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=p_in, order=order)
     rho = np.random.default_rng(3).uniform(0.3, 1.0, mesh.ne)
     p = dar.forward(rho)
@@ -176,7 +168,7 @@ def test_homogeneous_deformation_with_linear_pressure(kind, order):
     ``-∫ ∇_x p dv = -|Ω_t| F⁻ᵀ a`` with the sign of a residual)."""
     from ngsolve import CF, GridFunction, H1, Integrate, InnerProduct, LinearForm, x, y
 
-    mesh = _mesh(kind)
+    mesh = small_pa_mesh(kind)
     Fh = np.array([[1.2, 0.3], [-0.1, 0.9]])
     a = np.array([3.0e5, -1.5e5])
     s = 0.7
