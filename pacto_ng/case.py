@@ -271,7 +271,8 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         mech_fields.append(pfield)
     loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force))) for ld in setup.loads)
     newton = NewtonSettings(rtol=params.newton_rtol, max_iter=params.newton_max_iter,
-                            initial_increment=params.newton_increment)
+                            initial_increment=params.newton_increment,
+                            min_increment=params.newton_min_increment)
     try:
         mech = Mechanics(mesh, order=params.order, energy=energy, fields=mech_fields,
                          supports=setup.supports, loads=loads, springs=setup.springs, body=body,

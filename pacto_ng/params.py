@@ -47,6 +47,7 @@ class Parameters:
     # -- loads and ports
     load: float = _p(1.0, "N", "load magnitude (force in N, or inlet pressure in Pa)")
     load_ramp: int = _p(0, "", "iterations over which the load rises to full (0: none)")
+    load_adapt: float = _p(0.0, "", "on a Newton failure go on at the load reached, raising it by this factor per iteration (0: stop)")
     k_in: float = _p(0.0, "N/m", "input spring stiffness")
     k_out: float = _p(0.0, "N/m", "output spring stiffness")
     # -- Darcy pressure (SPEC §2)
@@ -77,6 +78,7 @@ class Parameters:
     newton_rtol: float = _p(1e-10, "", "Newton residual tolerance (relative to the load)")
     newton_max_iter: int = _p(30, "", "Newton iterations per load step")
     newton_increment: float = _p(1.0, "", "first load increment of Newton continuation (fraction)")
+    newton_min_increment: float = _p(1.0 / 1024, "", "smallest load increment before Newton gives up (fraction)")
 
     def __post_init__(self):
         from .physics.materials import MODELS
@@ -116,8 +118,12 @@ class Parameters:
             raise InputError("k_in, k_out: spring stiffnesses must be >= 0")
         if not 0 < self.newton_increment <= 1:
             raise InputError("newton_increment: must lie in (0, 1]")
+        if not 0 < self.newton_min_increment <= self.newton_increment:
+            raise InputError("newton_min_increment: must lie in (0, newton_increment]")
         if self.load_ramp < 0:
             raise InputError("load_ramp: must be >= 0")
+        if self.load_adapt != 0 and not self.load_adapt > 1:
+            raise InputError(f"load_adapt: must be 0 (off) or a growth factor > 1 (got {self.load_adapt})")
         if not 0.0 < self.r < 1.0:
             raise InputError(f"r: must lie in (0, 1) (got {self.r})")
         if not self.delta_s > 0:

@@ -75,7 +75,8 @@ def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
     arrays = dict(k=state.k, x=state.x, scale=np.nan if state.scale is None else state.scale,
                   stable=state.stable, history=json.dumps(state.history),
                   u=problem.mech.gfu.vec.FV().NumPy().copy(),
-                  warm=bool(problem.mech.result is not None and problem.mech.result.converged))
+                  warm=bool(problem.mech.result is not None and problem.mech.result.converged),
+                  load_cap=state.load_cap)
     if state.last_good is not None:
         arrays["last_good"] = state.last_good
     if state.opt_state is not None:
@@ -96,7 +97,8 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
         state = LoopState(k=int(data["k"]), x=data["x"].copy(), opt_state=opt or None,
                           scale=None if np.isnan(scale) else scale,
                           history=json.loads(str(data["history"])), stable=int(data["stable"]),
-                          last_good=data["last_good"].copy() if "last_good" in data.files else None)
+                          last_good=data["last_good"].copy() if "last_good" in data.files else None,
+                          load_cap=float(data["load_cap"]) if "load_cap" in data.files else 1.0)
         u = data["u"]
         if u.size == problem.mech.gfu.vec.size and bool(data["warm"]):
             problem.mech.gfu.vec.FV().NumPy()[:] = u
@@ -153,7 +155,8 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
 
     result = optimize(problem, schedule_of(params), iterations=params.iterations, tol=params.tol,
                       method=params.optimizer, move=params.move, state=state,
-                      on_iteration=on_iteration, obj_tol=params.obj_tol)
+                      on_iteration=on_iteration, obj_tol=params.obj_tol,
+                      load_adapt=params.load_adapt)
     failed = result.stopped == "newton"
     final_x = state.last_good if failed else state.x
     if final_x is None:
@@ -165,7 +168,15 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         problem.evaluate(final_x, gradients=False)
     except NewtonFailure as err:
         failed = True
-        result.message += f"; the final analysis failed too ({err})"
+        result.message += f"; the final analysis at the full load failed ({err})"
+        last = state.history[-1]["load"] if state.history else 1.0
+        if params.load_adapt and last < 1.0:  # report the design at the load it carried
+            problem.mech.target = last
+            try:
+                problem.evaluate(final_x, gradients=False)
+                result.message += f"; reported at load factor {last:.4g}"
+            except NewtonFailure:
+                pass
     wall = time.perf_counter() - t_start
     write_outputs(path, problem, final_x, state.history, result, wall)
     if not quiet or failed:

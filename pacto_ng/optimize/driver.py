@@ -5,6 +5,13 @@ sensitivities through the chain, one MMA/GCMMA update with the external move lim
 and checkpoint callbacks, and the convergence test (which restarts whenever a schedule value
 changes, so a run cannot stop mid-continuation).  A Newton failure stops the loop cleanly: the
 last good design is kept and the reason is returned.
+
+Adaptive load continuation (``load_adapt = g > 1``): when the analysis fails at the scheduled
+load factor ``s(k)`` after Newton's own step cutting, the iteration goes on at the load factor
+Newton did reach (``s_r``, warm-started from that equilibrium) instead of stopping; the load is
+then capped, ``s = min(s(k), cap)``, and the cap grows by ``g`` after every successful iteration
+until it is 1 again.  The design keeps improving at the load it can carry, and it is analysed
+at the full load as soon as it can carry it.  The convergence test waits for the full load.
 """
 from __future__ import annotations
 
@@ -29,6 +36,8 @@ class LoopState:
     history: list = field(default_factory=list)
     stable: int = 0  # consecutive settled iterations with a small change
     last_good: np.ndarray | None = None  # the last design whose analysis succeeded
+    load_cap: float = 1.0  # adaptive load continuation: the largest load factor to ask for
+    load_failed_at: int = -1  # ... and the last iteration whose analysis failed at the cap
 
 
 @dataclass
@@ -49,7 +58,8 @@ def _stalled(history: list, obj_tol: float, window: int = 5) -> bool:
 
 
 def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method: str,
-             move: float, state: LoopState, on_iteration=None, obj_tol: float = 0.0) -> LoopResult:
+             move: float, state: LoopState, on_iteration=None, obj_tol: float = 0.0,
+             load_adapt: float = 0.0) -> LoopResult:
     # ---- set-up: everything invariant before the loop ------------------------------------
     n = state.x.size
     m = len(problem.constraints)
@@ -65,11 +75,28 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         k = state.k
         t0 = time.perf_counter()
         # ---- continuation schedules ------------------------------------------------------
-        penal, beta, load = schedule.values(k)
+        penal, beta, scheduled = schedule.values(k)
+        load = min(scheduled, state.load_cap)
         problem.apply_schedule(penal, beta, load)
         # ---- analysis and sensitivities ---------------------------------------------------
+        failed_newton = 0  # Newton iterations of an attempt that adaptive continuation cut short
         try:
-            f0, f, df0, df = problem.evaluate(x)
+            try:
+                f0, f, df0, df = problem.evaluate(x)
+            except NewtonFailure as err:
+                reached = err.result.load_reached
+                failed_newton = err.result.iterations
+                if not load_adapt or reached <= 0.0:
+                    raise
+                # adaptive load continuation: go on at the load Newton reached
+                load = state.load_cap = reached
+                state.load_failed_at = k
+                problem.apply_schedule(penal, beta, load)
+                f0, f, df0, df = problem.evaluate(x)
+            else:
+                # raise the cap after a success, but not in the iteration after a failure
+                if load_adapt and load < scheduled and k - state.load_failed_at >= 2:
+                    state.load_cap = min(1.0, load * load_adapt)
         except NewtonFailure as err:
             kept = (f"the last good design (iteration {k - 1}) is saved" if k > 0 else
                     "no design could be analysed at this load; the initial design is saved")
@@ -85,7 +112,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         res = problem.mech.result
         row = dict(iteration=k, objective=f0, volume=problem.volume_fraction(),
                    constraint=float(f[0]), change=change, penal=penal, beta=beta, load=load,
-                   newton=res.iterations if res else 0, load_steps=res.steps if res else 0,
+                   newton=(res.iterations if res else 0) + failed_newton, load_steps=res.steps if res else 0,
                    time=time.perf_counter() - t0)
         for name in problem.reports:
             row[name] = float(problem.values[name])
@@ -94,11 +121,17 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         state.x, state.opt_state, state.k = x.copy(), opt.state, k + 1
         # ---- convergence: only once every schedule has settled ------------------------------
         small = change < tol or _stalled(state.history, obj_tol)
-        state.stable = state.stable + 1 if (small and schedule.settled(k, window=5)) else 0
+        settled = schedule.settled(k, window=5) and load >= 1.0
+        state.stable = state.stable + 1 if (small and settled) else 0
         if on_iteration is not None:
             on_iteration(state, row)
         if state.stable >= 2 and f[0] <= 1e-3:
             return LoopResult(state, True, "converged",
                               f"converged at iteration {k}: change {change:.3g}, objective "
                               f"change over 5 iterations below {obj_tol:g} or design change below {tol:g}")
-    return LoopResult(state, False, "iterations", f"stopped after {iterations} iterations")
+    message = f"stopped after {iterations} iterations"
+    last = state.history[-1]["load"] if state.history else 1.0
+    if last < 1.0 and load_adapt:
+        message += (f" (adaptive load continuation: the last iteration ran at load factor "
+                    f"{last:.4g} of the full load)")
+    return LoopResult(state, False, "iterations", message)

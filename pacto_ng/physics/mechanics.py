@@ -305,7 +305,8 @@ class Mechanics:
 
     def forward(self, *values):
         self.set_fields(*values)
-        warm = self.result is not None and self.result.converged
+        # warm start from the last equilibrium (also one a failed solve reached on its way)
+        warm = self.result is not None and (self.result.converged or self.result.load_reached > 0)
         if self.linear:
             warm = True  # one Newton step from any state solves a linear problem
         res = solve_with_continuation(self, self.gfu.vec, self.target, self.settings, warm=warm,

@@ -1,0 +1,105 @@
+"""Adaptive load continuation in the optimisation loop (driver ``load_adapt``).
+
+A stand-in problem whose "Newton" can carry a load factor of at most ``capacity(k)``: above it
+the analysis fails with the load reached equal to the capacity, as the mechanics block reports.
+"""
+import numpy as np
+import pytest
+
+from pacto_ng.optimize.driver import LoopState, optimize
+from pacto_ng.optimize.schedules import Schedule
+from pacto_ng.physics.mechanics import NewtonFailure
+from pacto_ng.physics.newton import NewtonResult
+
+
+class _Mech:
+    def __init__(self):
+        self.target = 1.0
+        self.result = None
+
+
+class CappedProblem:
+    """min s (1 + Σ (x - 0.3)²)  s.t. mean(x) <= 0.5; loads above capacity(k) fail in Newton."""
+
+    constraints = ("volume",)
+    reports = ()
+
+    def __init__(self, capacity):
+        self.capacity = capacity
+        self.mech = _Mech()
+        self.k = 0
+        self.asked = []  # (iteration, load factor asked for)
+        self.values = {}
+
+    def apply_schedule(self, penal, beta, load):
+        self.mech.target = load
+
+    def evaluate(self, x, gradients=True):
+        cap = self.capacity(self.k)
+        self.asked.append((self.k, self.mech.target))
+        if self.mech.target > cap + 1e-15:
+            res = NewtonResult(False, iterations=7, load_reached=cap, reason="stand-in failure")
+            self.mech.result = res
+            raise NewtonFailure(res)
+        self.mech.result = NewtonResult(True, iterations=2, load_reached=self.mech.target, steps=1)
+        f0 = (float(np.sum((x - 0.3) ** 2)) + 1.0) * self.mech.target
+        f = np.array([x.mean() - 0.5])
+        if not gradients:
+            return f0, f
+        self.k += 1
+        return f0, f, 2 * (x - 0.3) * self.mech.target, np.full((1, x.size), 1.0 / x.size)
+
+    def volume_fraction(self):
+        return 0.5
+
+
+def _run(problem, load_adapt, iterations=60):
+    state = LoopState(k=0, x=np.full(6, 0.8), opt_state=None, scale=1.0)
+    return optimize(problem, Schedule(), iterations=iterations, tol=5e-3, method="mma", move=0.1,
+                    state=state, obj_tol=1e-3, load_adapt=load_adapt)
+
+
+def capacity(k):
+    """The design can carry 0.3 of the load at first, the full load from iteration 12 on."""
+    return min(1.0, 0.3 + 0.06 * k)
+
+
+def test_without_adaptation_the_first_failure_stops_the_run():
+    result = _run(CappedProblem(capacity), load_adapt=0.0)
+    assert result.stopped == "newton"
+    assert result.state.k == 0 and "Newton failed" in result.message
+
+
+def test_adaptive_continuation_goes_on_at_the_load_reached_and_returns_to_full_load():
+    prob = CappedProblem(capacity)
+    result = _run(prob, load_adapt=1.25)
+    loads = [h["load"] for h in result.state.history]
+    # never above what the design could carry, first at the capacity of iteration 0
+    assert all(ld <= capacity(h["iteration"]) + 1e-12 for ld, h in zip(loads, result.state.history))
+    assert loads[0] == pytest.approx(0.3)
+    # after a failure the load is held for two iterations, then grows by the factor
+    assert loads[1] == pytest.approx(0.3) and loads[2] == pytest.approx(0.3)
+    assert loads[3] == pytest.approx(min(0.3 * 1.25, capacity(3)))
+    # ... and the full load is reached again
+    first_full = loads.index(1.0)
+    assert 0 < first_full <= 20
+    assert all(ld == 1.0 for ld in loads[first_full:])
+    # the failed attempt's Newton iterations are counted (7 failed + 2 converged)
+    assert result.state.history[0]["newton"] == 9
+    # the run converges only at the full load, to the constrained optimimum x = 0.3
+    assert result.converged and result.stopped == "converged"
+    assert len(loads) - first_full >= 5
+    np.testing.assert_allclose(result.state.x, 0.3, atol=1e-2)
+
+
+def test_adaptive_continuation_reports_a_run_that_never_reaches_full_load():
+    prob = CappedProblem(lambda k: 0.5)
+    result = _run(prob, load_adapt=1.5, iterations=10)
+    assert result.stopped == "iterations" and not result.converged
+    assert "load factor 0.5 of the full load" in result.message
+    assert max(h["load"] for h in result.state.history) == pytest.approx(0.5)
+
+
+def test_adaptive_continuation_stops_when_nothing_is_carried():
+    result = _run(CappedProblem(lambda k: 0.0), load_adapt=1.5)
+    assert result.stopped == "newton" and result.state.k == 0
