@@ -164,6 +164,8 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
     # final analysis of the design that is reported (the schedule's last values)
     k_last = max(state.k - 1, 0)
     problem.apply_schedule(*schedule_of(params).values(k_last))
+    u_last, res_last = problem.mech.gfu.vec.CreateVector(), problem.mech.result
+    u_last.data = problem.mech.gfu.vec  # the last iteration's equilibrium (a warm start)
     try:
         problem.evaluate(final_x, gradients=False)
     except NewtonFailure as err:
@@ -171,10 +173,14 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         result.message += f"; the final analysis at the full load failed ({err})"
         last = state.history[-1]["load"] if state.history else 1.0
         if params.load_adapt and last < 1.0:  # report the design at the load it carried
+            problem.mech.gfu.vec.data = u_last
+            problem.mech.result = res_last
             problem.mech.target = last
+            final_x = state.last_good if state.last_good is not None else final_x
             try:
                 problem.evaluate(final_x, gradients=False)
-                result.message += f"; reported at load factor {last:.4g}"
+                result.message += (f"; the last analysed design is reported at load factor "
+                                   f"{last:.4g}")
             except NewtonFailure:
                 pass
     wall = time.perf_counter() - t_start
