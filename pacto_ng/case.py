@@ -277,7 +277,7 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         mech = Mechanics(mesh, order=params.order, energy=energy, fields=mech_fields,
                          supports=setup.supports, loads=loads, springs=setup.springs, body=body,
                          thickness=params.thickness, guard=guard, linear=linear, newton=newton,
-                         residual_density=follower)
+                         residual_density=follower, realcompile=params.realcompile)
     except ValueError as err:
         raise InputError(str(err)) from None
     blocks.append(mech)

@@ -44,10 +44,10 @@ def energy_and_guard(model, plane="strain", gamma_fn=None, **wang_kw):
 
 
 def cantilever(mesh, model, order=1, load=2e5, plane="strain", newton=None, gamma_fn=None,
-               **wang_kw):
+               realcompile=False, **wang_kw):
     """A :class:`Mechanics` block of the cantilever with a downward tip load ``load`` (N)."""
     energy, guard, linear = energy_and_guard(model, plane, gamma_fn, **wang_kw)
     newton = newton or NewtonSettings(rtol=1e-12, initial_increment=0.25)
     return Mechanics(mesh, order=order, energy=energy, supports=Supports(clamp=("fixed",)),
                      loads=(PointLoad("load", (0.0, -load)),), thickness=T, guard=guard,
-                     linear=linear, newton=newton)
+                     linear=linear, newton=newton, realcompile=realcompile)

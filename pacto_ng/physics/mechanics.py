@@ -135,6 +135,11 @@ class Mechanics:
     symmetric : bool or None
         Whether the tangent is symmetric; default: neither ``residual_terms`` nor
         ``residual_density`` given.
+    realcompile : bool
+        Compile the CoefficientFunctions of the Newton forms (energy, residual density) to
+        machine code (``Compile(realcompile=True)``: needs NGSolve's ``ngscxx`` and a C++
+        compiler; 10-30 s once per form).  Measured on 1710 triangles, P1: Neo-Hookean tangent
+        assembly 2.6x, Wang 3.6x faster, the matrix equal to round-off.
     inverse : str or None
         Direct solver of the tangent; default ``sparsecholesky`` for a symmetric tangent and
         ``umfpack`` otherwise.  With an unsymmetric tangent the adjoint solves ``Kᵀ λ = ∂J/∂u``.
@@ -146,7 +151,7 @@ class Mechanics:
                  newton: NewtonSettings = NewtonSettings(), output: str = "u",
                  inverse: str | None = None, intorder: int | None = None,
                  residual_terms: Callable | None = None, symmetric: bool | None = None,
-                 residual_density: Callable | None = None):
+                 residual_density: Callable | None = None, realcompile: bool = False):
         from ngsolve import (L2, BilinearForm, GridFunction, Grad, LinearForm, Parameter,
                              VectorH1, Variation, dx)
 
@@ -160,6 +165,7 @@ class Mechanics:
         if inverse is None:
             inverse = "sparsecholesky" if self.symmetric else "umfpack"
         self.linear, self.settings, self.inverse_type = linear, newton, inverse
+        self.realcompile = bool(realcompile)
         self.fields = [f if isinstance(f, Field) else Field(f) for f in fields]
         self.inputs = tuple(f.name for f in self.fields)
         self.output = output
@@ -206,7 +212,7 @@ class Mechanics:
             self._fbody += (self.thickness * body(self.fes.TestFunction(), self.coeffs)).Compile() * self.DX
         self._fbody_stale = True
         if residual_density is not None:
-            self.a += self.residual_density(u, self.fes.TestFunction()).Compile() * self.DX
+            self.a += self.hot(self.residual_density(u, self.fes.TestFunction())) * self.DX
         if residual_terms is not None:
             self.a += residual_terms(u, self.fes.TestFunction(), self.load)
         # vector of the external load at unit load factor (for norms)
@@ -237,6 +243,12 @@ class Mechanics:
         self.adjoint_solves_skipped = 0
 
     # -- the energy ------------------------------------------------------------------------
+    def hot(self, cf):
+        """``cf`` compiled for a form that Newton assembles in every iteration."""
+        if self.realcompile:
+            return cf.Compile(realcompile=True, wait=True)
+        return cf.Compile()
+
     def volume_density(self, u):
         """Everything integrated over the volume: ``t (φ - s b·u)`` (a CF, per unit area)."""
         from ngsolve import Grad
@@ -256,7 +268,7 @@ class Mechanics:
         # compiled CFs assemble 2-3x faster (measured: 0.45 -> 0.24 s for 19k quads)
         from ngsolve import Grad
 
-        total = (self.thickness * self._energy(Grad(u), self.coeffs)).Compile() * self.DX
+        total = self.hot(self.thickness * self._energy(Grad(u), self.coeffs)) * self.DX
         for ld in self.loads:
             total = total + ld.work(self.mesh, u, scale=-1.0 * self.load)
         for sp in self.springs:
