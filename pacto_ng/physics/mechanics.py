@@ -241,6 +241,7 @@ class Mechanics:
         self._fixed_loads = body is None and conservative
         self._unit_load_norm = None
         self.adjoint_solves_skipped = 0
+        self._ramp_first = None  # first increment of the last successful ramp from zero
 
     # -- the energy ------------------------------------------------------------------------
     def hot(self, cf):
@@ -339,7 +340,9 @@ class Mechanics:
         if self.linear:
             warm = True  # one Newton step from any state solves a linear problem
         res = solve_with_continuation(self, self.gfu.vec, self.target, self.settings, warm=warm,
-                                      linear=self.linear)
+                                      linear=self.linear, first_increment=self._ramp_first)
+        if res.ramp_first is not None:
+            self._ramp_first = res.ramp_first  # where the next ramp from zero starts
         self.result = res
         if not res.converged:
             raise NewtonFailure(res)

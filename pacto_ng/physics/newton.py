@@ -60,6 +60,7 @@ class NewtonResult:
     reason: str = ""
     residual: float = float("nan")
     history: list = field(default_factory=list)
+    ramp_first: float | None = None  # first accepted increment of a ramp from zero (fraction)
 
 
 def _norm_free(vec, free):
@@ -130,7 +131,8 @@ def _attempt(problem, u, load, ref, s, linear, accept):
 
 
 def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, warm: bool,
-                            linear: bool = False, on_step=None, accept=None) -> NewtonResult:
+                            linear: bool = False, on_step=None, accept=None,
+                            first_increment: float | None = None) -> NewtonResult:
     """Bring ``u`` to equilibrium at load factor ``target``.
 
     With ``warm`` the current ``u`` (the previous design's equilibrium at the same load) is
@@ -139,6 +141,9 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
     reason (an empty string accepts it); a rejected one counts as a failed increment.
     ``on_step(load, u)``, if given, is called at every accepted equilibrium.  On failure ``u``
     holds the last equilibrium, ``load_reached`` its load factor and ``reason`` says why.
+    ``first_increment`` (a fraction of ``target``) replaces ``s.initial_increment`` as the first
+    increment of a ramp from zero, e.g. the one that worked in the previous solve
+    (``NewtonResult.ramp_first``), so that a ramp does not fail its way down to it again.
     """
     ref = problem.load_norm(target)
     if not np.isfinite(ref):
@@ -161,7 +166,8 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
         u[:] = 0.0
     else:
         u[:] = 0.0
-    load, inc = 0.0, s.initial_increment * target
+    first = s.initial_increment if first_increment is None else min(1.0, max(first_increment, s.min_increment))
+    load, inc = 0.0, first * target
     saved = u.CreateVector()
     while load < target * (1 - 1e-12):
         if result.steps >= s.max_steps:
@@ -180,6 +186,8 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
             result.steps += 1
             result.history.append((load, it))
             result.residual = res / ref
+            if result.ramp_first is None:
+                result.ramp_first = load / target
             if on_step is not None:
                 on_step(load, u)
             if it <= s.easy:

@@ -172,6 +172,32 @@ def test_failure_reasons_of_the_continuation():
                                   on_step=lambda s, v: seen.append(s))
     assert not res.converged and 0.5 <= res.load_reached <= 0.6 and "too far" in res.reason
     assert seen == [h[0] for h in res.history] and max(seen) == res.load_reached
+    # a ramp reports its first accepted increment; a later ramp can start there
+    res = solve_with_continuation(Scalar(1.0), u, 1.0, NewtonSettings(initial_increment=0.25),
+                                  warm=False)
+    assert res.converged and res.ramp_first == pytest.approx(0.25)
+    res = solve_with_continuation(Scalar(1.0), u, 1.0, NewtonSettings(), warm=False,
+                                  first_increment=0.125)
+    assert res.converged and res.history[0][0] == pytest.approx(0.125)
+    assert res.ramp_first == pytest.approx(0.125)
+
+
+def test_a_ramp_starts_where_the_last_one_succeeded():
+    """The Neo-Hookean cantilever at 5e5 N from u = 0 needs small first increments; the next
+    ramp from zero (e.g. after a failed warm start) starts at the first increment that worked
+    instead of failing its way down to it again: fewer Newton iterations, same equilibrium."""
+    mesh = cantilever_mesh("trig")
+    rho = np.ones(mesh.ne)
+    mech = cantilever(mesh, "neohookean", 1, load=2e6,
+                      newton=NewtonSettings(rtol=1e-12, initial_increment=1.0, max_iter=12))
+    u1 = mech.forward(rho).FV().NumPy().copy()
+    first = mech.result
+    assert first.ramp_first is not None and first.ramp_first < 1.0
+    mech.result = None  # forget the equilibrium: the next solve ramps from zero
+    u2 = mech.forward(rho).FV().NumPy().copy()
+    assert mech.result.history[0][0] == pytest.approx(first.ramp_first)
+    assert mech.result.iterations < first.iterations
+    assert np.linalg.norm(u1 - u2) <= 1e-8 * np.linalg.norm(u1)
 
 
 def test_settings_validation():

@@ -1,0 +1,185 @@
+"""Extreme loads: the pressure-actuated cases past the thesis's pressures, and the nonlinear
+force cases (cantilever, inverter) at and past their published limits.
+
+    python -m benchmarks.extreme [--runs DIR] [--only NAME,...] [--report-only] [--out FILE]
+
+Every run is a plain ``pacto run`` (the command is in the table), written to ``DIR/NAME``
+(default: $PACTO_BENCH_RUNS or ``output/extreme``); a run whose folder already holds a
+``summary.json`` is not run again, so an interrupted study resumes.  Pressure-case designs are
+then post-analysed with ``pacto analyse`` (threshold 0.5, body-fitted remesh, Neo-Hookean
+re-analysis under the Darcy pressure of the thresholded part, a fixed and a follower pressure on
+its wetted boundary) over the same pressures for every design of a case, so that the linear and
+the nonlinear designs are compared under the same Neo-Hookean analysis.
+
+The optimisation settings of the nonlinear runs: the case defaults plus load continuation over
+the first iterations (``load_ramp``), adaptive load continuation past a Newton failure
+(``load_adapt``), a cheap failure (``newton_min_increment=1/32``) and machine-code forms
+(``realcompile``).  "valid" means: the run finished at the full load (``load_factor_reached``
+= 1, so every accepted state had det F > 0 where the model needs it), the volume constraint is
+met (volume fraction <= volfrac + 0.002) and the objective improved on iteration 0's (which,
+with a load ramp, was evaluated at a fraction of the load; for the −Δ/SE objective a working
+mechanism has a negative objective).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+NL = ["--set", "load_adapt=1.2", "--set", "newton_min_increment=0.03125", "--set", "realcompile=1"]
+PA = ["--set", "load_ramp=30"] + NL
+FC = ["--set", "load_ramp=20"] + NL
+
+#: name -> (case, arguments); the order is the order of the tables
+RUNS = {
+    # pa-inverter (thesis limit 1e7 Pa)
+    "inv_lin": ("pa-inverter", ["--model", "linear", "--load", "1e6"]),
+    "inv_w_1e6": ("pa-inverter", ["--model", "wang", "--load", "1e6"] + PA),
+    "inv_w_1e7": ("pa-inverter", ["--model", "wang", "--load", "1e7"] + PA),
+    "inv_w_5e7": ("pa-inverter", ["--model", "wang", "--load", "5e7"] + PA),
+    "inv_wf_5e7": ("pa-inverter", ["--model", "wang", "--load", "5e7", "--set", "load_type=follower"] + PA),
+    "inv_nh_1e7": ("pa-inverter", ["--model", "neohookean", "--load", "1e7"] + PA),
+    # pa-gripper (thesis limit 1e7 Pa)
+    "grip_lin": ("pa-gripper", ["--model", "linear", "--load", "1e6"]),
+    "grip_w_1e6": ("pa-gripper", ["--model", "wang", "--load", "1e6"] + PA),
+    "grip_w_1e7": ("pa-gripper", ["--model", "wang", "--load", "1e7"] + PA),
+    "grip_w_5e7": ("pa-gripper", ["--model", "wang", "--load", "5e7"] + PA),
+    # pneunet (thesis limit 1e5 Pa), mm-gripper (thesis limit 5e5 Pa)
+    "pn_w_1e6": ("pneunet", ["--model", "wang", "--load", "1e6"] + PA),
+    "mm_w_5e6": ("mm-gripper", ["--model", "wang", "--load", "5e6"] + PA),
+    # cantilever (thesis: NH 150 kN, Wang 250 kN; Wang et al. 2014: NH 240 kN, Wang 500 kN)
+    **{f"cant_{m}_{F}": ("cantilever", ["--model", {"nh": "neohookean", "w": "wang"}[m],
+                                        "--load", f"{F}e3"] + FC)
+       for F in (80, 144, 240, 300, 500, 800) for m in ("nh", "w")},
+    # force inverter at the thesis mesh (thesis limit 0.4 N)
+    "inv_f_lin_04": ("inverter", ["--model", "linear", "--load", "0.4", "--maxh", "3e-6"]),
+    **{f"inv_f_{m}_{tag}": ("inverter", ["--model", {"nh": "neohookean", "w": "wang"}[m],
+                                        "--load", F, "--maxh", "3e-6"] + FC)
+       for tag, F in (("002", "0.02"), ("01", "0.1"), ("04", "0.4"), ("08", "0.8"))
+       for m in ("nh", "w")},
+}
+
+#: pressure-case designs compared under one Neo-Hookean analysis sweep (pressures in Pa)
+ANALYSES = {
+    "pa-inverter": (["inv_lin", "inv_w_1e6", "inv_w_1e7", "inv_w_5e7", "inv_wf_5e7"],
+                    "1e5,1e6,1e7,5e7"),
+    "pa-gripper": (["grip_lin", "grip_w_1e6", "grip_w_1e7", "grip_w_5e7"], "1e5,1e6,1e7,5e7"),
+    "pneunet": (["pn_w_1e6"], "1e4,1e5,1e6"),
+}
+
+
+def command(name: str) -> str:
+    case, args = RUNS[name]
+    return " ".join(["pacto", "run", case] + args)
+
+
+def run(root: Path, name: str) -> None:
+    out = root / name
+    if (out / "summary.json").exists():
+        return
+    case, args = RUNS[name]
+    print(f"[extreme] {command(name)} --out {out}", flush=True)
+    subprocess.run([sys.executable, "-m", "pacto_ng.cli", "run", case, *args, "--out", str(out),
+                    "--quiet"], check=False)
+
+
+def analyse(root: Path, name: str, pressures: str) -> None:
+    out = root / name
+    if not (out / "summary.json").exists() or (out / "analysis" / "analysis.json").exists():
+        return
+    print(f"[extreme] pacto analyse {out} --pressures {pressures}", flush=True)
+    subprocess.run([sys.executable, "-m", "pacto_ng.cli", "analyse", str(out), "--pressures",
+                    pressures, "--quiet"], check=False)
+
+
+def _load(path: Path):
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def _g(x, fmt="{:.4g}"):
+    return "–" if x is None else fmt.format(x)
+
+
+def valid(s: dict) -> bool:
+    p = s["parameters"]
+    hist = s.get("objective_history") or [None]
+    return bool(s.get("load_factor_reached") == 1.0 and s.get("stopped") != "newton"
+                and s["volume_fraction"] <= p["volfrac"] + 0.002
+                and s["objective"] is not None and hist[0] is not None and s["objective"] < hist[0])
+
+
+def runs_markdown(root: Path, names) -> str:
+    head = ("| run | command (`pacto run ...`) | stopped | its | load factor reached | objective it 0 → final "
+            "| Δ [mm] | volume | leakage | Newton its | wall [s] | valid |")
+    lines = [head, "|" + "---|" * 12]
+    for n in names:
+        s = _load(root / n / "summary.json")
+        if s is None:
+            continue
+        hist = s.get("objective_history") or [None]
+        d = s.get("output_displacement")
+        lines.append(
+            f"| {n} | `{' '.join([RUNS[n][0]] + RUNS[n][1])}` | {s['stopped']} | {s['iterations']} "
+            f"| {_g(s.get('load_factor_reached'))} | {_g(hist[0])} → {_g(s['objective'])} "
+            f"| {_g(None if d is None else 1e3 * d)} | {s['volume_fraction']:.4f} "
+            f"| {_g(s.get('leakage'), '{:.2%}')} | {s['newton_iterations_total']} "
+            f"| {s['wall_time_s']:.0f} | {'yes' if valid(s) else '**no**'} |")
+    return "\n".join(lines)
+
+
+def analyses_markdown(root: Path, names) -> str:
+    lines = ["| design | P [Pa] | expected Δ [mm] | Darcy Δ [mm] | fixed Δ [mm] | follower Δ [mm] "
+             "| min J (follower) | remeshed vs thresholded area |",
+             "|" + "---|" * 8]
+    for n in names:
+        a = _load(root / n / "analysis" / "analysis.json")
+        if a is None:
+            continue
+        for r in a["pressures"]:
+            cells = []
+            for k in ("darcy", "fixed", "follower"):
+                v = r.get(k)
+                cells.append("–" if not v or v["delta"] is None or not v["converged"]
+                             else f"{1e3 * v['delta']:.4g}")
+            fj = (r.get("follower") or {}).get("min_J")
+            e = r["expected"] if r.get("expected_converged") else None
+            lines.append(f"| {n} | {r['pressure']:.0e} | {_g(None if e is None else 1e3 * e)} | "
+                         + " | ".join(cells) + f" | {_g(fj, '{:.3f}')} | "
+                         f"{_g(a['areas']['remeshed_vs_kept'], '{:+.2%}')} |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", default=os.environ.get("PACTO_BENCH_RUNS", "output/extreme"))
+    ap.add_argument("--only", default="", help="comma-separated run names (default: all)")
+    ap.add_argument("--report-only", action="store_true", help="no new runs, only the tables")
+    ap.add_argument("--out", default=None, help="print the tables here (default: stdout)")
+    args = ap.parse_args(argv)
+    root = Path(args.runs)
+    names = [n for n in args.only.split(",") if n] or list(RUNS)
+    for n in names:
+        if n not in RUNS:
+            ap.error(f"--only: unknown run '{n}' (choose from {', '.join(RUNS)})")
+    if not args.report_only:
+        for n in names:
+            run(root, n)
+        for case, (designs, pressures) in ANALYSES.items():
+            for n in designs:
+                if n in names:
+                    analyse(root, n, pressures)
+    text = ["### Runs", "", runs_markdown(root, names), "", "### Neo-Hookean analyses of the parts",
+            "", analyses_markdown(root, names)]
+    out = "\n".join(text)
+    if args.out:
+        Path(args.out).write_text(out + "\n")
+    else:
+        print(out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
