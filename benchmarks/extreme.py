@@ -82,8 +82,8 @@ def run(root: Path, name: str) -> None:
         return
     case, args = RUNS[name]
     print(f"[extreme] {command(name)} --out {out}", flush=True)
-    subprocess.run([sys.executable, "-m", "pacto_ng.cli", "run", case, *args, "--out", str(out),
-                    "--quiet"], check=False)
+    subprocess.run([sys.executable, "-m", "pacto_ng.cli", "run", case, *args, "--out", str(out)],
+                   check=False)
 
 
 def analyse(root: Path, name: str, pressures: str) -> None:
