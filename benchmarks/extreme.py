@@ -95,6 +95,73 @@ def analyse(root: Path, name: str, pressures: str) -> None:
                     pressures, "--quiet"], check=False)
 
 
+#: cross analyses: every design of a case analysed with the Wang model (Neo-Hookean wherever
+#: material is) on its density field, at each pressure, with the fixed and the follower load
+CROSS = {
+    "pa-inverter": (["inv_lin", "inv_w_1e6", "inv_w_1e7", "inv_w_5e7", "inv_wf_5e7"],
+                    [(1e6, "fixed"), (1e7, "fixed"), (5e7, "fixed"), (1e7, "follower"),
+                     (5e7, "follower")]),
+    "pa-gripper": (["grip_lin", "grip_w_1e6", "grip_w_1e7", "grip_w_5e7"],
+                   [(1e6, "fixed"), (1e7, "fixed"), (5e7, "fixed"), (5e7, "follower")]),
+}
+
+
+def cross_evaluate(folder: Path, model: str, load: float, load_type: str) -> dict:
+    """The final design of a run (its density field, the run's last penalty and β) analysed
+    with ``model`` at inlet pressure ``load`` under a ``load_type`` Darcy load: −Δ/SE, Δ, SE,
+    or the load factor Newton reached."""
+    import dataclasses
+
+    from pacto_ng.physics.mechanics import NewtonFailure
+    from pacto_ng.post.cli_commands import load_run, rebuild
+    from pacto_ng.threads import compute
+
+    run = load_run(folder, "extreme")
+    run.params = dataclasses.replace(run.params, model=model, load=load, load_type=load_type,
+                                     load_ramp=0, realcompile=False, newton_increment=0.25)
+    with compute():
+        problem = rebuild(run)
+    if problem.failure:
+        reached = problem.mech.result.load_reached if problem.mech.result else 0.0
+        return dict(ok=False, reached=reached)
+    v = problem.values
+    return dict(ok=True, objective=float(v[problem.objective]), delta=float(v["delta"]),
+                se=float(v["se"]) if "se" in v else None)
+
+
+def cross_markdown(root: Path, case: str, cache: Path) -> str:
+    designs, points = CROSS[case]
+    done = json.loads(cache.read_text()) if cache.exists() else {}
+    lines = ["| design (optimised at) | " + " | ".join(f"{P:.0e} Pa {t}" for P, t in points) + " |",
+             "|---|" + "---|" * len(points)]
+    for n in designs:
+        if not (root / n / "summary.json").exists():
+            continue
+        cells = []
+        for P, t in points:
+            key = f"{n}|{P:g}|{t}"
+            if key not in done:
+                done[key] = cross_evaluate(root / n, "wang", P, t)
+                cache.write_text(json.dumps(done, indent=1))
+            r = done[key]
+            cells.append(f"{r['objective']:.4g} (Δ {1e3 * r['delta']:.3g} mm)" if r["ok"]
+                         else f"fails (load factor {r['reached']:.2g})")
+        lines.append(f"| {n} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def design_difference(root: Path, a: str, b: str):
+    """‖ρ̄_a − ρ̄_b‖ / ‖ρ̄_b‖ over the elements (same case and mesh), from design.vtu."""
+    import meshio
+    import numpy as np
+
+    ra, rb = (np.concatenate(meshio.read(root / n / "design.vtu").cell_data["rho_bar"])
+              for n in (a, b))
+    if ra.shape != rb.shape:
+        return None
+    return float(np.linalg.norm(ra - rb) / np.linalg.norm(rb))
+
+
 def _load(path: Path):
     return json.loads(path.read_text()) if path.exists() else None
 
@@ -158,6 +225,8 @@ def main(argv=None):
     ap.add_argument("--only", default="", help="comma-separated run names (default: all)")
     ap.add_argument("--report-only", action="store_true", help="no new runs, only the tables")
     ap.add_argument("--out", default=None, help="print the tables here (default: stdout)")
+    ap.add_argument("--cross", action="store_true",
+                    help="also analyse every design at every pressure (cached in DIR/cross_CASE.json)")
     args = ap.parse_args(argv)
     root = Path(args.runs)
     names = [n for n in args.only.split(",") if n] or list(RUNS)
@@ -173,6 +242,17 @@ def main(argv=None):
                     analyse(root, n, pressures)
     text = ["### Runs", "", runs_markdown(root, names), "", "### Neo-Hookean analyses of the parts",
             "", analyses_markdown(root, names)]
+    if args.cross:
+        for case in CROSS:
+            text += ["", f"### {case}: each design analysed at each pressure (Wang mechanics on "
+                     "the density field; −Δ/SE in m/J)", "",
+                     cross_markdown(root, case, root / f"cross_{case}.json")]
+        pairs = [(a, b) for designs, _ in CROSS.values() for a in designs[1:] for b in designs[:1]]
+        pairs += [("inv_wf_5e7", "inv_w_5e7")]
+        rows = [(a, b, design_difference(root, a, b)) for a, b in pairs
+                if (root / a / "design.vtu").exists() and (root / b / "design.vtu").exists()]
+        text += ["", "| design | against | ‖ρ̄ − ρ̄_ref‖ / ‖ρ̄_ref‖ |", "|---|---|---|"]
+        text += [f"| {a} | {b} | {d:.3f} |" for a, b, d in rows if d is not None]
     out = "\n".join(text)
     if args.out:
         Path(args.out).write_text(out + "\n")
