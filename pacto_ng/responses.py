@@ -76,11 +76,15 @@ class StrainEnergy:
         self._energy_form += Variation(
             (mech.thickness * mech._energy(Grad(u), mech.coeffs)).Compile() * mech.DX)
         self._du_vec = self.gfu.vec.CreateVector()
+        # ∂SE/∂field the same way (Apply of a Variation form in the field's trial function):
+        # symbolic .Diff(field) of the Wang energy is ~25x slower (1.7 s on 2906 triangles)
         self._dfield = {}
         for f in mech.fields:
-            lf = LinearForm(f.space)
-            lf += dens.Diff(f.gf, f.space.TestFunction()).Compile() * mech.DX
-            self._dfield[f.name] = lf
+            c = dict(mech.coeffs)
+            c[f.name] = f.space.TrialFunction()
+            form = BilinearForm(f.space)
+            form += Variation((mech.thickness * mech._energy(Grad(self.gfu), c)).Compile() * mech.DX)
+            self._dfield[f.name] = (form, f.gf.vec.CreateVector())
         self._integrate = Integrate
 
     def forward(self, u, *fields):
@@ -94,13 +98,13 @@ class StrainEnergy:
         du.data = float(g) * self._du_vec
         out = [du]
         for f in self.mech.fields:
-            lf = self._dfield[f.name]
-            lf.Assemble()
+            form, vec = self._dfield[f.name]
+            form.Apply(f.gf.vec, vec)
             if f.space is self.mech.l2:
-                out.append(float(g) * lf.vec.FV().NumPy().copy())
+                out.append(float(g) * vec.FV().NumPy().copy())
             else:
-                v = lf.vec.CreateVector()
-                v.data = float(g) * lf.vec
+                v = vec.CreateVector()
+                v.data = float(g) * vec
                 out.append(v)
         return tuple(out)
 
