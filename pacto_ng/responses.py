@@ -60,7 +60,9 @@ class StrainEnergy:
     """Stored strain energy ``SE = t ∫ φ(∇u; fields) dΩ`` (the springs are not part of it)."""
 
     def __init__(self, mech, output="se"):
-        from ngsolve import BilinearForm, GridFunction, Grad, Integrate, LinearForm, Variation
+        from ngsolve import BilinearForm, GridFunction, Grad, Integrate, Variation
+
+        from .physics.mechanics import field_derivative_form
 
         self.mech = mech
         self.inputs = ("u",) + mech.inputs
@@ -76,20 +78,30 @@ class StrainEnergy:
         self._energy_form += Variation(
             (mech.thickness * mech._energy(Grad(u), mech.coeffs)).Compile() * mech.DX)
         self._du_vec = self.gfu.vec.CreateVector()
+        # a quadratic energy (linear mechanics): SE, ∂SE/∂u and ∂SE/∂ρ from the tangent's C
+        lin = getattr(mech, "_lin", None)
+        self._quad = lin if (lin is not None and lin.quadratic) else None
         self._dfield = {}
         for f in mech.fields:
-            lf = LinearForm(f.space)
-            lf += dens.Diff(f.gf, f.space.TestFunction()).Compile() * mech.DX
-            self._dfield[f.name] = lf
+            if self._quad is not None and f.name in lin._dC:
+                self._dfield[f.name] = lin.field_form(f.name, self.gfu, self.gfu, 0.5)
+            else:
+                self._dfield[f.name] = field_derivative_form(dens, f, mech.l2, mech.DX, mech.one)
         self._integrate = Integrate
 
     def forward(self, u, *fields):
         # the field values are those the mechanics block was last run with (same chain)
         self.gfu.vec.data = u
+        if self._quad is not None:
+            return self._quad.energy(self.gfu.vec)
         return float(self._integrate(self._dens * self.mech.DX, self.mech.mesh))
 
     def backward(self, g):
-        self._energy_form.Apply(self.gfu.vec, self._du_vec)
+        if self._quad is not None:
+            self._quad.energy_gradient(self.gfu.vec, self._du_vec)
+            self._quad.prepare_fields()
+        else:
+            self._energy_form.Apply(self.gfu.vec, self._du_vec)
         du = self._du_vec.CreateVector()
         du.data = float(g) * self._du_vec
         out = [du]
