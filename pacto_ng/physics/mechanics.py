@@ -422,7 +422,7 @@ class Mechanics:
         self._gtrial = GridFunction(self.fes)
         if guard is not None:
             from ngsolve import QUAD, TRIG, VOL, IntegrationRule
-            self._guard_cf = guard(Grad(self._gtrial), self.coeffs)
+            self._guard_cf = guard(Grad(self._gtrial), self.coeffs).Compile()
             self._guard_pts = mesh.MapToAllElements(guard_rules(self.rules), VOL)
         # adjoint state and sensitivity forms (built once)
         self.lam = GridFunction(self.fes)
@@ -446,6 +446,40 @@ class Mechanics:
         self._fixed_loads = body is None and conservative
         self._unit_load_norm = None
         self.adjoint_solves_skipped = 0
+        # a design-dependent load on a stress-free energy (∂φ/∂G = 0 at G = 0): R(0) = -s f,
+        # so the load norm is that of the LinearForm f -- no Apply of the energy at u = 0
+        self._load_form = None
+        if conservative and body is not None and self._lin is None and self._stress_free():
+            v = self.fes.TestFunction()
+            self._load_form = LinearForm(self.fes)
+            for ld in self.loads:
+                self._load_form += ld.work(mesh, v)
+            self._load_form += (self.thickness * body(v, self.coeffs)).Compile() * self.DX
+
+    def _stress_free(self, tol=1e-13) -> bool:
+        """Whether ``∂(tφ)/∂G`` vanishes at ``G = 0`` (to ``tol`` of the stress at a unit
+        strain), checked at the quadrature points with random field values (restored)."""
+        from ngsolve import CF, VOL, GridFunction, Grad
+
+        rng = np.random.default_rng(54321)
+        saved = [f.gf.vec.FV().NumPy().copy() for f in self.fields]
+        try:
+            for f in self.fields:
+                f.gf.vec.FV().NumPy()[:] = rng.uniform(0.2, 1.0, len(f.gf.vec))
+            pts = self.mesh.MapToAllElements(self.rules, VOL)
+            w = GridFunction(self.fes)  # u = 0: ∇w = 0 at every point
+            G = Grad(w)
+            s0 = np.asarray((self.thickness * self._energy(G, self.coeffs)).Diff(G)(pts))
+            d = self.mesh.dim
+            G1 = CF(tuple(1e-3 * (1 + k) for k in range(d * d)), dims=(d, d)).MakeVariable()
+            s1 = np.asarray((self.thickness * self._energy(G1, self.coeffs)).Diff(G1)(pts))
+            ref = np.max(np.abs(s1)) / (1e-3 * d * d)
+            return bool(np.all(np.isfinite(s0)) and ref > 0 and np.max(np.abs(s0)) <= tol * ref)
+        except Exception:
+            return False
+        finally:
+            for f, v in zip(self.fields, saved):
+                f.gf.vec.FV().NumPy()[:] = v
 
     # -- the energy ------------------------------------------------------------------------
     def volume_density(self, u):
@@ -515,6 +549,10 @@ class Mechanics:
         if self._lin is not None and not self._fixed_loads:
             # R(0) = -s f: the norm of the (design-dependent) load vector, no residual needed
             return abs(load) * self._lin.load_norm()
+        if self._load_form is not None:
+            self.load.Set(load)
+            self._load_form.Assemble()
+            return abs(load) * float(np.linalg.norm(self._load_form.vec.FV().NumPy()[self.free]))
         if self._fixed_loads:
             self._ext[:] = 0.0
             self.residual(self._ext, self._rhs, 1.0)

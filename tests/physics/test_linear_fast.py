@@ -160,3 +160,46 @@ def test_new_design_reassembles():
     mech.a.Apply(u, r_ad)
     assert _rel(r2.FV().NumPy(), r_ad.FV().NumPy()) <= 1e-10
     assert _rel(r1.FV().NumPy(), r_ad.FV().NumPy()) > 1e-3
+
+
+# -- nonlinear, stress-free energies: the load norm from the LinearForm of the loads -----------
+@pytest.mark.parametrize("model", ["neohookean", "wang"])
+@pytest.mark.parametrize("plane", ["strain", "stress"])
+def test_load_norm_of_a_stress_free_energy_equals_the_residual_at_zero(model, plane):
+    from pacto_ng.case import make_energy
+    from pacto_ng.params import Parameters
+    from ngsolve import Parameter
+
+    mesh = small_pa_mesh("trig")
+    dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e5, order=1)
+    params = Parameters().with_overrides({"model": model, "plane": plane, "E1": "3e9",
+                                          "E0": "3e3", "nu": "0.4"})
+    energy, guard, linear = make_energy(params, Parameter(3.0))
+    mech = Mechanics(mesh, order=1, energy=energy, fields=("rho_bar", dar.field()),
+                     supports=SUP, springs=(Spring("output", 1e4, (1.0, 0.0)),),
+                     body=darcy_body("p"), thickness=1e-3, guard=guard, linear=linear)
+    assert mech._load_form is not None
+    rng = np.random.default_rng(5)
+    rho = rng.uniform(0.05, 1.0, mesh.ne)
+    mech.set_fields(rho, dar.forward(rho))
+    zero, r = mech.gfu.vec.CreateVector(), mech.gfu.vec.CreateVector()
+    zero[:] = 0.0
+    for load in (1.0, 0.25):
+        mech.residual(zero, r, load)
+        ref = np.linalg.norm(r.FV().NumPy()[mech.free])
+        assert mech.load_norm(load) == pytest.approx(ref, rel=1e-12)
+
+
+def test_prestressed_energy_keeps_the_residual_load_norm():
+    from ngsolve import CF, InnerProduct
+
+    mesh = small_pa_mesh("trig")
+    dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e5, order=1)
+    s0 = CF((1e3, 0.0, 0.0, 1e3), dims=(2, 2))
+    from pacto_ng.physics.materials import neohookean_energy
+
+    energy = lambda G, c: (neohookean_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4)
+                           + InnerProduct(s0, G))
+    mech = Mechanics(mesh, order=1, energy=energy, fields=("rho_bar", dar.field()),
+                     supports=SUP, body=darcy_body("p"), thickness=1e-3)
+    assert mech._load_form is None
