@@ -6,7 +6,10 @@ The total potential is
 
 with thickness ``t`` and load factor ``s``.  The residual ``R = ∂Π/∂u`` and the tangent come from
 NGSolve's ``Variation`` (automatic differentiation).  Equilibrium is found by
-:func:`~pacto_ng.physics.newton.solve_with_continuation`.
+:func:`~pacto_ng.physics.newton.solve_with_continuation`.  A linear, conservative problem
+(``linear=True``, no residual terms) whose energy is quadratic in ``∇u`` instead assembles
+``K`` from the symbolic Hessian ``∂²(tφ)/∂G²`` of the same energy and evaluates
+``R(u) = K u - s f`` by a matrix-vector product (:class:`_LinearSystem`; equal to round-off).
 
 Loads that are not the derivative of a potential (follower loads) enter the residual directly:
 
