@@ -49,7 +49,7 @@ def measure(nelx: int, nely: int, iterations: int = 8, repeat: int = 3):
         out = rhs.CreateVector()
         for _ in range(repeat):
             t0 = time.perf_counter()
-            inv = mech.a.mat.Inverse(mech.fes.FreeDofs(), inverse="sparsecholesky")
+            inv = mech.matrix.Inverse(mech.fes.FreeDofs(), inverse="sparsecholesky")
             out.data = inv * rhs
             times.append(time.perf_counter() - t0)
         fs = statistics.median(times)

@@ -172,3 +172,95 @@ def ab_markdown(rows):
         lines.append(f"| {r['label']} | {r['elements']} | {r['dofs']} | {r['before']:.4f} | "
                      f"{r['after']:.4f} | {r['before'] / r['after']:.2f}x | {r['diff']:.1e} |")
     return "\n".join(lines)
+
+
+def _ab(before, after, repeat):
+    """Median times of two callables, interleaved (before, after, before, ...)."""
+    import statistics
+
+    before(), after()
+    tb, ta = [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        before()
+        tb.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        after()
+        ta.append(time.perf_counter() - t0)
+    return statistics.median(tb), statistics.median(ta)
+
+
+def fast_paths_ab(overrides_list, repeat=7, threads=1):
+    """Before/after of the library changes of the second performance round, timed interleaved
+    in one process on the same state (median of ``repeat``), with their largest relative
+    difference:
+
+    * load norm of a design-dependent load on a stress-free energy: ``Apply`` of the whole
+      energy at u = 0 (before) against the assembled LinearForm of the loads (after);
+    * element-wise field derivatives (λᵀ∂R/∂ρ of the mechanics block, ∂SE/∂ρ): a LinearForm
+      of ``dens.Diff(ρ, q)`` (before) against the library's form (after): automatic
+      differentiation in ρ (``FieldGradient``), or for linear mechanics the tangent's
+      ``∂C/∂ρ``.
+    """
+    import numpy as np
+    from ngsolve import Grad, LinearForm, SetNumThreads, TaskManager
+
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.run import initial_design
+
+    SetNumThreads(threads)
+    case = get_case("pa-inverter")
+    out = []
+    for label, over in overrides_list:
+        with TaskManager():
+            problem = build_problem(case, case.defaults.with_overrides(over))
+            problem.evaluate(initial_design(problem))
+            m = problem.mech
+            rel = lambda a, b: float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
+            rows = []
+            if m._load_form is not None:
+                zero, r = m.gfu.vec.CreateVector(), m.gfu.vec.CreateVector()
+                zero[:] = 0.0
+                res = {}
+
+                def old_norm():
+                    m.a.Apply(zero, r)
+                    res["old"] = float(np.linalg.norm(r.FV().NumPy()[m.free]))
+
+                def new_norm():
+                    res["new"] = m.load_norm(1.0)
+
+                tb, ta = _ab(old_norm, new_norm, repeat)
+                rows.append(("load norm", tb, ta, abs(res["old"] - res["new"]) / res["old"]))
+            rho = m.fields[0]
+            q = rho.space.TestFunction()
+            m.lam.vec.FV().NumPy()[:] = np.where(m.free, np.random.default_rng(0).standard_normal(
+                len(m.free)), 0.0)
+            dens = m.volume_density(m.gfu).Diff(m.gfu, m.lam)
+            old = LinearForm(rho.space)
+            old += dens.Diff(rho.gf, q).Compile() * m.DX
+            new = m._sens[rho.name]
+            tb, ta = _ab(old.Assemble, new.Assemble, repeat)
+            rows.append(("λᵀ∂R/∂ρ form", tb, ta, rel(new.vec.FV().NumPy(), old.vec.FV().NumPy())))
+            se = next(b for b in problem.chain.blocks if type(b).__name__ == "StrainEnergy")
+            sdens = m.thickness * m._energy(Grad(se.gfu), m.coeffs)
+            old = LinearForm(rho.space)
+            old += sdens.Diff(rho.gf, q).Compile() * m.DX
+            new = se._dfield[rho.name]
+            if se._quad is not None:
+                se._quad.prepare_fields()
+            tb, ta = _ab(old.Assemble, new.Assemble, repeat)
+            rows.append(("∂SE/∂ρ form", tb, ta, rel(new.vec.FV().NumPy(), old.vec.FV().NumPy())))
+        for name, tb, ta, d in rows:
+            out.append(dict(label=label, part=name, elements=problem.mesh.ne, before=tb,
+                            after=ta, diff=d))
+    return out
+
+
+def fast_ab_markdown(rows):
+    lines = ["| problem | part | elements | before [s] | after [s] | speed-up | max rel. difference |",
+             "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['label']} | {r['part']} | {r['elements']} | {r['before']:.4f} | "
+                     f"{r['after']:.4f} | {r['before'] / r['after']:.2f}x | {r['diff']:.1e} |")
+    return "\n".join(lines)

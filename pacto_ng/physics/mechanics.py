@@ -6,7 +6,10 @@ The total potential is
 
 with thickness ``t`` and load factor ``s``.  The residual ``R = ∂Π/∂u`` and the tangent come from
 NGSolve's ``Variation`` (automatic differentiation).  Equilibrium is found by
-:func:`~pacto_ng.physics.newton.solve_with_continuation`.
+:func:`~pacto_ng.physics.newton.solve_with_continuation`.  A linear, conservative problem
+(``linear=True``, no residual terms) whose energy is quadratic in ``∇u`` instead assembles
+``K`` from the symbolic Hessian ``∂²(tφ)/∂G²`` of the same energy and evaluates
+``R(u) = K u - s f`` by a matrix-vector product (:class:`_LinearSystem`; equal to round-off).
 
 Loads that are not the derivative of a potential (follower loads) enter the residual directly:
 
@@ -85,6 +88,214 @@ def guard_rules(rules):
         pts = [tuple(p[:2]) for p in rules[et].points] + _EXTRA_GUARD_POINTS[key]
         out[et] = IntegrationRule(pts, [0.0] * len(pts))
     return out
+
+
+class FieldGradient:
+    """``∫ ∂L/∂field [q] dΩ`` for every test function ``q`` of a field's space, by automatic
+    differentiation: ``L(coeffs)`` (a CF) with the field replaced by its trial function is the
+    integrand of a ``Variation`` form, whose ``Apply`` at the field's values is the gradient.
+
+    Symbolic ``.Diff(field)`` of an already differentiated density blows the CF up: measured,
+    Wang, 2906 triangles, λᵀ∂R/∂ρ 4.8 s per assembly as a LinearForm of ``.Diff``, 0.07 s this
+    way, equal to 6e-16.  Used like a LinearForm: ``Assemble()``, then ``vec``.
+    """
+
+    def __init__(self, field, make_integrand, coeffs, DX):
+        from ngsolve import BilinearForm, Variation
+
+        c = dict(coeffs)
+        c[field.name] = field.space.TrialFunction()
+        self.field = field
+        self.form = BilinearForm(field.space)
+        self.form += Variation(make_integrand(c).Compile() * DX)
+        self.vec = field.gf.vec.CreateVector()
+
+    def Assemble(self):
+        self.form.Apply(self.field.gf.vec, self.vec)
+
+
+class _LinearSystem:
+    """``K`` and ``f`` of a linear, conservative mechanics problem: ``R(u) = K u - s f``.
+
+    ``K`` is the Hessian of the (quadratic) potential, assembled as a symbolic bilinear form
+    instead of by ``AssembleLinearization`` of the ``Variation`` form (second-order automatic
+    differentiation at every quadrature point, 3-7x slower).  The integrand is
+    ``(C ∇u) : ∇v`` with the fourth-order tensor ``C = ∂²(t φ)/∂G²`` obtained from the energy
+    by ``.Diff`` twice.  When ``C`` is constant on each element (it depends on the element-wise
+    fields only) it is evaluated once per element and handed to the form as an L2-order-0
+    field; otherwise the form is ``∂(t φ)/∂G [∇v]`` with ``G = ∇u`` the trial function.
+    Springs enter as ``∂/∂u`` of their energies.  ``f`` (the external load at unit load
+    factor) is the LinearForm of the loads' work and ``t b·v`` (``b·u`` is linear in u).
+
+    ``quadratic``: additionally ``t φ(G) = ½ G:C:G`` exactly (no constant or linear part), so
+    that the strain energy, its gradient ``K_φ u`` (``K`` minus the design-independent spring
+    matrix) and the field derivatives ``∫ (∂C/∂ρ ∇u) : ∇w`` follow from ``C`` too.
+
+    Both properties are checked once at construction, with random values of every field, at
+    the block's quadrature points (C at two different G; C against its element-wise constant
+    projection; φ and ∂φ/∂G against ½ G:C:G and C G).  Equal to the ``Variation`` tangent,
+    residual and sensitivities to round-off (tests/physics/test_linear_fast.py).
+    """
+
+    def __init__(self, mech):
+        from ngsolve import (CF, L2, BilinearForm, GridFunction, Grad, LinearForm, QUAD, TRIG,
+                             VOL, IntegrationRule)
+
+        self.mech = mech
+        mesh, fes, DX = mech.mesh, mech.fes, mech.DX
+        d = self.d = mesh.dim
+        dd = d * d
+        u, v = fes.TnT()
+        self.stale = True
+        self.version = 0  # increases with every assembly (a new design)
+        # C = ∂²(tφ)/∂G² at two different (constant) G
+        Gs = [CF(tuple(0.1 * (k + 1) * (1 + j) for k in range(dd)), dims=(d, d)).MakeVariable()
+              for j in range(2)]
+        try:
+            phis = [mech.thickness * mech._energy(G, mech.coeffs) for G in Gs]
+            Cs = [phi.Diff(G).Diff(G).Reshape((dd, dd)).Compile() for phi, G in zip(phis, Gs)]
+        except Exception:  # an energy NGSolve cannot differentiate without a direction
+            Cs = None
+        self.C = None
+        self.valid, self.elementwise, self.quadratic = (
+            self._check(Cs, phis, Gs, mesh, mech) if Cs is not None else (False, False, False))
+        if not self.valid:
+            return  # not a pure quadratic-plus-constant energy: Mechanics keeps Variation
+        if self.elementwise:
+            self.C = Cs[0]
+            self.l2C = L2(mesh, order=0, dim=dd * dd)
+            self.gfC = GridFunction(self.l2C)
+            self._centroids = mesh.MapToAllElements(
+                {TRIG: IntegrationRule([(1 / 3, 1 / 3)], [0.5]),
+                 QUAD: IntegrationRule([(0.5, 0.5)], [1.0])}, VOL)
+            # (not compiled: the plain tree assembles faster here, 0.052 against 0.067 s)
+            integrand = (self.gfC.Reshape((dd, dd)) * Grad(u).Reshape((dd,))) \
+                * Grad(v).Reshape((dd,))
+        else:
+            Gu = Grad(u)
+            integrand = (mech.thickness * mech._energy(Gu, mech.coeffs)).Diff(Gu, Grad(v)).Compile()
+        self.a = BilinearForm(fes, symmetric=True)
+        self.a += integrand * DX
+        self.springs = None
+        if mech.springs:
+            self.springs = BilinearForm(fes, symmetric=True)
+            for sp in mech.springs:
+                self.a += sp.energy(mesh, u).Diff(u, v)
+                self.springs += sp.energy(mesh, u).Diff(u, v)
+            self.springs.Assemble()  # design-independent
+        self.f = LinearForm(fes)
+        terms = [ld.work(mesh, v) for ld in mech.loads]
+        if mech._body is not None:
+            terms.append((mech.thickness * mech._body(v, mech.coeffs)).Compile() * DX)
+        for t in terms:
+            self.f += t
+        self.has_load = bool(terms)
+        self._Ku = mech.gfu.vec.CreateVector()
+        # ∂C/∂field for the element-wise fields (quadratic energies), evaluated on demand
+        self._dC, self._dC_version = {}, -1
+        if self.quadratic:
+            for f in mech.fields:
+                if f.space is mech.l2:
+                    self._dC[f.name] = (self.C.Diff(f.gf, mech.one).Compile(),
+                                        GridFunction(self.l2C))
+
+    @staticmethod
+    def _check(Cs, phis, Gs, mesh, mech, tol=1e-12):
+        """``(valid, elementwise, quadratic)`` for random field values (restored afterwards).
+
+        valid: ``C`` is the same at two different ``G`` and ``∂φ/∂G = C G`` (no linear term,
+        so that ``R(u) = K u - s f``); elementwise: ``C`` equals its element-wise constant
+        projection; quadratic: also ``φ(G) = ½ G:C:G`` (no constant).
+        """
+        from ngsolve import L2, VOL, GridFunction
+
+        rng = np.random.default_rng(12345)
+        saved = [f.gf.vec.FV().NumPy().copy() for f in mech.fields]
+        try:
+            for f in mech.fields:
+                f.gf.vec.FV().NumPy()[:] = rng.uniform(0.2, 1.0, len(f.gf.vec))
+            pts = mesh.MapToAllElements(mech.rules, VOL)
+            c0, c1 = (np.asarray(C(pts)) for C in Cs)
+            scale = max(float(np.max(np.abs(c0))), 1e-300)
+            if not (np.all(np.isfinite(c0)) and np.max(np.abs(c0 - c1)) <= tol * scale):
+                return False, False, False
+            G = Gs[0]
+            gv = np.asarray(G(pts)).reshape(len(c0), -1)
+            CG = np.einsum("pij,pj->pi", c0.reshape(len(c0), gv.shape[1], gv.shape[1]), gv)
+            dphi = np.asarray(phis[0].Diff(G)(pts)).reshape(gv.shape)
+            if not np.max(np.abs(dphi - CG)) <= tol * max(float(np.max(np.abs(CG))), 1e-300):
+                return False, False, False
+            phi = np.asarray(phis[0](pts)).ravel()
+            quad = bool(np.max(np.abs(phi - 0.5 * np.einsum("pi,pi->p", gv, CG)))
+                        <= tol * max(float(np.max(np.abs(phi))), 1e-300))
+            g = GridFunction(L2(mesh, order=0, dim=c0.shape[1]))
+            g.Set(Cs[0])
+            elementwise = bool(np.max(np.abs(np.asarray(g(pts)) - c0)) <= tol * scale)
+            return True, elementwise, quad and elementwise
+        except Exception:
+            return False, False, False
+        finally:
+            for f, v in zip(mech.fields, saved):
+                f.gf.vec.FV().NumPy()[:] = v
+
+    def assemble(self):
+        """Assemble ``K`` and ``f`` for the current fields (once per design)."""
+        if not self.stale:
+            return
+        if self.C is not None:
+            self.gfC.vec.FV().NumPy()[:] = np.asarray(self.C(self._centroids)).ravel()
+        self.a.Assemble()
+        if self.has_load:
+            self.f.Assemble()
+        else:
+            self.f.vec[:] = 0.0
+        self.stale = False
+        self.version += 1
+
+    def residual(self, vec, out, load):
+        self.assemble()
+        out.data = self.a.mat * vec
+        out.data -= load * self.f.vec
+
+    def load_norm(self):
+        self.assemble()
+        return float(np.linalg.norm(self.f.vec.FV().NumPy()[self.mech.free]))
+
+    # -- quadratic energies: strain energy and its derivatives from C ---------------------------
+    def energy_gradient(self, vec, out):
+        """``∂/∂u t∫φ(∇u) = K u - K_springs u``."""
+        self.assemble()
+        out.data = self.a.mat * vec
+        if self.springs is not None:
+            out.data -= self.springs.mat * vec
+
+    def energy(self, vec):
+        """``t∫φ(∇u) = ½ u·(K - K_springs) u``."""
+        self.energy_gradient(vec, self._Ku)
+        return 0.5 * float(self._Ku.InnerProduct(vec))
+
+    def field_form(self, name, gu, gw, factor=1.0, extra=None):
+        """LinearForm ``factor ∫ (∂C/∂field ∇gu) : ∇gw q (+ extra q)`` on the element space;
+        call :meth:`prepare_fields` before assembling it."""
+        from ngsolve import Grad, LinearForm
+
+        m, dd = self.mech, self.d * self.d
+        dC = self._dC[name][1].Reshape((dd, dd))
+        cf = factor * ((dC * Grad(gu).Reshape((dd,))) * Grad(gw).Reshape((dd,)))
+        lf = LinearForm(m.l2)
+        lf += cf * m.l2.TestFunction() * m.DX
+        if extra is not None:
+            lf += extra.Compile() * m.l2.TestFunction() * m.DX
+        return lf
+
+    def prepare_fields(self):
+        """Evaluate ``∂C/∂field`` per element for the current design (once per design)."""
+        self.assemble()
+        if self._dC_version == self.version:
+            return
+        for cf, gf in self._dC.values():
+            gf.vec.FV().NumPy()[:] = np.asarray(cf(self._centroids)).ravel()
+        self._dC_version = self.version
 
 
 @dataclass
@@ -192,6 +403,8 @@ class Mechanics:
             f.space = f.space or self.l2
             f.gf = GridFunction(f.space)
         self.coeffs = {f.name: f.gf for f in self.fields}
+        self.one = GridFunction(self.l2)  # the constant 1: direction of element-wise derivatives
+        self.one.vec[:] = 1.0
         self.load = Parameter(1.0)
         self.target = 1.0  # load factor of the next forward pass (continuation over iterations)
         self.rules = integration_rules(intorder or 2 * order)
@@ -216,6 +429,11 @@ class Mechanics:
             self.a += self.hot(self.residual_density(u, self.fes.TestFunction())) * self.DX
         if residual_terms is not None:
             self.a += residual_terms(u, self.fes.TestFunction(), self.load)
+        # a linear, conservative problem: R(u) = K u - s f with K independent of u and s
+        self._lin = None
+        if linear and conservative:
+            lin = _LinearSystem(self)
+            self._lin = lin if lin.valid else None
         # vector of the external load at unit load factor (for norms)
         self._inv = None
         self._tangent_at = None  # id of the state the factorisation belongs to
@@ -223,24 +441,23 @@ class Mechanics:
         self._gtrial = GridFunction(self.fes)
         if guard is not None:
             from ngsolve import QUAD, TRIG, VOL, IntegrationRule
-            self._guard_cf = guard(Grad(self._gtrial), self.coeffs)
+            self._guard_cf = guard(Grad(self._gtrial), self.coeffs).Compile()
             self._guard_pts = mesh.MapToAllElements(guard_rules(self.rules), VOL)
         # adjoint state and sensitivity forms (built once)
         self.lam = GridFunction(self.fes)
-        # λᵀ ∂R/∂field by automatic differentiation: L(field) = λᵀ R(u; field) (u, λ fixed) as
-        # an energy of the field's trial function, whose gradient is Apply of its Variation
-        # form.  Symbolic .Diff(field) of the already differentiated density blows the CF up
-        # (measured, Wang, 2906 triangles: 4.8 s per assembly; this route 0.07 s, equal to 6e-16)
+        # λᵀ ∂R/∂field by automatic differentiation of L(field) = λᵀ R(u; field) (FieldGradient)
         self._sens = {}
         for f in self.fields:
-            c = dict(self.coeffs)
-            c[f.name] = f.space.TrialFunction()
-            lag = self.volume_density(self.gfu, c).Diff(self.gfu, self.lam)
-            if residual_density is not None:
-                lag = lag + self.residual_density(self.gfu, self.lam, c)  # λᵀ R_nc, linear in λ
-            form = BilinearForm(f.space)
-            form += Variation(lag.Compile() * self.DX)
-            self._sens[f.name] = (form, f.gf.vec.CreateVector())
+            if self._lin is not None and f.name in self._lin._dC:
+                # λᵀ ∂R/∂ρ = ∫ (∂C/∂ρ ∇u) : ∇λ - s t ∂(b·λ)/∂ρ (quadratic energy, b·u linear)
+                extra = None
+                if body is not None:
+                    extra = (-self.load * self.thickness * body(self.lam, self.coeffs)).Diff(
+                        f.gf, self.one)
+                self._sens[f.name] = self._lin.field_form(f.name, self.gfu, self.lam, 1.0, extra)
+            else:
+                self._sens[f.name] = FieldGradient(f, self._adjoint_lagrangian, self.coeffs,
+                                                   self.DX)
         self._rhs = self.gfu.vec.CreateVector()
         self._ext = self.gfu.vec.CreateVector()
         # with only design-independent loads the load vector is fixed: its norm is computed once
@@ -248,6 +465,40 @@ class Mechanics:
         self._unit_load_norm = None
         self.adjoint_solves_skipped = 0
         self._ramp_first = None  # first increment of the last successful ramp from zero
+        # a design-dependent load on a stress-free energy (∂φ/∂G = 0 at G = 0): R(0) = -s f,
+        # so the load norm is that of the LinearForm f -- no Apply of the energy at u = 0
+        self._load_form = None
+        if conservative and body is not None and self._lin is None and self._stress_free():
+            v = self.fes.TestFunction()
+            self._load_form = LinearForm(self.fes)
+            for ld in self.loads:
+                self._load_form += ld.work(mesh, v)
+            self._load_form += (self.thickness * body(v, self.coeffs)).Compile() * self.DX
+
+    def _stress_free(self, tol=1e-13) -> bool:
+        """Whether ``∂(tφ)/∂G`` vanishes at ``G = 0`` (to ``tol`` of the stress at a unit
+        strain), checked at the quadrature points with random field values (restored)."""
+        from ngsolve import CF, VOL, GridFunction, Grad
+
+        rng = np.random.default_rng(54321)
+        saved = [f.gf.vec.FV().NumPy().copy() for f in self.fields]
+        try:
+            for f in self.fields:
+                f.gf.vec.FV().NumPy()[:] = rng.uniform(0.2, 1.0, len(f.gf.vec))
+            pts = self.mesh.MapToAllElements(self.rules, VOL)
+            w = GridFunction(self.fes)  # u = 0: ∇w = 0 at every point
+            G = Grad(w)
+            s0 = np.asarray((self.thickness * self._energy(G, self.coeffs)).Diff(G)(pts))
+            d = self.mesh.dim
+            G1 = CF(tuple(1e-3 * (1 + k) for k in range(d * d)), dims=(d, d)).MakeVariable()
+            s1 = np.asarray((self.thickness * self._energy(G1, self.coeffs)).Diff(G1)(pts))
+            ref = np.max(np.abs(s1)) / (1e-3 * d * d)
+            return bool(np.all(np.isfinite(s0)) and ref > 0 and np.max(np.abs(s0)) <= tol * ref)
+        except Exception:
+            return False
+        finally:
+            for f, v in zip(self.fields, saved):
+                f.gf.vec.FV().NumPy()[:] = v
 
     # -- the energy ------------------------------------------------------------------------
     def hot(self, cf):
@@ -266,6 +517,13 @@ class Mechanics:
         if self._body is not None:
             dens = dens - self.load * self.thickness * self._body(u, coeffs)
         return dens
+
+    def _adjoint_lagrangian(self, coeffs):
+        """``λᵀ R(u)`` per unit area with the fields ``coeffs`` (u, λ: the block's states)."""
+        lag = self.volume_density(self.gfu, coeffs).Diff(self.gfu, self.lam)
+        if self._rdens is not None:
+            lag = lag + self.residual_density(self.gfu, self.lam, coeffs)  # linear in λ
+        return lag
 
     def residual_density(self, u, v, coeffs=None):
         """The non-conservative volume term ``t r(u, v; fields, s)`` (a CF, per unit area)."""
@@ -288,6 +546,9 @@ class Mechanics:
     # -- the problem interface used by Newton --------------------------------------------------
     def residual(self, vec, out, load):
         self.load.Set(load)
+        if self._lin is not None:
+            self._lin.residual(vec, out, load)
+            return
         self.a.Apply(vec, out)
         if self._fbody is not None:
             if self._fbody_stale:
@@ -295,11 +556,21 @@ class Mechanics:
                 self._fbody_stale = False
             out.data -= load * self._fbody.vec
 
+    @property
+    def matrix(self):
+        """The tangent matrix last assembled by :meth:`assemble_tangent`."""
+        return self._lin.a.mat if self._lin is not None else self.a.mat
+
     def assemble_tangent(self, vec, load):
         self.load.Set(load)
-        self.a.AssembleLinearization(vec)
+        if self._lin is not None:
+            if self._tangent_at is not None:
+                return  # u- and load-independent: this design's matrix is factorised already
+            self._lin.assemble()
+        else:
+            self.a.AssembleLinearization(vec)
         if self._inv is None:
-            self._inv = self.a.mat.Inverse(self.fes.FreeDofs(), inverse=self.inverse_type)
+            self._inv = self.matrix.Inverse(self.fes.FreeDofs(), inverse=self.inverse_type)
         else:
             self._inv.Update()
         self._tangent_at = (load, vec.FV().NumPy().copy()) if not self.linear else ("linear",)
@@ -318,6 +589,13 @@ class Mechanics:
         """Norm of the external load vector (the residual at u = 0) at load factor ``load``."""
         if self._fixed_loads and self._unit_load_norm is not None:
             return abs(load) * self._unit_load_norm
+        if self._lin is not None and not self._fixed_loads:
+            # R(0) = -s f: the norm of the (design-dependent) load vector, no residual needed
+            return abs(load) * self._lin.load_norm()
+        if self._load_form is not None:
+            self.load.Set(load)
+            self._load_form.Assemble()
+            return abs(load) * float(np.linalg.norm(self._load_form.vec.FV().NumPy()[self.free]))
         if self._fixed_loads:
             self._ext[:] = 0.0
             self.residual(self._ext, self._rhs, 1.0)
@@ -341,6 +619,8 @@ class Mechanics:
                 f.gf.vec.data = v
         self._tangent_at = None  # a new design: any factorisation is stale
         self._fbody_stale = True  # ... and so is the body load (it depends on the fields)
+        if self._lin is not None:
+            self._lin.stale = True
 
     def forward(self, *values):
         self.set_fields(*values)
@@ -396,14 +676,16 @@ class Mechanics:
     def backward(self, dJdu):
         lam = self.adjoint(dJdu)
         self.lam.vec.data = lam
+        if self._lin is not None:
+            self._lin.prepare_fields()
         grads = []
         for f in self.fields:
-            form, out = self._sens[f.name]
-            form.Apply(f.gf.vec, out)
+            lf = self._sens[f.name]  # a LinearForm or a FieldGradient
+            lf.Assemble()
             if f.space is self.l2:
-                grads.append(-out.FV().NumPy().copy())
+                grads.append(-lf.vec.FV().NumPy().copy())
             else:
-                v = out.CreateVector()
-                v.data = -1.0 * out
+                v = lf.vec.CreateVector()
+                v.data = -1.0 * lf.vec
                 grads.append(v)
         return tuple(grads)

@@ -242,7 +242,7 @@ def test_tangent_is_derivative_of_residual(model, plane, kind, order):
     d.FV().NumPy()[:] = np.where(free, rng.standard_normal(len(free)), 0.0)
     mech.assemble_tangent(u, 1.0)
     Kd = d.CreateVector()
-    Kd.data = mech.a.mat * d
+    Kd.data = mech.matrix * d
     h = 1e-7
     rp, rm, w = u.CreateVector(), u.CreateVector(), u.CreateVector()
     w.data = u + h * d

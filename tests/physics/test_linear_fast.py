@@ -1,0 +1,221 @@
+"""The symbolic linear system of a linear, conservative Mechanics block (``Mechanics._lin``)
+against the automatic-differentiation route it replaces: the tangent from
+``AssembleLinearization`` of the ``Variation`` form, the residual from ``Apply``, the strain
+energy from ``Integrate`` and every derivative from ``.Diff``."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from pacto_ng.interpolation import simp_cf
+from pacto_ng.physics.darcy import DarcyPressure, darcy_body
+from pacto_ng.physics.loads import PointLoad, Spring
+from pacto_ng.physics.materials import linear_energy
+from pacto_ng.physics.mechanics import Mechanics, Supports
+from pacto_ng.responses import StrainEnergy
+from tests.small_cases import small_pa_mesh
+
+SUP = Supports(clamp=("fixed",), fix_y=("symmetry",))
+
+
+
+
+def _variation_residual(mech, vec, out, load=1.0):
+    """The general route: Apply of the Variation form minus the body load's LinearForm."""
+    mech.load.Set(load)
+    mech.a.Apply(vec, out)
+    if mech._fbody is not None:
+        mech._fbody.Assemble()
+        out.data -= load * mech._fbody.vec
+
+def _diff_form(dens, field, DX):
+    """The reference: the LinearForm of the symbolic derivative ``dens.Diff(field, q)``."""
+    from ngsolve import LinearForm
+
+    lf = LinearForm(field.space)
+    lf += dens.Diff(field.gf, field.space.TestFunction()) * DX
+    lf.Assemble()
+    return lf
+
+def _csr(mat):
+    r, c, v = mat.COO()
+    return sp.csr_matrix((np.array(v), (np.array(r), np.array(c))), shape=(mat.height, mat.width))
+
+
+def _rel(a, b):
+    return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
+
+
+def _block(kind, order, energy=None, plane="stress", darcy=True):
+    mesh = small_pa_mesh(kind)
+    energy = energy or (lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4,
+                                                   plane))
+    fields, body, loads, dar = ["rho_bar"], None, (), None
+    if darcy:
+        dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e5, order=order)
+        fields.append(dar.field())
+        body = darcy_body("p")
+    else:
+        loads = (PointLoad("output", (0.0, -1.0)),)
+    mech = Mechanics(mesh, order=order, energy=energy, fields=fields, supports=SUP,
+                     loads=loads, springs=(Spring("output", 1e4, (1.0, 0.0)),), body=body,
+                     thickness=1e-3, linear=True)
+    rng = np.random.default_rng(3)
+    rho = rng.uniform(0.05, 1.0, mesh.ne)
+    values = [rho] + ([dar.forward(rho)] if darcy else [])
+    mech.set_fields(*values)
+    return mech, rng
+
+
+def _compare(mech, rng, *, elementwise, quadratic):
+    lin = mech._lin
+    assert lin is not None
+    assert lin.elementwise is elementwise and lin.quadratic is quadratic
+    u = mech.gfu.vec
+    u.FV().NumPy()[:] = np.where(mech.free, 1e-4 * rng.standard_normal(len(mech.free)), 0.0)
+    mech.assemble_tangent(u, 1.0)
+    mech.a.AssembleLinearization(u)
+    K, K_ad = _csr(mech.matrix), _csr(mech.a.mat)
+    assert abs(K - K_ad).max() <= 1e-12 * abs(K_ad).max()  # measured 2e-16
+    for load in (1.0, 0.37):
+        r, r_ad = u.CreateVector(), u.CreateVector()
+        mech.residual(u, r, load)
+        _variation_residual(mech, u, r_ad, load)
+        # relative to the larger of the two parts K u and s f
+        Ku = (mech.matrix * u).Evaluate().FV().NumPy()
+        scale = max(np.max(np.abs(Ku)), np.max(np.abs(load * lin.f.vec.FV().NumPy())))
+        assert np.max(np.abs(r.FV().NumPy() - r_ad.FV().NumPy())) <= 1e-12 * scale
+        ext = u.CreateVector()
+        ext[:] = 0.0
+        _variation_residual(mech, ext, r_ad, load)
+        assert mech.load_norm(load) == pytest.approx(
+            np.linalg.norm(r_ad.FV().NumPy()[mech.free]), rel=1e-12)
+
+
+@pytest.mark.parametrize("kind,order", [("trig", 1), ("quads", 1), ("quads", 2)])
+@pytest.mark.parametrize("plane", ["stress", "strain"])
+def test_symbolic_tangent_and_residual_equal_the_variation_ones(kind, order, plane):
+    mech, rng = _block(kind, order, plane=plane)
+    _compare(mech, rng, elementwise=True, quadratic=True)
+
+
+def test_point_load_without_body():
+    mech, rng = _block("quads", 1, darcy=False)
+    _compare(mech, rng, elementwise=True, quadratic=True)
+
+
+def test_position_dependent_energy_uses_the_trial_function_form():
+    """E depends on x: C is not constant per element, so the tangent is the Diff form."""
+    from ngsolve import x
+
+    energy = lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0) * (1 + 50 * x), 0.4)
+    mech, rng = _block("trig", 2, energy=energy)
+    _compare(mech, rng, elementwise=False, quadratic=False)
+
+
+def test_energy_with_a_linear_term_keeps_the_variation_route():
+    """A pre-stress σ0 : G: the residual is not K u - s f, so Mechanics keeps ``Variation``."""
+    from ngsolve import CF, InnerProduct
+
+    s0 = CF((1e3, 2e3, 2e3, -1e3), dims=(2, 2))
+    energy = lambda G, c: (linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4)
+                           + InnerProduct(s0, G))
+    mech, rng = _block("quads", 1, energy=energy)
+    assert mech._lin is None
+
+
+def test_energy_with_a_constant_is_not_quadratic():
+    """φ + const: the same K and residual, but SE is not ½ u·K_φ u (StrainEnergy integrates)."""
+    energy = lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4) + 7.0
+    mech, rng = _block("quads", 1, energy=energy)
+    _compare(mech, rng, elementwise=True, quadratic=False)
+    assert StrainEnergy(mech)._quad is None
+
+
+@pytest.mark.parametrize("kind,order", [("trig", 1), ("quads", 2)])
+def test_quadratic_energy_responses_and_sensitivities(kind, order):
+    """SE, ∂SE/∂u, ∂SE/∂ρ and λᵀ∂R/∂ρ from C equal the Integrate / Variation / Diff ones."""
+    from ngsolve import BilinearForm, Grad, Integrate, Variation
+
+    mech, rng = _block(kind, order)
+    u = mech.gfu.vec
+    u.FV().NumPy()[:] = np.where(mech.free, 1e-4 * rng.standard_normal(len(mech.free)), 0.0)
+    se = StrainEnergy(mech)
+    assert se._quad is not None
+    val = se.forward(u)
+    dens = mech.thickness * mech._energy(Grad(se.gfu), mech.coeffs)
+    assert val == pytest.approx(Integrate(dens * mech.DX, mech.mesh), rel=1e-12)
+    du, drho, dp = se.backward(1.0)
+    w = mech.fes.TrialFunction()
+    ef = BilinearForm(mech.fes)
+    ef += Variation((mech.thickness * mech._energy(Grad(w), mech.coeffs)) * mech.DX)
+    ref = u.CreateVector()
+    ef.Apply(u, ref)
+    assert _rel(du.FV().NumPy(), ref.FV().NumPy()) <= 1e-12
+    f_rho = mech.fields[0]
+    lf = _diff_form(dens, f_rho, mech.DX)
+    assert _rel(drho, lf.vec.FV().NumPy()) <= 1e-12
+    # mechanics sensitivity λᵀ∂R/∂ρ (through C and the body term) against the Diff form
+    mech.lam.vec.FV().NumPy()[:] = np.where(mech.free, rng.standard_normal(len(mech.free)), 0.0)
+    mech._lin.prepare_fields()
+    lf_fast = mech._sens["rho_bar"]
+    lf_fast.Assemble()
+    gen = _diff_form(mech.volume_density(mech.gfu).Diff(mech.gfu, mech.lam), f_rho, mech.DX)
+    assert _rel(lf_fast.vec.FV().NumPy(), gen.vec.FV().NumPy()) <= 1e-12
+
+
+def test_new_design_reassembles():
+    """set_fields marks K, f and ∂C/∂ρ stale: a second design gives its own residual."""
+    mech, rng = _block("quads", 1)
+    u = mech.gfu.vec
+    u.FV().NumPy()[:] = np.where(mech.free, 1e-4 * rng.standard_normal(len(mech.free)), 0.0)
+    r1, r2, r_ad = u.CreateVector(), u.CreateVector(), u.CreateVector()
+    mech.residual(u, r1, 1.0)
+    rho = rng.uniform(0.05, 1.0, mech.mesh.ne)
+    mech.set_fields(rho, mech.fields[1].gf.vec)
+    mech.residual(u, r2, 1.0)
+    _variation_residual(mech, u, r_ad)
+    assert _rel(r2.FV().NumPy(), r_ad.FV().NumPy()) <= 1e-10
+    assert _rel(r1.FV().NumPy(), r_ad.FV().NumPy()) > 1e-3
+
+
+# -- nonlinear, stress-free energies: the load norm from the LinearForm of the loads -----------
+@pytest.mark.parametrize("model", ["neohookean", "wang"])
+@pytest.mark.parametrize("plane", ["strain", "stress"])
+def test_load_norm_of_a_stress_free_energy_equals_the_residual_at_zero(model, plane):
+    from pacto_ng.case import make_energy
+    from pacto_ng.params import Parameters
+    from ngsolve import Parameter
+
+    mesh = small_pa_mesh("trig")
+    dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e5, order=1)
+    params = Parameters().with_overrides({"model": model, "plane": plane, "E1": "3e9",
+                                          "E0": "3e3", "nu": "0.4"})
+    energy, guard, linear = make_energy(params, Parameter(3.0))
+    mech = Mechanics(mesh, order=1, energy=energy, fields=("rho_bar", dar.field()),
+                     supports=SUP, springs=(Spring("output", 1e4, (1.0, 0.0)),),
+                     body=darcy_body("p"), thickness=1e-3, guard=guard, linear=linear)
+    assert mech._load_form is not None
+    rng = np.random.default_rng(5)
+    rho = rng.uniform(0.05, 1.0, mesh.ne)
+    mech.set_fields(rho, dar.forward(rho))
+    zero, r = mech.gfu.vec.CreateVector(), mech.gfu.vec.CreateVector()
+    zero[:] = 0.0
+    for load in (1.0, 0.25):
+        mech.residual(zero, r, load)
+        ref = np.linalg.norm(r.FV().NumPy()[mech.free])
+        assert mech.load_norm(load) == pytest.approx(ref, rel=1e-12)
+
+
+def test_prestressed_energy_keeps_the_residual_load_norm():
+    from ngsolve import CF, InnerProduct
+
+    mesh = small_pa_mesh("trig")
+    dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e5, order=1)
+    s0 = CF((1e3, 0.0, 0.0, 1e3), dims=(2, 2))
+    from pacto_ng.physics.materials import neohookean_energy
+
+    energy = lambda G, c: (neohookean_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4)
+                           + InnerProduct(s0, G))
+    mech = Mechanics(mesh, order=1, energy=energy, fields=("rho_bar", dar.field()),
+                     supports=SUP, body=darcy_body("p"), thickness=1e-3)
+    assert mech._load_form is None
