@@ -1,7 +1,8 @@
 """Extreme loads: the pressure-actuated cases past the thesis's pressures, and the nonlinear
 force cases (cantilever, inverter) at and past their published limits.
 
-    python -m benchmarks.extreme [--runs DIR] [--only NAME,...] [--report-only] [--out FILE]
+    python -m benchmarks.extreme [--runs DIR] [--only NAME,...] [--report-only] [--cross]
+                                 [--out FILE] [--doc docs/benchmarks.md]
 
 Every run is a plain ``pacto run`` (the command is in the table), written to ``DIR/NAME``
 (default: $PACTO_BENCH_RUNS or ``output/extreme``); a run whose folder already holds a
@@ -244,6 +245,7 @@ def main(argv=None):
     ap.add_argument("--only", default="", help="comma-separated run names (default: all)")
     ap.add_argument("--report-only", action="store_true", help="no new runs, only the tables")
     ap.add_argument("--out", default=None, help="print the tables here (default: stdout)")
+    ap.add_argument("--doc", default=None, help="rewrite the block benchmarks-extreme of this file")
     ap.add_argument("--cross", action="store_true",
                     help="also analyse every design at every pressure (cached in DIR/cross_CASE.json)")
     args = ap.parse_args(argv)
@@ -277,6 +279,15 @@ def main(argv=None):
         Path(args.out).write_text(out + "\n")
     else:
         print(out)
+    if args.doc:
+        from benchmarks.__main__ import _describe, machine, replace_block
+
+        body = ["## Extreme loads (thesis meshes)", "", _describe(sys.modules[__name__]), "", out,
+                "", "Regenerate: `python -m benchmarks.extreme --runs DIR --cross --doc "
+                "docs/benchmarks.md` (runs what is missing in DIR, then rewrites this block).",
+                "", f"*Tables written {machine()}; the runs' wall times were measured while "
+                "other runs shared the 2 cores (2-4 processes at a time).*"]
+        replace_block(args.doc, "benchmarks-extreme", "\n".join(body))
     return 0
 
 
