@@ -7,7 +7,7 @@ The total potential is
 with thickness ``t`` and load factor ``s``.  The residual ``R = ∂Π/∂u`` and the tangent come from
 NGSolve's ``Variation`` (automatic differentiation).  Equilibrium is found by
 :func:`~pacto_ng.physics.newton.solve_with_continuation`.  A linear, conservative problem
-(``linear=True``, no residual terms) whose energy is quadratic in ``∇u`` instead assembles
+(``linear=True``, no residual terms, no body load) whose energy is quadratic in ``∇u`` instead assembles
 ``K`` from the symbolic Hessian ``∂²(tφ)/∂G²`` of the same energy and evaluates
 ``R(u) = K u - s f`` by a matrix-vector product (:class:`_LinearSystem`; equal to round-off).
 
@@ -431,7 +431,10 @@ class Mechanics:
             self.a += residual_terms(u, self.fes.TestFunction(), self.load)
         # a linear, conservative problem: R(u) = K u - s f with K independent of u and s
         self._lin = None
-        if linear and conservative:
+        # (not with a design-dependent body load: there the finite-difference checks of the
+        # pressure cases lost two to three digits, e.g. pneunet d(SE)/dx 4.5e-5 against 1.5e-7
+        # with the Variation route, measured with one thread; the cause is not yet found)
+        if linear and conservative and body is None:
             lin = _LinearSystem(self)
             self._lin = lin if lin.valid else None
         # vector of the external load at unit load factor (for norms)
