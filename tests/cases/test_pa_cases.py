@@ -102,6 +102,18 @@ def test_check_gradients(case, extra, capsys):
         assert "d(volume2)/dx" in out
 
 
+@pytest.mark.parametrize("load_type", ["fixed", "follower"])
+@pytest.mark.parametrize("model", ["neohookean", "wang"])
+@pytest.mark.parametrize("case", ["pa-inverter", "pa-gripper", "pneunet", "mm-gripper"])
+def test_check_gradients_nonlinear(case, model, load_type, capsys):
+    """The whole chain x -> ... -> p -> u -> objective and constraints, for every pressure case
+    with each nonlinear model and each Darcy load type, against central finite differences."""
+    code = main(["check-gradients", case, "--model", model, "--set", f"load_type={load_type}"])
+    out = capsys.readouterr().out
+    assert code == 0, out[-2000:]
+    assert "pass" in out and f"{case}/{model}: d(objective)/dx" in out
+
+
 def test_check_gradients_sees_a_missing_load_sensitivity(capsys):
     """Without the Darcy load sensitivity the gradient is wrong, and the check says so."""
     assert main(["check-gradients", "pa-inverter", "--set", "load_sensitivity=0"]) == 1
