@@ -195,8 +195,9 @@ def fast_paths_ab(overrides_list, repeat=7, threads=1):
     in one process on the same state (median of ``repeat``), with their largest relative
     difference:
 
-    * load norm of a design-dependent load on a stress-free energy: ``Apply`` of the whole
-      energy at u = 0 (before) against the assembled LinearForm of the loads (after);
+    * load norm of a design-dependent load on a stress-free energy: the residual at u = 0
+      (``Apply`` of the energy plus the body load; before) against the assembled LinearForm of
+      the loads (after);
     * element-wise field derivatives (λᵀ∂R/∂ρ of the mechanics block, ∂SE/∂ρ): a LinearForm
       of ``dens.Diff(ρ, q)`` (before) against the library's form (after): automatic
       differentiation in ρ (``FieldGradient``), or for linear mechanics the tangent's
@@ -223,8 +224,8 @@ def fast_paths_ab(overrides_list, repeat=7, threads=1):
                 zero[:] = 0.0
                 res = {}
 
-                def old_norm():
-                    m.a.Apply(zero, r)
+                def old_norm():  # the residual at u = 0: Apply of the energy + the body load
+                    m.residual(zero, r, 1.0)
                     res["old"] = float(np.linalg.norm(r.FV().NumPy()[m.free]))
 
                 def new_norm():
