@@ -121,7 +121,6 @@ def cross_evaluate(folder: Path, model: str, load: float, load_type: str) -> dic
     or the load factor Newton reached."""
     import dataclasses
 
-    from pacto_ng.physics.mechanics import NewtonFailure
     from pacto_ng.post.cli_commands import load_run, rebuild
     from pacto_ng.threads import compute
 

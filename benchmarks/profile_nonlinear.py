@@ -129,35 +129,27 @@ def strain_energy_ab(overrides_list, repeat=7):
     import statistics
 
     import numpy as np
-    from ngsolve import Grad, LinearForm, SetNumThreads, TaskManager
+    from ngsolve import Grad, LinearForm
 
-    from pacto_ng.case import build_problem, get_case
-    from pacto_ng.run import initial_design
-
-    SetNumThreads(2)
-    case = get_case("pa-inverter")
     out = []
-    for label, over in overrides_list:
-        with TaskManager():
-            problem = build_problem(case, case.defaults.with_overrides(over))
-            problem.evaluate(initial_design(problem))
-            mech = problem.mech
-            se = next(b for b in problem.chain.blocks if type(b).__name__ == "StrainEnergy")
-            dens = mech.thickness * mech._energy(Grad(se.gfu), mech.coeffs)
-            old = LinearForm(mech.fes)
-            old += dens.Diff(se.gfu, mech.fes.TestFunction()).Compile() * mech.DX
+    for label, problem in _evaluated(overrides_list, 2):
+        mech = problem.mech
+        se = next(b for b in problem.chain.blocks if type(b).__name__ == "StrainEnergy")
+        dens = mech.thickness * mech._energy(Grad(se.gfu), mech.coeffs)
+        old = LinearForm(mech.fes)
+        old += dens.Diff(se.gfu, mech.fes.TestFunction()).Compile() * mech.DX
+        old.Assemble()
+        se._energy_form.Apply(se.gfu.vec, se._du_vec)
+        a, b = old.vec.FV().NumPy(), se._du_vec.FV().NumPy()
+        diff = float(np.max(np.abs(a - b)) / np.max(np.abs(a)))
+        t_old, t_new = [], []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
             old.Assemble()
+            t_old.append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
             se._energy_form.Apply(se.gfu.vec, se._du_vec)
-            a, b = old.vec.FV().NumPy(), se._du_vec.FV().NumPy()
-            diff = float(np.max(np.abs(a - b)) / np.max(np.abs(a)))
-            t_old, t_new = [], []
-            for _ in range(repeat):
-                t0 = time.perf_counter()
-                old.Assemble()
-                t_old.append(time.perf_counter() - t0)
-                t0 = time.perf_counter()
-                se._energy_form.Apply(se.gfu.vec, se._du_vec)
-                t_new.append(time.perf_counter() - t0)
+            t_new.append(time.perf_counter() - t0)
         out.append(dict(label=label, elements=problem.mesh.ne, dofs=mech.fes.ndof,
                         before=statistics.median(t_old), after=statistics.median(t_new),
                         diff=diff))
@@ -190,6 +182,23 @@ def _ab(before, after, repeat):
     return statistics.median(tb), statistics.median(ta)
 
 
+
+def _evaluated(overrides_list, threads):
+    """``(label, problem)`` per ``(label, overrides)``: the pa-inverter with those overrides,
+    built and evaluated once at its initial design, inside NGSolve's TaskManager."""
+    from ngsolve import SetNumThreads, TaskManager
+
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.run import initial_design
+
+    SetNumThreads(threads)
+    case = get_case("pa-inverter")
+    for label, over in overrides_list:
+        with TaskManager():
+            problem = build_problem(case, case.defaults.with_overrides(over))
+            problem.evaluate(initial_design(problem))
+            yield label, problem
+
 def fast_paths_ab(overrides_list, repeat=7, threads=1):
     """Before/after of the library changes of the second performance round, timed interleaved
     in one process on the same state (median of ``repeat``), with their largest relative
@@ -204,54 +213,46 @@ def fast_paths_ab(overrides_list, repeat=7, threads=1):
       ``∂C/∂ρ``.
     """
     import numpy as np
-    from ngsolve import Grad, LinearForm, SetNumThreads, TaskManager
+    from ngsolve import Grad, LinearForm
 
-    from pacto_ng.case import build_problem, get_case
-    from pacto_ng.run import initial_design
-
-    SetNumThreads(threads)
-    case = get_case("pa-inverter")
     out = []
-    for label, over in overrides_list:
-        with TaskManager():
-            problem = build_problem(case, case.defaults.with_overrides(over))
-            problem.evaluate(initial_design(problem))
-            m = problem.mech
-            rel = lambda a, b: float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
-            rows = []
-            if m._load_form is not None:
-                zero, r = m.gfu.vec.CreateVector(), m.gfu.vec.CreateVector()
-                zero[:] = 0.0
-                res = {}
+    for label, problem in _evaluated(overrides_list, threads):
+        m = problem.mech
+        rel = lambda a, b: float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
+        rows = []
+        if m._load_form is not None:
+            zero, r = m.gfu.vec.CreateVector(), m.gfu.vec.CreateVector()
+            zero[:] = 0.0
+            res = {}
 
-                def old_norm():  # the residual at u = 0: Apply of the energy + the body load
-                    m.residual(zero, r, 1.0)
-                    res["old"] = float(np.linalg.norm(r.FV().NumPy()[m.free]))
+            def old_norm():  # the residual at u = 0: Apply of the energy + the body load
+                m.residual(zero, r, 1.0)
+                res["old"] = float(np.linalg.norm(r.FV().NumPy()[m.free]))
 
-                def new_norm():
-                    res["new"] = m.load_norm(1.0)
+            def new_norm():
+                res["new"] = m.load_norm(1.0)
 
-                tb, ta = _ab(old_norm, new_norm, repeat)
-                rows.append(("load norm", tb, ta, abs(res["old"] - res["new"]) / res["old"]))
-            rho = m.fields[0]
-            q = rho.space.TestFunction()
-            m.lam.vec.FV().NumPy()[:] = np.where(m.free, np.random.default_rng(0).standard_normal(
-                len(m.free)), 0.0)
-            dens = m.volume_density(m.gfu).Diff(m.gfu, m.lam)
-            old = LinearForm(rho.space)
-            old += dens.Diff(rho.gf, q).Compile() * m.DX
-            new = m._sens[rho.name]
-            tb, ta = _ab(old.Assemble, new.Assemble, repeat)
-            rows.append(("λᵀ∂R/∂ρ form", tb, ta, rel(new.vec.FV().NumPy(), old.vec.FV().NumPy())))
-            se = next(b for b in problem.chain.blocks if type(b).__name__ == "StrainEnergy")
-            sdens = m.thickness * m._energy(Grad(se.gfu), m.coeffs)
-            old = LinearForm(rho.space)
-            old += sdens.Diff(rho.gf, q).Compile() * m.DX
-            new = se._dfield[rho.name]
-            if se._quad is not None:
-                se._quad.prepare_fields()
-            tb, ta = _ab(old.Assemble, new.Assemble, repeat)
-            rows.append(("∂SE/∂ρ form", tb, ta, rel(new.vec.FV().NumPy(), old.vec.FV().NumPy())))
+            tb, ta = _ab(old_norm, new_norm, repeat)
+            rows.append(("load norm", tb, ta, abs(res["old"] - res["new"]) / res["old"]))
+        rho = m.fields[0]
+        q = rho.space.TestFunction()
+        m.lam.vec.FV().NumPy()[:] = np.where(m.free, np.random.default_rng(0).standard_normal(
+            len(m.free)), 0.0)
+        dens = m.volume_density(m.gfu).Diff(m.gfu, m.lam)
+        old = LinearForm(rho.space)
+        old += dens.Diff(rho.gf, q).Compile() * m.DX
+        new = m._sens[rho.name]
+        tb, ta = _ab(old.Assemble, new.Assemble, repeat)
+        rows.append(("λᵀ∂R/∂ρ form", tb, ta, rel(new.vec.FV().NumPy(), old.vec.FV().NumPy())))
+        se = next(b for b in problem.chain.blocks if type(b).__name__ == "StrainEnergy")
+        sdens = m.thickness * m._energy(Grad(se.gfu), m.coeffs)
+        old = LinearForm(rho.space)
+        old += sdens.Diff(rho.gf, q).Compile() * m.DX
+        new = se._dfield[rho.name]
+        if se._quad is not None:
+            se._quad.prepare_fields()
+        tb, ta = _ab(old.Assemble, new.Assemble, repeat)
+        rows.append(("∂SE/∂ρ form", tb, ta, rel(new.vec.FV().NumPy(), old.vec.FV().NumPy())))
         for name, tb, ta, d in rows:
             out.append(dict(label=label, part=name, elements=problem.mesh.ne, before=tb,
                             after=ta, diff=d))
