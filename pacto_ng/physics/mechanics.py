@@ -469,14 +469,16 @@ class Mechanics:
         self.adjoint_solves_skipped = 0
         self._ramp_first = None  # first increment of the last successful ramp from zero
         # a design-dependent load on a stress-free energy (∂φ/∂G = 0 at G = 0): R(0) = -s f,
-        # so the load norm is that of the LinearForm f -- no Apply of the energy at u = 0
+        # so the load norm is that of f = (point/edge loads) + (body load) -- no Apply of the
+        # energy at u = 0.  The point loads are design independent: assembled here, once; the
+        # body load is the residual's own LinearForm (_fbody)
         self._load_form = None
         if conservative and body is not None and self._lin is None and self._stress_free():
             v = self.fes.TestFunction()
             self._load_form = LinearForm(self.fes)
             for ld in self.loads:
                 self._load_form += ld.work(mesh, v)
-            self._load_form += (self.thickness * body(v, self.coeffs)).Compile() * self.DX
+            self._load_form.Assemble()
 
     def _stress_free(self, tol=1e-13) -> bool:
         """Whether ``∂(tφ)/∂G`` vanishes at ``G = 0`` (to ``tol`` of the stress at a unit
@@ -554,10 +556,14 @@ class Mechanics:
             return
         self.a.Apply(vec, out)
         if self._fbody is not None:
-            if self._fbody_stale:
-                self._fbody.Assemble()
-                self._fbody_stale = False
-            out.data -= load * self._fbody.vec
+            out.data -= load * self._body_load()
+
+    def _body_load(self):
+        """The body-load vector ``t ∫ b·v dΩ`` of the current fields (assembled once per design)."""
+        if self._fbody_stale:
+            self._fbody.Assemble()
+            self._fbody_stale = False
+        return self._fbody.vec
 
     @property
     def matrix(self):
@@ -596,9 +602,8 @@ class Mechanics:
             # R(0) = -s f: the norm of the (design-dependent) load vector, no residual needed
             return abs(load) * self._lin.load_norm()
         if self._load_form is not None:
-            self.load.Set(load)
-            self._load_form.Assemble()
-            return abs(load) * float(np.linalg.norm(self._load_form.vec.FV().NumPy()[self.free]))
+            f = self._load_form.vec.FV().NumPy() + self._body_load().FV().NumPy()
+            return abs(load) * float(np.linalg.norm(f[self.free]))
         if self._fixed_loads:
             self._ext[:] = 0.0
             self.residual(self._ext, self._rhs, 1.0)
