@@ -58,11 +58,21 @@ RUNS = {
     **{f"cant_{m}_{F}": ("cantilever", ["--model", {"nh": "neohookean", "w": "wang"}[m],
                                         "--load", f"{F}e3"] + FC)
        for F in (80, 144, 240, 300, 500, 800) for m in ("nh", "w")},
+    # cantilever on Wang et al.'s 120 x 30 quad mesh
+    **{f"cant_q_{m}_{F}": ("cantilever", ["--model", {"nh": "neohookean", "w": "wang"}[m],
+                                          "--load", f"{F}e3", "--nelx", "120", "--nely", "30"] + FC)
+       for F in (80, 144, 240, 300) for m in ("nh", "w")},
+    # Wang et al.'s own schedule, as data: p 1 -> 3 by 0.05, beta 4 -> 64 doubling every 10
+    "cant_q_w2014_w_240": ("cantilever", ["--model", "wang", "--load", "240e3", "--nelx", "120",
+                                          "--nely", "30", "--set", "penal_start=1", "--set",
+                                          "penal_step=0.05", "--set", "beta=4", "--set",
+                                          "beta_max=64", "--set", "beta_every=10", "--set",
+                                          "wang_beta=500", "--set", "wang_eta=0.01"] + FC),
     # force inverter at the thesis mesh (thesis limit 0.4 N)
     "inv_f_lin_04": ("inverter", ["--model", "linear", "--load", "0.4", "--maxh", "3e-6"]),
     **{f"inv_f_{m}_{tag}": ("inverter", ["--model", {"nh": "neohookean", "w": "wang"}[m],
                                         "--load", F, "--maxh", "3e-6"] + FC)
-       for tag, F in (("002", "0.02"), ("01", "0.1"), ("04", "0.4"), ("08", "0.8"))
+       for tag, F in (("002", "0.02"), ("01", "0.1"), ("02", "0.2"), ("04", "0.4"), ("08", "0.8"))
        for m in ("nh", "w")},
 }
 

@@ -259,8 +259,12 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         if params.inlet:
             pressure = Pressure(inlet=tuple(params.inlet.split("|")), zero=pressure.zero)
         try:
+            # Wang: the follower load sees the deformation I + γ∇u of the energy's
+            # large-strain part (void: the fixed load), unless follower_wang=0
+            gamma = (energy.__self__.gamma if params.model == "wang" and params.follower_wang
+                     else None)
             pressure_block, pfield, body = darcy.for_case(mesh, params, pressure, names[0],
-                                                          order=params.order)
+                                                          order=params.order, gamma=gamma)
         except ValueError as err:
             raise InputError(str(err)) from None
         if params.load_type == "follower":

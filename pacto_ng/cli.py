@@ -226,7 +226,15 @@ def _main(argv) -> int:
         from .gradcheck import check_case
 
         explicit = args.maxh is not None or args.nelx is not None
-        worst = check_case(case, params, seed=args.seed, quiet=args.quiet, explicit_mesh=explicit)
+        from .physics.mechanics import NewtonFailure
+
+        try:
+            worst = check_case(case, params, seed=args.seed, quiet=args.quiet,
+                               explicit_mesh=explicit)
+        except NewtonFailure as err:
+            print(f"pacto: check-gradients {case.name}: the equilibrium of the check's random "
+                  f"design was not found: {err}", file=sys.stderr)
+            return 1
         ok = worst <= args.tol
         print(f"worst relative error {worst:.3e} ({'pass' if ok else 'FAIL'}, tolerance {args.tol:g})")
         return 0 if ok else 1

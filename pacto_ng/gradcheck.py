@@ -30,12 +30,17 @@ def coarse_params(case, params, explicit_mesh: bool):
 
 
 def check_case(case, params, *, seed: int = 0, quiet: bool = False, explicit_mesh: bool = False,
-               h: float = 1e-5) -> float:
+               h: float = 1e-4) -> float:
     """Worst relative error over every checked response.
 
-    The step ``h = 1e-5`` balances the O(h²) truncation error of central differences against
-    the equilibrium's own noise: Newton stops at a residual of ~1e-12 of the load, which
-    divided by 2h must stay well below the tolerance.
+    Five-point central differences (error O(h⁴)) with ``h = 1e-4``: Newton stops at a residual
+    of ~1e-12 of the load, and that noise of the responses, divided by h, must stay well below
+    the tolerance.  With the three-point stencil it did not: the strain energy of the
+    pressure-actuated cases, along random directions where its derivative is 1e3-5e4 times
+    smaller than the sum of its terms' magnitudes, came out 1.5e-5 to 3.9e-5 off at every h
+    (measured 2026-12-01; the five-point stencil at h = 1e-4 gives 9e-7 on the same
+    directions).  Directions with such cancellation (factor > 100) are drawn again: along them
+    the check measures the finite difference's error, not the gradient.
     """
     params = coarse_params(case, params, explicit_mesh)
     problem = build_problem(case, params)
@@ -54,7 +59,8 @@ def check_case(case, params, *, seed: int = 0, quiet: bool = False, explicit_mes
             problem.chain.forward(x=x)
             return np.asarray(problem.chain.gradient(nm))
 
-        res = check_gradient(fun, grad, x0, h=h, directions=3, seed=seed)
+        res = check_gradient(fun, grad, x0, h=h, directions=3, seed=seed, stencil=4,
+                             max_cancellation=100.0)
         worst = max(worst, res.rel_error)
         if not quiet:
             print(f"  {case.name}/{params.model}: d({name})/dx  {res}  "

@@ -61,6 +61,7 @@ class Parameters:
     delta_s: float = _p(0.002, "m", "pressure penetration depth Δs")
     p_out: float = _p(0.0, "Pa", "drainage outside pressure")
     load_type: str = _p("fixed", "", "Darcy load: fixed | follower")
+    follower_wang: bool = _p(True, "", "Wang model: the follower load sees I + γ∇u (void: fixed load)")
     load_sensitivity: bool = _p(True, "", "include the pressure-load sensitivity (off: study only)")
     volfrac2: float = _p(0.0, "", "volume fraction limit of the stiff material (0: none)")
     inlet: str = _p("", "", "Darcy inlet boundary name(s), '|'-separated (empty: the case's own)")

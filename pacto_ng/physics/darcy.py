@@ -293,7 +293,7 @@ def darcy_body(p_name: str = "p"):
     return body
 
 
-def darcy_follower(p_name: str = "p"):
+def darcy_follower(p_name: str = "p", gamma=None):
     r"""The ``residual_density`` of :class:`~pacto_ng.physics.mechanics.Mechanics` for the
     Darcy pressure as a follower load (SPEC §4).
 
@@ -315,10 +315,19 @@ def darcy_follower(p_name: str = "p"):
     ``u``: one Newton step is exact.  In plane stress the change of the out-of-plane thickness
     is not included in the load (the pressure acts on the reference thickness).
 
+    ``gamma`` (a callable ``coeffs -> CF`` in [0, 1], e.g. the Wang interpolation factor
+    :meth:`~pacto_ng.physics.wang.WangModel.gamma`): the load follows ``F_γ = I + γ∇u``, the
+    deformation the Wang energy's large-strain part sees, instead of ``F``:
+    ``cof(F_γ) = I + γ cof(∇u)`` in 2D.  In solid (γ = 1) this is the follower load; in void
+    (γ = 0) it is the fixed load, as small-strain theory models the void.  Without it the
+    load's own stiffness (of the order of the pressure) acts on void material whose stiffness
+    is E0: once the pressure exceeds E0 by far, the fictitious void can buckle under its own
+    load and Newton finds no equilibrium.
+
     Returns
     -------
     callable ``(u, v, coeffs, load) -> CF``
-        ``load * cof(I + ∇u) ∇p · v`` with ``p = coeffs[p_name]``.
+        ``load * cof(I + ∇u) ∇p · v`` with ``p = coeffs[p_name]`` (``γ∇u`` with ``gamma``).
     """
     def density(u, v, coeffs, load):
         from ngsolve import Cof, Grad, Id, InnerProduct, grad
@@ -327,6 +336,8 @@ def darcy_follower(p_name: str = "p"):
             raise ValueError(f"p_name: '{p_name}' is not a field of the mechanics block "
                              f"(fields: {', '.join(coeffs)})")
         G = Grad(u)
+        if gamma is not None:
+            G = gamma(coeffs) * G
         F = Id(G.dims[0]) + G
         return load * InnerProduct(Cof(F) * grad(coeffs[p_name]), v)
 
@@ -408,7 +419,7 @@ DarcyCompliance = Compliance
 
 
 def for_case(mesh, params, pressure, rho_name: str = "rho_bar", *, order: int = 1,
-             output: str = "p", load_type: str | None = None):
+             output: str = "p", load_type: str | None = None, gamma=None):
     """Build the Darcy part of a case: ``(DarcyPressure block, Field for Mechanics, load)``.
 
     ``pressure`` has ``inlet`` and ``zero`` (boundary names); ``params`` supplies
@@ -416,7 +427,7 @@ def for_case(mesh, params, pressure, rho_name: str = "rho_bar", *, order: int = 
     load_sensitivity and load_type (SPEC §2 defaults in :class:`~pacto_ng.params.Parameters`).
     ``load_type`` (default ``params.load_type``) chooses the third item: ``"fixed"`` gives
     :func:`darcy_body` (``Mechanics(body=...)``), ``"follower"`` gives :func:`darcy_follower`
-    (``Mechanics(residual_density=...)``).
+    (``Mechanics(residual_density=...)``), with ``gamma`` passed on to it.
     """
     load_type = params.load_type if load_type is None else load_type
     if load_type not in ("fixed", "follower"):
@@ -427,7 +438,7 @@ def for_case(mesh, params, pressure, rho_name: str = "rho_bar", *, order: int = 
                           r=params.r, delta_s=params.delta_s, p_out=params.p_out,
                           sensitivity=params.load_sensitivity, inputs=(rho_name,),
                           output=output)
-    load = darcy_body(output) if load_type == "fixed" else darcy_follower(output)
+    load = darcy_body(output) if load_type == "fixed" else darcy_follower(output, gamma)
     return block, block.field(), load
 
 

@@ -102,28 +102,23 @@ def test_check_gradients(case, extra, capsys):
         assert "d(volume2)/dx" in out
 
 
-#: measured on 2026-12-01 (one thread), not yet explained: the strain energy's gradient is off by
-#: 1.5e-5 to 3.9e-5 (independent of the FD step: 1e-5, 3e-6, 1e-6 give the same), present before
-#: (pa-gripper neohookean fixed: 1.1e-5 at commit ac0c13f); and Newton cannot find the follower
-#: equilibrium of the check's random grey PneuNet design (load factor 0.28-0.38 reached, also at
-#: 2e4 Pa).  Not strict: the figures sit near the tolerance and move with the thread count.
-_KNOWN = {
-    ("pa-gripper", "neohookean", "fixed"): "d(se)/dx off by 1.5e-5",
-    ("pa-gripper", "wang", "follower"): "d(se)/dx off by 1.7e-5",
-    ("pneunet", "wang", "fixed"): "d(se)/dx off by 3.9e-5",
-    ("pneunet", "neohookean", "follower"): "Newton fails on the check's grey design",
-    ("pneunet", "wang", "follower"): "Newton fails on the check's grey design",
-}
+#: The check's random grey design (x in [0.3, 0.7] at the final β = 32) of the PneuNet has void
+#: patches (E0 = 1e-6 E1 = 100 Pa) beside pressure gradients.  A follower load's own stiffness
+#: there (of the order of the pressure) exceeds the void's material stiffness once the inlet
+#: pressure is ~1e4 Pa, and with Neo-Hookean void Newton finds no equilibrium (load factor
+#: 0.56 of 1e4 Pa; measured 2026-12-01).  With E0 = 1e4 Pa the same check converges at 1e4 Pa
+#: and passes (1.1e-9), which supports that reading; the Wang model, whose follower load sees
+#: I + γ∇u (the fixed load in void, ``follower_wang``), passes at the default 1e5 Pa.  The
+#: Neo-Hookean follower chain is therefore checked at 1e3 Pa here, where the equilibrium exists.
+_EXTRA = {("pneunet", "neohookean", "follower"): ["--load", "1e3"]}
 
 
 def _combos():
     for case in ("pa-inverter", "pa-gripper", "pneunet", "mm-gripper"):
         for model in ("neohookean", "wang"):
             for load_type in ("fixed", "follower"):
-                why = _KNOWN.get((case, model, load_type))
-                marks = [pytest.mark.xfail(reason=why, strict=False)] if why else []
-                if case != "pa-inverter":  # every model x load type runs by default on one case
-                    marks.append(pytest.mark.slow)
+                # every model x load type runs by default on one case
+                marks = [] if case == "pa-inverter" else [pytest.mark.slow]
                 yield pytest.param(case, model, load_type, marks=marks,
                                    id=f"{case}-{model}-{load_type}")
 
@@ -132,7 +127,8 @@ def _combos():
 def test_check_gradients_nonlinear(case, model, load_type, capsys):
     """The whole chain x -> ... -> p -> u -> objective and constraints, for every pressure case
     with each nonlinear model and each Darcy load type, against central finite differences."""
-    code = main(["check-gradients", case, "--model", model, "--set", f"load_type={load_type}"])
+    code = main(["check-gradients", case, "--model", model, "--set", f"load_type={load_type}",
+                 *_EXTRA.get((case, model, load_type), [])])
     out = capsys.readouterr().out
     assert code == 0, out[-2000:]
     assert "pass" in out and f"{case}/{model}: d(objective)/dx" in out

@@ -249,3 +249,30 @@ def test_load_stiffness_symmetry():
         m.set_fields(rho, q)
     other = skew()
     assert other > 1e-2, other  # measured 0.55
+
+
+@pytest.mark.parametrize("kind", ["trig", "quad"])
+def test_wang_follower_is_follower_in_solid_and_fixed_in_void(kind):
+    """``darcy_follower(gamma=...)`` follows ``I + γ∇u``: with γ ≡ 1 its residual is the plain
+    follower's, with γ ≡ 0 the fixed load's, at a deformed state; in between it is affine in γ."""
+    from ngsolve import CF
+
+    fixed, follower, rho, p = _pair(kind, p_in=1e5)
+    ua = _smooth(follower, 1e-3).vec
+    ref_fol, ref_fix = _residual(follower, ua), _residual(fixed, ua)
+    n = np.linalg.norm(ref_fol - ref_fix)  # the load stiffness's share: the scale of the test
+    assert n > 1e-6 * np.linalg.norm(ref_fix)  # measured 2.6e-5 (trig), 3.0e-5 (quad)
+    out = {}
+    for g in (0.0, 0.5, 1.0):
+        energy, guard, lin = _energy("neohookean")
+        mech = Mechanics(follower.mesh, residual_density=darcy_follower("p", gamma=lambda c, g=g: CF(g)),
+                         fields=("rho_bar", DarcyPressure(follower.mesh, inlet="inlet", zero="zero",
+                                                          p_in=1e5).field()),
+                         order=1, energy=energy, thickness=T, guard=guard, linear=lin,
+                         supports=Supports(clamp=("fixed",), fix_y=("symmetry",)))
+        mech.set_fields(rho, p)
+        out[g] = _residual(mech, ua)
+    # measured: 3.6e-12 (γ = 0), 4.9e-12 (0.5), 0.0 (1) relative to n (trig)
+    assert np.linalg.norm(out[1.0] - ref_fol) / n < 1e-9
+    assert np.linalg.norm(out[0.0] - ref_fix) / n < 1e-9
+    assert np.linalg.norm(out[0.5] - 0.5 * (ref_fol + ref_fix)) / n < 1e-9
