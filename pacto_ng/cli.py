@@ -66,6 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
     _post_parsers(sub)
     s = sub.add_parser("resume", help="continue a run from its checkpoint")
     s.add_argument("dir")
+    s.add_argument("--iterations", type=int, default=None,
+                   help="raise the run's iteration cap (e.g. a run that stopped at the cap)")
     s.add_argument("--quiet", action="store_true")
     w = sub.add_parser("sweep", help="run a case over a grid of loads and models (Dask)")
     w.add_argument("case", help="case name (see 'pacto cases')")
@@ -196,7 +198,7 @@ def _main(argv) -> int:
     if args.command == "resume":
         from .run import resume_run
 
-        return resume_run(args.dir, quiet=args.quiet)
+        return resume_run(args.dir, quiet=args.quiet, iterations=args.iterations)
     case = get_case(args.case)
     params = params_from_args(case, args)
     if args.command == "run":

@@ -14,6 +14,8 @@ DIR/convergence.png    objective and volume against iteration
 """
 from __future__ import annotations
 
+import dataclasses
+
 import csv
 import json
 import os
@@ -122,6 +124,11 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
               resume: bool = False) -> int:
     path = prepare_output(out)
     t_start = time.perf_counter()
+    if resume and (path / "summary.json").exists():  # a finished run continued: add its time
+        try:
+            t_start -= float(json.loads((path / "summary.json").read_text())["wall_time_s"])
+        except (ValueError, KeyError, TypeError):
+            pass
     model_choice = None
     if params.model == "auto":
         from .auto import choose_model
@@ -398,7 +405,8 @@ def evaluate_design(case: Case, params: Parameters, density: str, out, *, filter
     return 0
 
 
-def resume_run(out: str | os.PathLike, *, quiet: bool = False) -> int:
+def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int | None = None) -> int:
+    """Continue the run in ``out`` from its checkpoint; ``iterations`` raises its cap."""
     path = Path(out)
     try:
         info = json.loads((path / "params.json").read_text())
@@ -406,4 +414,8 @@ def resume_run(out: str | os.PathLike, *, quiet: bool = False) -> int:
         raise InputError(f"resume: '{path}' holds no run (params.json missing or unreadable)") from None
     case = get_case(info["case"])
     params = Parameters(**info["params"])
+    if iterations is not None:
+        if iterations < params.iterations:
+            raise InputError(f"iterations: {iterations} is below the run's cap {params.iterations}")
+        params = dataclasses.replace(params, iterations=iterations)
     return run_case(case, params, path, quiet=quiet, resume=True)

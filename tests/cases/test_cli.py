@@ -130,6 +130,24 @@ def test_resume_after_kill_gives_the_same_design(tmp_path):
         assert np.max(np.abs(fa["x"] - fb["x"])) < 1e-9
 
 
+def test_resume_raises_the_iteration_cap(tmp_path):
+    """A run that stopped at its cap, continued with ``resume --iterations``, ends where an
+    uninterrupted run with the higher cap ends; a lower cap is refused."""
+    args = ["run", "inverter", "--nelx", "30", "--nely", "15", "--quiet"]
+    full, part = tmp_path / "full", tmp_path / "part"
+    assert main(args + ["--iterations", "20", "--out", str(full)]) == 0
+    assert main(args + ["--iterations", "10", "--out", str(part)]) == 0
+    t10 = json.loads((part / "summary.json").read_text())["wall_time_s"]
+    assert main(["resume", str(part), "--iterations", "20", "--quiet"]) == 0
+    a = json.loads((full / "summary.json").read_text())
+    b = json.loads((part / "summary.json").read_text())
+    assert b["iterations"] == a["iterations"] == 20
+    assert b["parameters"]["iterations"] == 20
+    assert np.allclose(a["objective_history"], b["objective_history"], rtol=1e-9, atol=0)
+    assert b["wall_time_s"] > t10  # the first part's time is carried over
+    assert main(["resume", str(part), "--iterations", "5", "--quiet"]) == 2
+
+
 @pytest.mark.parametrize("args", [
     ["mbb"], ["cantilever"], ["cantilever", "--model", "neohookean", "--load", "1e5"],
     ["cantilever", "--model", "wang", "--load", "1e5"], ["inverter"],
