@@ -8,7 +8,9 @@ last good design is kept and the reason is returned.
 
 Adaptive load continuation (``load_adapt = g > 1``): when the analysis fails at the scheduled
 load factor ``s(k)`` after Newton's own step cutting, the iteration goes on at the load factor
-Newton did reach (``s_r``, warm-started from that equilibrium) instead of stopping; the load is
+Newton did reach (``s_r``, warm-started from that equilibrium; if that solve falls short too,
+as near a limit point, at the load it reached, at least 5 % lower, up to 3 times) instead of
+stopping; the load is
 then capped, ``s = min(s(k), cap)``, and the cap grows by ``g`` after every successful iteration
 until it is 1 again.  The design keeps improving at the load it can carry, and it is analysed
 at the full load as soon as it can carry it.  The convergence test waits for the full load.
@@ -88,11 +90,21 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                 failed_newton = err.result.iterations
                 if not load_adapt or reached <= 0.0:
                     raise
-                # adaptive load continuation: go on at the load Newton reached
-                load = state.load_cap = reached
+                # adaptive load continuation: go on at the load Newton reached.  Near a limit
+                # point a fresh solve may fall just short of it again: then retry at the
+                # load that one reached, at least 5 % lower each time (3 retries)
                 state.load_failed_at = k
-                problem.apply_schedule(penal, beta, load)
-                f0, f, df0, df = problem.evaluate(x)
+                for retry in range(4):
+                    load = state.load_cap = reached
+                    problem.apply_schedule(penal, beta, load)
+                    try:
+                        f0, f, df0, df = problem.evaluate(x)
+                        break
+                    except NewtonFailure as again:
+                        failed_newton += again.result.iterations
+                        reached = min(again.result.load_reached, 0.95 * load)
+                        if retry == 3 or reached <= 0.0:
+                            raise
             else:
                 # raise the cap after a success, but not in the iteration after a failure
                 if load_adapt and load < scheduled and k - state.load_failed_at >= 2:

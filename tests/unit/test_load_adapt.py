@@ -24,8 +24,9 @@ class CappedProblem:
     constraints = ("volume",)
     reports = ()
 
-    def __init__(self, capacity):
+    def __init__(self, capacity, overshoot=1.0):
         self.capacity = capacity
+        self.overshoot = overshoot  # a failure reports this multiple of the capacity reached
         self.mech = _Mech()
         self.k = 0
         self.asked = []  # (iteration, load factor asked for)
@@ -38,7 +39,9 @@ class CappedProblem:
         cap = self.capacity(self.k)
         self.asked.append((self.k, self.mech.target))
         if self.mech.target > cap + 1e-15:
-            res = NewtonResult(False, iterations=7, load_reached=cap, reason="stand-in failure")
+            res = NewtonResult(False, iterations=7, load_reached=min(cap * self.overshoot,
+                                                                     self.mech.target * 0.999),
+                               reason="stand-in failure")
             self.mech.result = res
             raise NewtonFailure(res)
         self.mech.result = NewtonResult(True, iterations=2, load_reached=self.mech.target, steps=1)
@@ -103,3 +106,27 @@ def test_adaptive_continuation_reports_a_run_that_never_reaches_full_load():
 def test_adaptive_continuation_stops_when_nothing_is_carried():
     result = _run(CappedProblem(lambda k: 0.0), load_adapt=1.5)
     assert result.stopped == "newton" and result.state.k == 0
+
+
+def test_a_retry_that_falls_short_again_retries_lower():
+    """Near a limit point a fresh solve may not reach the load the failed one reported: the
+    retries go on at least 5 % lower each time instead of stopping the run."""
+    prob = CappedProblem(capacity, overshoot=1.02)
+    result = _run(prob, load_adapt=1.25)
+    assert result.stopped != "newton", result.message
+    first = [ld for k, ld in prob.asked if k == 0]
+    # 1.0 fails (reports 0.306), 0.306 fails (reports 0.306 -> 5 % lower: 0.2907) succeeds
+    assert first[:2] == [1.0, pytest.approx(0.306)]
+    assert first[2] == pytest.approx(0.95 * 0.306) and first[2] <= capacity(0)
+    assert result.state.history[-1]["load"] == 1.0
+
+
+def test_retries_give_up_after_three():
+    """A design that can carry almost nothing from iteration 3 on, while every failed solve
+    reports nearly its target reached: 1 + 4 attempts, each at least 5 % lower, then a clean
+    stop with the last good design."""
+    prob = CappedProblem(lambda k: 1.0 if k < 3 else 1e-3, overshoot=1e6)
+    result = _run(prob, load_adapt=1.25)
+    assert result.stopped == "newton" and result.state.k == 3
+    asked = [ld for k, ld in prob.asked if k == 3]
+    assert len(asked) == 5 and all(b <= 0.999 * a for a, b in zip(asked, asked[1:]))
