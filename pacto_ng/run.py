@@ -327,8 +327,34 @@ def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
         _finite("p", pg.vec.FV().NumPy())
         coefs.append(pg)
         names.append("p")
+    for name, cf in strain_stress_measures(problem).items():
+        for (i, j), comp in zip(((0, 0), (1, 1), (0, 1)), ("xx", "yy", "xy")):
+            gf = GridFunction(mech.l2)
+            gf.Set(cf[i, j])  # element mean (P0 projection)
+            add_l2(f"{name}_{comp}", gf.vec.FV().NumPy().copy())
     VTKOutput(problem.mesh, coefs=coefs, names=names, filename=str(stem),
               subdivision=0 if problem.params.order == 1 else 1, legacy=False).Do()
+
+
+def strain_stress_measures(problem: Problem) -> dict:
+    """In-plane 2x2 strain and stress CFs of the analysed state, by model: ``linear``: ε and
+    σ; ``gnl``/``neohookean``: Green–Lagrange ``E_GL`` and the second Piola–Kirchhoff ``S``
+    (``F⁻¹ ∂φ/∂F`` by automatic differentiation); ``wang``: ``E_W1``, ``E_W2`` (thesis eqs
+    5.4–5.5) and ``S`` (eq. 5.3).  design.vtu holds their xx, yy, xy element means."""
+    from ngsolve import Grad
+
+    from .physics.materials import first_piola_kirchhoff, green_lagrange, second_piola_kirchhoff
+
+    mech = problem.mech
+    G, c = Grad(mech.gfu), mech.coeffs
+    model = problem.params.model
+    if model == "wang":
+        wm = mech._energy.__self__  # the WangModel whose energy the block uses
+        return {"E_W1": wm.strain_w1(G, c), "E_W2": wm.strain_w2(G, c), "S": wm.stress(G, c)}
+    phi = lambda A: mech._energy(A, c)  # noqa: E731
+    if model == "linear":
+        return {"strain": 0.5 * (G + G.trans), "stress": first_piola_kirchhoff(phi, G)}
+    return {"E_GL": green_lagrange(G), "S": second_piola_kirchhoff(phi, G)}
 
 
 # ------------------------------------------------------------------------------------------

@@ -102,3 +102,72 @@ def test_too_high_load_ends_in_clean_newton_failure(tmp_path):
     assert s["stopped"] == "newton" and s["converged"] is False
     assert s["iterations"] >= 1 and len(s["newton_iterations"]) == s["iterations"]
     assert all(math.isfinite(v) for v in s["objective_history"])
+
+
+def _scalar(m, name):
+    import numpy as np
+
+    return np.asarray(m.point_data[name]).reshape(-1)
+
+
+def _element_gradients(m):
+    """∇u of each P1 triangle of a design.vtu (points are per element) from its vertex data."""
+    import numpy as np
+
+    tri = m.cells[0].data
+    X, U = m.points[tri][:, :, :2], m.point_data["u"][tri][:, :, :2]
+    dX = np.stack([X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]], axis=2)  # columns: edge vectors
+    dU = np.stack([U[:, 1] - U[:, 0], U[:, 2] - U[:, 0]], axis=2)
+    return dU @ np.linalg.inv(dX), tri
+
+
+def test_design_vtu_holds_green_lagrange_strain_and_second_piola_kirchhoff_stress(tmp_path):
+    """design.vtu's E_GL and S of a Neo-Hookean cantilever equal ½(FᵀF - I) and the closed
+    form μ(I - C⁻¹) + λ ln J C⁻¹ (plane strain) computed here from the written u and ρ̄."""
+    import meshio
+    import numpy as np
+
+    out = tmp_path / "nh"
+    assert main(["run", "cantilever", "--model", "neohookean", "--load", "3e5", "--maxh", "0.05",
+                 "--iterations", "1", "--out", str(out), "--quiet"]) == 0
+    m = meshio.read(out / "design.vtu")
+    G, tri = _element_gradients(m)
+    F = np.eye(2) + G
+    C = np.einsum("eki,ekj->eij", F, F)
+    E = 0.5 * (C - np.eye(2))
+    rho = _scalar(m, "rho_bar")[tri[:, 0]]
+    Emod = 3e3 + rho ** 3 * (3e9 - 3e3)
+    mu, lam = Emod / 2.8, Emod * 0.4 / (1.4 * 0.2)
+    Ci = np.linalg.inv(C)
+    S = mu[:, None, None] * (np.eye(2) - Ci) + (lam * np.log(np.linalg.det(F)))[:, None, None] * Ci
+    assert np.abs(E).max() > 1e-2  # a real deformation (measured 0.26; errors 6e-15)
+    for comp, (i, j) in (("xx", (0, 0)), ("yy", (1, 1)), ("xy", (0, 1))):
+        e_vtu = _scalar(m, f"E_GL_{comp}")[tri[:, 0]]
+        s_vtu = _scalar(m, f"S_{comp}")[tri[:, 0]]
+        assert np.abs(e_vtu - E[:, i, j]).max() < 1e-6 * np.abs(E).max()
+        assert np.abs(s_vtu - S[:, i, j]).max() < 1e-6 * np.abs(S).max()
+
+
+def test_design_vtu_holds_the_wang_strains(tmp_path):
+    """Wang: E_W1 = ε + γ² ½GᵀG and E_W2 = ε + γ ½GᵀG (thesis eqs 5.4-5.5) from the written u:
+    in solid (γ = 1) both equal E_GL, in void (γ = 0) both equal ε."""
+    import meshio
+    import numpy as np
+
+    out = tmp_path / "w"
+    assert main(["run", "cantilever", "--model", "wang", "--load", "3e5", "--maxh", "0.05",
+                 "--iterations", "1", "--out", str(out), "--quiet"]) == 0
+    m = meshio.read(out / "design.vtu")
+    G, tri = _element_gradients(m)
+    eps = 0.5 * (G + np.swapaxes(G, 1, 2))
+    quad = 0.5 * np.einsum("eki,ekj->eij", G, G)
+    rho = _scalar(m, "rho_bar")[tri[:, 0]]
+    t = np.tanh
+    gam = (t(0.1) + t(100 * (rho ** 3 - 0.001))) / (t(0.1) + t(100 * 0.999))
+    scale = np.abs(eps).max()
+    for comp, (i, j) in (("xx", (0, 0)), ("yy", (1, 1)), ("xy", (0, 1))):
+        w1 = _scalar(m, f"E_W1_{comp}")[tri[:, 0]]
+        w2 = _scalar(m, f"E_W2_{comp}")[tri[:, 0]]
+        assert np.abs(w1 - (eps + gam[:, None, None] ** 2 * quad)[:, i, j]).max() < 1e-6 * scale
+        assert np.abs(w2 - (eps + gam[:, None, None] * quad)[:, i, j]).max() < 1e-6 * scale
+        assert np.all(np.isfinite(m.point_data[f"S_{comp}"]))
