@@ -189,8 +189,14 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
     if params.model == "wang":
         from .physics import wang
 
+        gamma_fn = None
+        if params.wang_gamma >= 0:  # a prescribed constant γ (identity checks, studies)
+            from ngsolve import CF
+
+            gamma_fn = lambda c: CF(params.wang_gamma)  # noqa: E731
         energy, guard = wang.wang_model(modulus, params.nu, params.plane, fields[0], penal,
-                                        beta=params.wang_beta, eta=params.wang_eta)
+                                        beta=params.wang_beta, eta=params.wang_eta,
+                                        gamma_fn=gamma_fn)
         return energy, guard, False
     mat = get_material(params.model)
     energy = lambda G, c: mat.energy(G, modulus(c), params.nu, params.plane)

@@ -32,6 +32,7 @@ class Parameters:
     nu: float = _p(0.4, "", "Poisson's ratio")
     wang_beta: float = _p(100.0, "", "Wang interpolation sharpness β1")
     wang_eta: float = _p(0.001, "", "Wang interpolation threshold η1")
+    wang_gamma: float = _p(-1.0, "", "Wang: a constant γ in [0, 1] instead of eq. 5.2 (-1: eq. 5.2)")
     # -- design
     volfrac: float = _p(0.2, "", "allowed volume fraction of the design domain")
     filter: str = _p("helmholtz", "", "helmholtz | cone | none")
@@ -132,6 +133,8 @@ class Parameters:
             raise InputError(f"delta_s: must be positive (got {self.delta_s})")
         if not 0.0 < self.Ks < self.Kv:
             raise InputError(f"Ks: must satisfy 0 < Ks < Kv (got Ks={self.Ks}, Kv={self.Kv})")
+        if self.wang_gamma != -1.0 and not 0.0 <= self.wang_gamma <= 1.0:
+            raise InputError(f"wang_gamma: must be -1 (eq. 5.2) or lie in [0, 1] (got {self.wang_gamma:g})")
         if self.load_type not in ("fixed", "follower"):
             raise InputError(f"load_type: must be fixed or follower (got '{self.load_type}')")
         if not 0.0 <= self.volfrac2 < 1.0:
