@@ -303,6 +303,140 @@ def analyses_markdown(root: Path, names) -> str:
     return "\n".join(lines)
 
 
+def strain_concentration(folder: Path):
+    """How lumped a mechanism's hinges are: the 99th percentile of the Green–Lagrange strain
+    norm ‖E‖ over the solid (ρ̄ > 0.5) P1 triangles of design.vtu divided by its median (E from
+    the written u, element by element).  Lumped hinges: a few elements take the strain (high
+    ratio); distributed compliance: a low ratio.  None if not P1 triangles."""
+    import meshio
+    import numpy as np
+
+    path = folder / "design.vtu"
+    if not path.exists():
+        return None
+    m = meshio.read(path)
+    if len(m.cells) != 1 or m.cells[0].type != "triangle":
+        return None
+    tri = m.cells[0].data
+    X, U = m.points[tri][:, :, :2], np.asarray(m.point_data["u"])[tri][:, :, :2]
+    dX = np.stack([X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]], axis=2)
+    dU = np.stack([U[:, 1] - U[:, 0], U[:, 2] - U[:, 0]], axis=2)
+    F = np.eye(2) + dU @ np.linalg.inv(dX)
+    E = 0.5 * (np.einsum("eki,ekj->eij", F, F) - np.eye(2))
+    norm = np.linalg.norm(E.reshape(len(E), -1), axis=1)
+    rho = np.asarray(m.point_data["rho_bar"]).reshape(-1)[tri[:, 0]]
+    solid = norm[rho > 0.5]
+    return float(np.percentile(solid, 99) / np.median(solid)) if solid.size else None
+
+
+def inverter_designs_markdown(root: Path) -> str:
+    """Force inverter designs: output displacement of each run, its design's difference from
+    the linear design and its strain concentration (lumped vs distributed hinges)."""
+    lines = ["| run | load [N] | model | Δ [µm] | ‖ρ̄ − ρ̄_linear‖ / ‖ρ̄_linear‖ | strain "
+             "concentration (99th pct / median ‖E‖ in solid) | grey |", "|---|---|---|---|---|---|---|"]
+    for n in RUNS:
+        if RUNS[n][0] != "inverter":
+            continue
+        s = _load(root / n / "summary.json")
+        if s is None:
+            continue
+        d = design_difference(root, n, "inv_f_lin_04") if (
+            root / "inv_f_lin_04" / "design.vtu").exists() else None
+        lines.append(f"| {n} | {s['parameters']['load']:g} | {s['model']} "
+                     f"| {1e6 * s['output_displacement']:.2f} | {_g(d, '{:.3f}')} "
+                     f"| {_g(strain_concentration(root / n), '{:.1f}')} "
+                     f"| {_g(grey_fraction(root / n), '{:.0%}')} |")
+    return "\n".join(lines)
+
+
+#: force-inverter designs analysed with the Wang model at these loads [N]
+CROSS_INVERTER = (["inv_f_lin_04", "inv_f_w_002", "inv_f_w_01", "inv_f_w_02", "inv_f_w_04",
+                   "inv_f_w_08", "inv_f_nh_002", "inv_f_nh_01", "inv_f_nh_02"], (0.02, 0.4))
+
+
+def cross_force(root: Path, name: str, model: str, load: float) -> dict:
+    """The final design of a force-case run analysed with ``model`` at ``load``: Δ and the
+    strain concentration of that state (its design.vtu is written to DIR/cross_force/...)."""
+    import dataclasses
+
+    from pacto_ng.post.cli_commands import load_run, rebuild
+    from pacto_ng.run import write_vtu
+    from pacto_ng.threads import compute
+
+    run = load_run(root / name, "extreme")
+    run.params = dataclasses.replace(run.params, model=model, load=load, load_ramp=0,
+                                     realcompile=False)
+    with compute():
+        problem = rebuild(run)
+        if problem.failure:
+            return dict(ok=False, reached=problem.mech.result.load_reached)
+        out = root / "cross_force" / f"{name}_{model}_{load:g}"
+        out.mkdir(parents=True, exist_ok=True)
+        write_vtu(out / "design", problem, run.x)
+    return dict(ok=True, delta=float(problem.values["delta"]),
+                concentration=strain_concentration(out))
+
+
+def cross_force_markdown(root: Path, cache: Path) -> str:
+    designs, loads = CROSS_INVERTER
+    done = json.loads(cache.read_text()) if cache.exists() else {}
+    lines = ["| design (optimised at) | " + " | ".join(f"Wang at {F:g} N: Δ [µm] (strain "
+                                                      "concentration)" for F in loads) + " |",
+             "|---|" + "---|" * len(loads)]
+    for n in designs:
+        if not (root / n / "summary.json").exists():
+            continue
+        cells = []
+        for F in loads:
+            key = f"{n}|wang|{F:g}"
+            if key not in done:
+                done[key] = cross_force(root, n, "wang", F)
+                cache.write_text(json.dumps(done, indent=1))
+            r = done[key]
+            cells.append(f"{1e6 * r['delta']:.2f} ({_g(r['concentration'], '{:.1f}')})"
+                         if r["ok"] else f"fails (load factor {r['reached']:.2g})")
+        lines.append(f"| {n} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def force_cases_markdown(root: Path) -> str:
+    """Cantilever: end compliance [kJ] per load, model and mesh; force inverter: output
+    displacement [µm] per load and model (the runs of RUNS that exist in ``root``)."""
+    def cell(name, scale, unit_fmt):
+        s = _load(root / name / "summary.json")
+        if s is None:
+            return "not run"
+        ok = valid(s, root / name)
+        state = {"converged": "converged", "iterations": "iteration cap",
+                 "newton": "Newton failure"}.get(s["stopped"], s["stopped"])
+        val = (s["output_displacement"] if s.get("objective_name") == "output" or
+               s["case"] == "inverter" else s["objective"])
+        txt = "–" if val is None else unit_fmt.format(scale * val)
+        return (f"{txt} ({state}, {s['iterations']} its, load {s['load_factor_reached']:.3g}, "
+                f"grey {_g(grey_fraction(root / name), '{:.0%}')}, {s['wall_time_s']:.0f} s"
+                f"{'' if ok else ', **not valid**'})")
+
+    out = ["#### Cantilever: end compliance [kJ] (state, iterations, load factor reached, grey "
+           "fraction, wall time)", "",
+           "| load [kN] | NH, thesis mesh | Wang, thesis mesh | NH, 120 × 30 quads | Wang, 120 × 30 quads |",
+           "|---|---|---|---|---|"]
+    for F in (80, 144, 240, 300, 500, 800):
+        names = [f"cant_nh_{F}", f"cant_w_{F}", f"cant_q_nh_{F}", f"cant_q_w_{F}"]
+        if not any((root / n / "summary.json").exists() for n in names):
+            continue
+        out.append(f"| {F} | " + " | ".join(cell(n, 1e-3, "{:.2f}") if n in RUNS else "–"
+                                          for n in names) + " |")
+    out += ["", "#### Force inverter (thesis mesh, maxh 3e-6 m): output displacement −u_x [µm]", "",
+            "| load [N] | linear | Neo-Hookean | Wang |", "|---|---|---|---|"]
+    for tag, F in (("002", "0.02"), ("01", "0.1"), ("02", "0.2"), ("04", "0.4"), ("08", "0.8")):
+        names = [f"inv_f_lin_{tag}", f"inv_f_nh_{tag}", f"inv_f_w_{tag}"]
+        if not any((root / n / "summary.json").exists() for n in names):
+            continue
+        out.append(f"| {F} | " + " | ".join(cell(n, 1e6, "{:.2f}") if n in RUNS else "–"
+                                          for n in names) + " |")
+    return "\n".join(out)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", default=os.environ.get("PACTO_BENCH_RUNS", "output/extreme"))
@@ -325,9 +459,13 @@ def main(argv=None):
             for n in designs:
                 if n in names:
                     analyse(root, n, pressures, threshold)
-    text = ["### Runs", "", runs_markdown(root, names), "", "### Neo-Hookean analyses of the parts",
+    text = ["### Runs", "", runs_markdown(root, names), "", "### Force cases", "",
+            force_cases_markdown(root), "", "#### Force inverter designs", "",
+            inverter_designs_markdown(root), "", "### Neo-Hookean analyses of the parts",
             "", analyses_markdown(root, names)]
     if args.cross:
+        text += ["", "### Force inverter: each design analysed with the Wang model at 0.02 N "
+                 "and 0.4 N", "", cross_force_markdown(root, root / "cross_inverter.json")]
         for case in CROSS:
             text += ["", f"### {case}: each design analysed at each pressure (Wang mechanics on "
                      "the density field; −Δ/SE in m/J)", "",
