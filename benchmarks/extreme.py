@@ -380,7 +380,7 @@ def inverter_designs_markdown(root: Path) -> str:
 
 #: force-inverter designs analysed with the Wang model at these loads [N]
 CROSS_INVERTER = (["inv_f_lin_04", "inv_f_w_002", "inv_f_w_01", "inv_f_w_02", "inv_f_w_04",
-                   "inv_f_w_08", "inv_f_nh_002", "inv_f_nh_01", "inv_f_nh_02"], (0.02, 0.4))
+                   "inv_f_w_08", "inv_f_nh_002"], (0.02, 0.4))
 
 
 def cross_force(root: Path, name: str, model: str, load: float) -> dict:
