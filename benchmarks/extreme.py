@@ -163,26 +163,34 @@ def cross_evaluate(folder: Path, model: str, load: float, load_type: str,
                 se=float(v["se"]) if "se" in v else None)
 
 
-def cross_markdown(root: Path, case: str, cache: Path) -> str:
-    designs, points = CROSS[case]
+def cached_table(root: Path, cache: Path, designs, points, head, evaluate, cell) -> str:
+    """A markdown table, one row per existing run of ``designs`` and one column per point:
+    ``evaluate(name, point)`` (a dict with ``ok``, or ``reached`` on failure) is cached in the
+    JSON file ``cache`` under ``"name|key(point)"``; ``cell(result)`` formats a success."""
     done = json.loads(cache.read_text()) if cache.exists() else {}
-    lines = ["| design (optimised at) | " + " | ".join(f"{P:.0e} Pa {t}" for P, t in points) + " |",
-             "|---|" + "---|" * len(points)]
+    lines = [head, "|---|" + "---|" * len(points)]
     for n in designs:
         if not (root / n / "summary.json").exists():
             continue
         cells = []
-        for P, t in points:
-            key = f"{n}|{P:g}|{t}"
-            if key not in done:
-                # computed before follower_wang existed: the follower load through F
-                done[key] = cross_evaluate(root / n, "wang", P, t, follower_wang=False)
+        for key, point in points:
+            if f"{n}|{key}" not in done:
+                done[f"{n}|{key}"] = evaluate(n, point)
                 cache.write_text(json.dumps(done, indent=1))
-            r = done[key]
-            cells.append(f"{r['objective']:.4g} (Δ {1e3 * r['delta']:.3g} mm)" if r["ok"]
-                         else f"fails (load factor {r['reached']:.2g})")
+            r = done[f"{n}|{key}"]
+            cells.append(cell(r) if r["ok"] else f"fails (load factor {r['reached']:.2g})")
         lines.append(f"| {n} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def cross_markdown(root: Path, case: str, cache: Path) -> str:
+    designs, points = CROSS[case]
+    head = "| design (optimised at) | " + " | ".join(f"{P:.0e} Pa {t}" for P, t in points) + " |"
+    # computed before follower_wang existed: the follower load through F
+    return cached_table(
+        root, cache, designs, [(f"{P:g}|{t}", (P, t)) for P, t in points], head,
+        lambda n, pt: cross_evaluate(root / n, "wang", pt[0], pt[1], follower_wang=False),
+        lambda r: f"{r['objective']:.4g} (Δ {1e3 * r['delta']:.3g} mm)")
 
 
 #: follower design against fixed-load designs at 1e7 Pa, Wang mechanics, follower_wang on
@@ -190,23 +198,11 @@ FOLLOWER_1E7 = ["inv_wf_1e7", "inv_w_1e7", "inv_lin"]
 
 
 def follower_markdown(root: Path, cache: Path) -> str:
-    done = json.loads(cache.read_text()) if cache.exists() else {}
-    lines = ["| design | under the follower load: −Δ/SE (Δ [mm], SE [J]) | under the fixed load |",
-             "|---|---|---|"]
-    for n in FOLLOWER_1E7:
-        if not (root / n / "summary.json").exists():
-            continue
-        cells = []
-        for t in ("follower", "fixed"):
-            key = f"{n}|{t}"
-            if key not in done:
-                done[key] = cross_evaluate(root / n, "wang", 1e7, t)
-                cache.write_text(json.dumps(done, indent=1))
-            r = done[key]
-            cells.append(f"{r['objective']:.4g} ({1e3 * r['delta']:.3g}, {r['se']:.3g})"
-                         if r["ok"] else f"fails (load factor {r['reached']:.2g})")
-        lines.append(f"| {n} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    head = "| design | under the follower load: −Δ/SE (Δ [mm], SE [J]) | under the fixed load |"
+    return cached_table(
+        root, cache, FOLLOWER_1E7, [(t, t) for t in ("follower", "fixed")], head,
+        lambda n, t: cross_evaluate(root / n, "wang", 1e7, t),
+        lambda r: f"{r['objective']:.4g} ({1e3 * r['delta']:.3g}, {r['se']:.3g})")
 
 
 def design_difference(root: Path, a: str, b: str):
@@ -408,24 +404,12 @@ def cross_force(root: Path, name: str, model: str, load: float) -> dict:
 
 def cross_force_markdown(root: Path, cache: Path) -> str:
     designs, loads = CROSS_INVERTER
-    done = json.loads(cache.read_text()) if cache.exists() else {}
-    lines = ["| design (optimised at) | " + " | ".join(f"Wang at {F:g} N: Δ [µm] (strain "
-                                                      "concentration)" for F in loads) + " |",
-             "|---|" + "---|" * len(loads)]
-    for n in designs:
-        if not (root / n / "summary.json").exists():
-            continue
-        cells = []
-        for F in loads:
-            key = f"{n}|wang|{F:g}"
-            if key not in done:
-                done[key] = cross_force(root, n, "wang", F)
-                cache.write_text(json.dumps(done, indent=1))
-            r = done[key]
-            cells.append(f"{1e6 * r['delta']:.2f} ({_g(r['concentration'], '{:.1f}')})"
-                         if r["ok"] else f"fails (load factor {r['reached']:.2g})")
-        lines.append(f"| {n} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    head = ("| design (optimised at) | " + " | ".join(
+        f"Wang at {F:g} N: Δ [µm] (strain concentration)" for F in loads) + " |")
+    return cached_table(
+        root, cache, designs, [(f"wang|{F:g}", F) for F in loads], head,
+        lambda n, F: cross_force(root, n, "wang", F),
+        lambda r: f"{1e6 * r['delta']:.2f} ({_g(r['concentration'], '{:.1f}')})")
 
 
 def force_cases_markdown(root: Path) -> str:

@@ -194,10 +194,10 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
             from ngsolve import CF
 
             gamma_fn = lambda c: CF(params.wang_gamma)  # noqa: E731
-        energy, guard = wang.wang_model(modulus, params.nu, params.plane, fields[0], penal,
-                                        beta=params.wang_beta, eta=params.wang_eta,
-                                        gamma_fn=gamma_fn)
-        return energy, guard, False
+        # the WangModel itself is the energy (callable), so γ and its measures stay reachable
+        model = wang.wang_model(modulus, params.nu, params.plane, fields[0], penal,
+                                beta=params.wang_beta, eta=params.wang_eta, gamma_fn=gamma_fn)
+        return model, model.guard, False
     mat = get_material(params.model)
     energy = lambda G, c: mat.energy(G, modulus(c), params.nu, params.plane)
     guard = (lambda G, c: jacobian(G)) if mat.needs_positive_J else None
@@ -267,8 +267,7 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         try:
             # Wang: the follower load sees the deformation I + γ∇u of the energy's
             # large-strain part (void: the fixed load), unless follower_wang=0
-            gamma = (energy.__self__.gamma if params.model == "wang" and params.follower_wang
-                     else None)
+            gamma = energy.gamma if params.model == "wang" and params.follower_wang else None
             pressure_block, pfield, body = darcy.for_case(mesh, params, pressure, names[0],
                                                           order=params.order, gamma=gamma)
         except ValueError as err:

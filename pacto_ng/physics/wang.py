@@ -147,6 +147,10 @@ class WangModel:
         """The Newton guard ``(G, coeffs) -> det(I + γG)`` (None if ``φ_H`` accepts any F)."""
         return self.jacobian if _hyper(self.hyper)[1] else None
 
+    def __call__(self, G, coeffs):
+        """The model as an energy density ``(G, coeffs) -> CF`` (same as :meth:`energy`)."""
+        return self.energy(G, coeffs)
+
     def __iter__(self):
         yield self.energy
         yield self.guard
