@@ -41,7 +41,13 @@ def machine() -> str:
             f"{os.cpu_count()} cores ({cpu}); load average at the start of the study "
             f"{load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} (1 / 5 / 15 min); Python "
             f"{platform.python_version()}, NGSolve {ngsolve.__version__}, SciPy "
-            f"{scipy.__version__}; 2 NGSolve threads")
+            f"{scipy.__version__}; {threads()} NGSolve thread{'s' if threads() > 1 else ''}")
+
+
+def threads() -> int:
+    """NGSolve threads of a study: ``PACTO_THREADS`` if set (e.g. 1 when two studies share the
+    machine), else 2."""
+    return int(os.environ.get("PACTO_THREADS", "2"))
 
 
 def replace_block(path: str, name: str, body: str) -> None:
@@ -95,17 +101,24 @@ def run_peer(quick):
                 "assembled and factorised, for the adjoint); a new design costs one "
                 "solve and two matrix-vector products more (measured +5-15 %).")
     text.append("")
-    text.append("What the linear block does here: the tangent by `Variation` (automatic "
-                "differentiation of the energy), the Darcy body load as a LinearForm assembled "
-                "once per design, the field derivatives by automatic differentiation "
-                "(`FieldGradient`).  Its faster route for linear problems -- the tangent from the "
-                "symbolic Hessian C = ∂²(tφ)/∂G² evaluated once per element, R(u) = K u - s f "
-                "by a matrix-vector product, SE and ∂SE/∂ρ from C (`_LinearSystem`, "
-                "pacto_ng/physics/mechanics.py), measured 2.5-2.9x faster on this benchmark at "
-                "60 x 40 and 120 x 80 -- is used only for design-independent loads (MBB, "
-                "cantilever, inverter): with the Darcy load the finite-difference checks of the "
-                "pressure cases lost two to three digits through it (pneunet 4.5e-5 against "
-                "1.5e-7, one thread), a cause not yet found.")
+    text.append("What the linear block does here (`_LinearSystem`, "
+                "pacto_ng/physics/mechanics.py): the tangent from the symbolic Hessian "
+                "C = ∂²(tφ)/∂G² evaluated once per element, the Darcy body load as a LinearForm "
+                "assembled once per design, the residual R(u) = K u - s f and ∂SE/∂u element by "
+                "element (`Apply`), SE as the integral of the energy density, ∂SE/∂ρ and "
+                "λᵀ∂R/∂ρ from ∂C/∂ρ, λᵀ∂R/∂p by automatic differentiation (`FieldGradient`).  "
+                "Until 2026-12-01 the pressure cases kept the slower `Variation` route "
+                "(automatic differentiation of the energy for the tangent; 1.16x the time per "
+                "evaluation at 120 x 80, one thread, new designs, median of 7 interleaved): with R = K u - s f and SE = ½ u·K_φ u "
+                "from the assembled matrix their finite-difference checks lost three to four "
+                "digits (PneuNet 5e-7 to 1.2e-5 against 1e-9), the round-off of products with "
+                "K, whose entries cancel where the structure moves rigidly.  Evaluated element "
+                "by element they are exact to the round-off of ∇u (PneuNet 5e-10 to 2.4e-9, "
+                "tests/physics/test_linear_fast.py).  Where the time goes at 120 x 80 (one "
+                "thread, cProfile, new designs): the two factorisations (Darcy and mechanics) "
+                "0.12 s, λᵀ∂R/∂p by automatic differentiation 0.08 s, the residual and ∂SE/∂u "
+                "applications 0.09 s, the ∂C/∂ρ evaluation 0.08 s, of 0.6 s per evaluation; "
+                "scipy's whole evaluation takes 0.3 s.  The aim of 2x is not met.")
     tol = 1e-2
     if quick:
         ref, orows, picks = P.order_study(levels=(30,), fine=60, repeat=1, tol=tol)

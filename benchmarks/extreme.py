@@ -45,8 +45,14 @@ RUNS = {
     "inv_w_1e6": ("pa-inverter", ["--model", "wang", "--load", "1e6"] + PA),
     "inv_w_1e7": ("pa-inverter", ["--model", "wang", "--load", "1e7"] + PA),
     "inv_w_5e7": ("pa-inverter", ["--model", "wang", "--load", "5e7"] + PA),
+    "inv_w_5e7_b64": ("pa-inverter", ["--model", "wang", "--load", "5e7", "--set", "beta_max=64"] + PA),
     "inv_wf_5e7": ("pa-inverter", ["--model", "wang", "--load", "5e7", "--set", "load_type=follower"] + PA),
     "inv_wf_1e7": ("pa-inverter", ["--model", "wang", "--load", "1e7", "--set", "load_type=follower"] + PA),
+    # 5e7 Pa on the coarse mesh, fixed and follower load (the thesis mesh's follower run was
+    # too slow to finish)
+    "inv_w_5e7_c": ("pa-inverter", ["--model", "wang", "--load", "5e7", "--maxh", "0.008"] + PA),
+    "inv_wf_5e7_c": ("pa-inverter", ["--model", "wang", "--load", "5e7", "--maxh", "0.008",
+                                     "--set", "load_type=follower"] + PA),
     "inv_nh_1e7": ("pa-inverter", ["--model", "neohookean", "--load", "1e7"] + PA),
     # pa-gripper (thesis limit 1e7 Pa)
     "grip_lin": ("pa-gripper", ["--model", "linear", "--load", "1e6"]),
@@ -55,6 +61,16 @@ RUNS = {
     "grip_w_5e7": ("pa-gripper", ["--model", "wang", "--load", "5e7"] + PA),
     # pneunet (thesis limit 1e5 Pa), mm-gripper (thesis limit 5e5 Pa)
     "pn_w_1e6": ("pneunet", ["--model", "wang", "--load", "1e6"] + PA),
+    "pn_nh_1e6": ("pneunet", ["--model", "neohookean", "--load", "1e6"] + PA),
+    # a sharper projection (β doubling to 64), and the objective "maximise Δ, SE <= se_max"
+    "pn_w_1e6_b64": ("pneunet", ["--model", "wang", "--load", "1e6", "--set", "beta_max=64"] + PA),
+    "pn_w_1e6_ose": ("pneunet", ["--model", "wang", "--load", "1e6", "--set",
+                                 "objective=output_se"] + PA),
+    # Wang et al.'s sharper schedule and interpolation settings on the PneuNet
+    "pn_w2014_1e6": ("pneunet", ["--model", "wang", "--load", "1e6", "--set", "penal_step=0.05",
+                                 "--set", "beta=4", "--set", "beta_max=64", "--set",
+                                 "beta_every=10", "--set", "wang_beta=500", "--set",
+                                 "wang_eta=0.01"] + PA),
     "mm_w_5e6": ("mm-gripper", ["--model", "wang", "--load", "5e6"] + PA),
     # cantilever (thesis: NH 150 kN, Wang 250 kN; Wang et al. 2014: NH 240 kN, Wang 500 kN)
     **{f"cant_{m}_{F}": ("cantilever", ["--model", {"nh": "neohookean", "w": "wang"}[m],
@@ -83,10 +99,12 @@ RUNS = {
 #: and the density threshold: 0.4 for the inverter, whose linear design's output bar hangs on a
 #: grey joint that a 0.5 threshold cuts off (the part then floats and is dropped; measured)
 ANALYSES = {
-    "pa-inverter": (["inv_lin", "inv_w_1e6", "inv_w_1e7", "inv_wf_1e7", "inv_w_5e7", "inv_wf_5e7"],
+    "pa-inverter": (["inv_lin", "inv_w_1e6", "inv_w_1e7", "inv_wf_1e7", "inv_w_5e7", "inv_w_5e7_b64",
+                     "inv_wf_5e7", "inv_w_5e7_c", "inv_wf_5e7_c"],
                     "1e5,1e6,1e7,5e7", 0.4),
     "pa-gripper": (["grip_lin", "grip_w_1e6", "grip_w_1e7", "grip_w_5e7"], "1e5,1e6,1e7,5e7", 0.5),
-    "pneunet": (["pn_w_1e6"], "1e4,1e5,1e6", 0.5),
+    "pneunet": (["pn_w_1e6", "pn_nh_1e6", "pn_w2014_1e6", "pn_w_1e6_b64", "pn_w_1e6_ose"],
+                "1e4,1e5,1e6", 0.5),
 }
 
 
@@ -195,13 +213,16 @@ def cross_markdown(root: Path, case: str, cache: Path) -> str:
 
 #: follower design against fixed-load designs at 1e7 Pa, Wang mechanics, follower_wang on
 FOLLOWER_1E7 = ["inv_wf_1e7", "inv_w_1e7", "inv_lin"]
+#: the follower/fixed pair at 5e7 Pa on the coarse mesh (maxh 0.008: the thesis mesh's
+#: follower run at 5e7 Pa took 30-85 s per iteration and was stopped)
+FOLLOWER_5E7_COARSE = ["inv_wf_5e7_c", "inv_w_5e7_c"]
 
 
-def follower_markdown(root: Path, cache: Path) -> str:
+def follower_markdown(root: Path, cache: Path, designs=FOLLOWER_1E7, load=1e7) -> str:
     head = "| design | under the follower load: −Δ/SE (Δ [mm], SE [J]) | under the fixed load |"
     return cached_table(
-        root, cache, FOLLOWER_1E7, [(t, t) for t in ("follower", "fixed")], head,
-        lambda n, t: cross_evaluate(root / n, "wang", 1e7, t),
+        root, cache, designs, [(t, t) for t in ("follower", "fixed")], head,
+        lambda n, t: cross_evaluate(root / n, "wang", load, t),
         lambda r: f"{r['objective']:.4g} ({1e3 * r['delta']:.3g}, {r['se']:.3g})")
 
 
@@ -487,6 +508,11 @@ def main(argv=None):
     text += ["", "### pa-inverter at 1e7 Pa: the follower-load design against the fixed-load "
              "designs (Wang mechanics on the density field, the follower load through I + γ∇u)",
              "", follower_markdown(root, root / "cross_follower_1e7.json")]
+    if any((root / n / "summary.json").exists() for n in FOLLOWER_5E7_COARSE):
+        text += ["", "### pa-inverter at 5e7 Pa, coarse mesh (maxh 0.008): the follower-load "
+                 "design against the fixed-load design (as above)", "",
+                 follower_markdown(root, root / "cross_follower_5e7_coarse.json",
+                                   FOLLOWER_5E7_COARSE, 5e7)]
     if args.cross:
         for case in CROSS:
             text += ["", f"### {case}: each design analysed at each pressure (Wang mechanics on "

@@ -22,6 +22,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from benchmarks.__main__ import threads
+
 LOADS = (1e5, 1e6, 3e6, 1e7, 3e7, 1e8)
 BASE = {"maxh": "0.004", "order": "1", "filter": "none", "beta": "0", "beta_max": "0",
         "penal_start": "0", "E0": "3e3", "nu": "0.4"}
@@ -70,10 +72,11 @@ def sweep(overrides, design, loads=LOADS):
     from pacto_ng.physics.mechanics import NewtonFailure
     from benchmarks.trade import sample
 
-    SetNumThreads(2)
+    SetNumThreads(threads())
     case = get_case("pa-inverter")
     params = case.defaults.with_overrides({**BASE, **overrides, "load": str(loads[0])})
-    image, W, H = design
+    images, W, H = design
+    image = images[0]
     done, failure, newton, t_total = None, "", [], 0.0
     with TaskManager():
         problem = build_problem(case, params)
@@ -103,7 +106,7 @@ def sweep(overrides, design, loads=LOADS):
 def study(quick=False, log=print):
     from benchmarks.trade import STUDIES as TRADE, fixed_design
 
-    _, grid, _, _ = TRADE["pa-inverter"]
+    grid = TRADE["pa-inverter"][1]
     design = fixed_design("pa-inverter", grid, 8 if quick else 20)
     rows = []
     for label, value, over in (QUICK if quick else STUDIES):

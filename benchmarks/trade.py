@@ -1,18 +1,21 @@
 """Trade curves: wall time against accuracy over mesh size x element order, per case and model.
 
-    python -m benchmarks.trade [--quick] [--repeat 3] [--plot docs/trade_curves.png]
+    python -m benchmarks.trade [--quick] [--repeat 3] [--cases a,b] [--plot docs/trade_curves.png]
 
 A fixed design per case: the physical density after ``DESIGN_ITERATIONS`` optimisation
 iterations of the case's defaults on a coarse structured mesh (computed once, cached in
-``$PACTO_BENCH_CACHE`` or the system temp folder).  It is a pixel image, so every mesh samples
-the same function at its element centroids; the runs use no filter and no projection (the
-image already is the physical density).  Per (Netgen triangle size maxh, order 1/2/3):
-median wall time of one analysis with sensitivities (``problem.evaluate``: Darcy, Newton or
-the linear solve, adjoints, sensitivity forms), dofs, objective, output displacement, and the
-relative error of the objective against the finest run of that case and model.
-The cantilever's tip load is spread over ±2 h (the case's definition), so across mesh sizes
-its objective changes by definition as well as by discretisation; at fixed maxh only the
-order changes.
+``$PACTO_BENCH_CACHE`` or the system temp folder), interpolated bilinearly between its element
+centres, so that every mesh samples one continuous function (at its element centroids) and
+refinement converges to one problem; the runs use no filter and no projection (the function
+already is the physical density).  A spread force load keeps its width of the default mesh
+(``load_width``) at every mesh size.  Per (Netgen triangle size maxh, order 1/2/3): median
+wall time of one analysis with sensitivities (``problem.evaluate``: Darcy, Newton or the linear
+solve, adjoints, sensitivity forms), dofs, objective, output displacement, and the relative
+error of the objective against the finest run of that case and model (the reference).
+Cases without a trade curve: ``mbb`` (unit elements by definition, so a finer mesh is a larger
+beam; and its point load's compliance has no mesh limit in 2D) and ``c-beam`` (an analysis
+whose result, the load factor at which the void inverts, depends on the mesh and the load
+path rather than converging: 0.44-1.52 measured, see ``pacto_ng.studies.c_beam_limit``).
 """
 from __future__ import annotations
 
@@ -25,18 +28,28 @@ import time
 
 import numpy as np
 
+from benchmarks.__main__ import threads
+
 DESIGN_ITERATIONS = 20
 
-STUDIES = {  # case -> (models, structured mesh of the design run, maxh levels, default maxh)
-    "pa-inverter": (("linear",), (50, 25), (0.008, 0.004, 0.002), 0.004),
-    "cantilever": (("linear",), (80, 20), (0.04, 0.02, 0.01), 0.01),
-    # neohookean (at NH_LOAD, orders 1-2) is left out of the default run: on this fixed design
-    # its Newton failed at maxh 0.004 and 0.002 (load factor 0.44 / 0.41 after 150 iterations),
-    # and each failure costs minutes; add ("linear", "neohookean") to run it
+#: case -> (models, structured mesh of the design run, maxh levels, default maxh, overrides)
+STUDIES = {
+    "pa-inverter": (("linear", "wang"), (50, 25), (0.008, 0.004, 0.002, 0.001), 0.004, {}),
+    "pa-gripper": (("linear",), (50, 25), (0.008, 0.004, 0.002, 0.001), 0.004, {}),
+    "mm-gripper": (("linear",), (50, 25), (0.008, 0.004, 0.002, 0.001), 0.004, {}),
+    "pneunet": (("linear",), (60, 30), (0.006, 0.003, 0.0015, 0.00075), 0.003, {}),
+    "cantilever": (("linear", "wang"), (80, 20), (0.04, 0.02, 0.01, 0.005), 0.01,
+                   {"load_width": "0.04"}),
+    "inverter": (("linear",), (60, 30), (6e-6, 3e-6, 1.5e-6, 0.75e-6), 1.5e-6,
+                 {"load_width": "3e-6"}),
 }
-QUICK = {"pa-inverter": (("linear",), (50, 25), (0.008, 0.004), 0.004)}
-MAX_DOFS = 250_000
-NH_LOAD = 3e5  # Pa: the fixed design's Neo-Hookean analysis fails at maxh 0.008 at 1e6 Pa
+#: the nonlinear rows (``--models``): Neo-Hookean/Wang at this load of the pressure cases
+#: (the force cases at their default loads)
+NL_LOAD = 1e6
+QUICK = {"pa-inverter": (("linear",), (50, 25), (0.008, 0.004), 0.004, {})}
+MAX_DOFS = 400_000
+MAX_DOFS_NONLINEAR = 160_000  # a Newton solve costs 4-8 linear ones
+PRESSURE_CASES = ("pa-inverter", "pa-gripper", "mm-gripper", "pneunet")
 
 
 def _cache_dir():
@@ -47,20 +60,22 @@ def _cache_dir():
 
 
 def fixed_design(case_name, grid, iterations=DESIGN_ITERATIONS):
-    """(image (nely, nelx), width, height): rho_bar after a short optimisation (cached)."""
+    """(images (k, nely, nelx), width, height): the physical densities (k = 1, or 2 for two
+    materials) after a short optimisation on a structured mesh (cached)."""
     from ngsolve import SetNumThreads, TaskManager
 
     from benchmarks.mbb_iteration import short_optimisation
 
     nelx, nely = grid
-    path = os.path.join(_cache_dir(), f"{case_name}_{nelx}x{nely}_{iterations}.npz")
+    path = os.path.join(_cache_dir(), f"{case_name}_{nelx}x{nely}_{iterations}_v2.npz")
     if os.path.exists(path):
         d = np.load(path)
         return d["image"], float(d["W"]), float(d["H"])
-    SetNumThreads(2)
+    SetNumThreads(threads())
     with TaskManager():
         problem, _ = short_optimisation(case_name, nelx, nely, iterations)
-        image = np.asarray(problem.values["rho_bar"]).reshape(nely, nelx)
+        names = ["rho_bar"] if "rho_bar" in problem.values else ["rho_bar1", "rho_bar2"]
+        image = np.stack([np.asarray(problem.values[n]).reshape(nely, nelx) for n in names])
         pts = np.array([v.point for v in problem.mesh.vertices])
     W, H = pts[:, 0].max(), pts[:, 1].max()
     np.savez(path, image=image, W=W, H=H)
@@ -68,31 +83,46 @@ def fixed_design(case_name, grid, iterations=DESIGN_ITERATIONS):
 
 
 def sample(image, W, H, cen):
+    """The pixel value of each point (piecewise constant; image (nely, nelx))."""
     nely, nelx = image.shape
     i = np.clip((cen[:, 0] / W * nelx).astype(int), 0, nelx - 1)
     j = np.clip((cen[:, 1] / H * nely).astype(int), 0, nely - 1)
     return np.clip(image[j, i], 0.0, 1.0)
 
 
-def run_point(case_name, model, maxh, order, design, repeat=3):
+def sample_smooth(image, W, H, cen):
+    """Bilinear interpolation of the pixel values between the pixel centres (constant beyond
+    the outer centres): a continuous density function."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    nely, nelx = image.shape
+    xs = (np.arange(nelx) + 0.5) * W / nelx
+    ys = (np.arange(nely) + 0.5) * H / nely
+    f = RegularGridInterpolator((ys, xs), image, method="linear")
+    q = np.column_stack([np.clip(cen[:, 1], ys[0], ys[-1]), np.clip(cen[:, 0], xs[0], xs[-1])])
+    return np.clip(f(q), 0.0, 1.0)
+
+
+def run_point(case_name, model, maxh, order, design, repeat=3, extra=None):
     from ngsolve import SetNumThreads, TaskManager
 
     from pacto_ng.case import build_problem, get_case
 
-    SetNumThreads(2)
+    SetNumThreads(threads())
     case = get_case(case_name)
     over = {"model": model, "maxh": str(maxh), "order": str(order), "filter": "none",
-            "beta": "0", "beta_max": "0", "penal_start": "0"}
+            "beta": "0", "beta_max": "0", "penal_start": "0", **(extra or {})}
     if model != "linear" and case.load_unit == "Pa":
-        over["load"] = str(NH_LOAD)
+        over["load"] = str(NL_LOAD)
     params = case.defaults.with_overrides(over)
-    image, W, H = design
+    images, W, H = design
     with TaskManager():
         t0 = time.perf_counter()
         problem = build_problem(case, params)
         problem.mech.settings = replace(problem.mech.settings, max_total_iter=150)
         setup = time.perf_counter() - t0
-        x = sample(image, W, H, problem.field.centroids()[problem.field.design_index])
+        cen = problem.field.centroids()[problem.field.design_index]
+        x = np.concatenate([sample_smooth(im, W, H, cen) for im in images])
         t0 = time.perf_counter()
         f0 = problem.evaluate(x)[0]
         first = time.perf_counter() - t0
@@ -111,24 +141,30 @@ def run_point(case_name, model, maxh, order, design, repeat=3):
                 delta=float(vals["delta"]) if "delta" in vals else float("nan"))
 
 
-def study(quick=False, repeat=3, log=print):
+def study(quick=False, repeat=3, log=print, cases=None, models=None):
     from pacto_ng.physics.mechanics import NewtonFailure
 
     plan = QUICK if quick else STUDIES
+    if cases:
+        unknown = [c for c in cases if c not in STUDIES]
+        if unknown:
+            raise SystemExit(f"trade: unknown case(s) {', '.join(unknown)} "
+                             f"(choose from {', '.join(STUDIES)})")
+        plan = {c: STUDIES[c] for c in cases}
     results, failed = [], []
-    for case_name, (models, grid, levels, default) in plan.items():
+    for case_name, (case_models, grid, levels, default, extra) in plan.items():
         design = fixed_design(case_name, grid, 8 if quick else DESIGN_ITERATIONS)
-        for model in models:
+        for model in models or case_models:
             rows = []
-            for order in (1, 2) if quick or model != "linear" else (1, 2, 3):
+            for order in (1, 2) if quick else (1, 2, 3):
                 for maxh in levels:
                     # rough dof estimate of a triangle mesh: 2 * (order/maxh)^2 * area
                     W, H = design[1], design[2]
                     est = 2 * 2.3 * W * H * (order / maxh) ** 2
-                    if est > MAX_DOFS:
+                    if est > (MAX_DOFS if model == "linear" else MAX_DOFS_NONLINEAR):
                         continue
                     try:
-                        r = run_point(case_name, model, maxh, order, design, repeat)
+                        r = run_point(case_name, model, maxh, order, design, repeat, extra)
                     except NewtonFailure as err:
                         log(f"  trade {case_name} {model} maxh={maxh} order={order}: {err}")
                         failed.append((model, maxh, order, str(err)))
@@ -137,6 +173,8 @@ def study(quick=False, repeat=3, log=print):
                     rows.append(r)
                     log(f"  trade {case_name} {model} maxh={maxh} order={order}: "
                         f"{r['dofs']} dofs, {r['time']:.3f} s, f={r['f']:.8g}")
+            if not rows:
+                continue
             ref = max(rows, key=lambda r: r["dofs"])
             for r in rows:
                 r["err"] = abs(r["f"] - ref["f"]) / abs(ref["f"])
@@ -147,23 +185,37 @@ def study(quick=False, repeat=3, log=print):
     return results
 
 
+def _pct(e):
+    return f"{100 * e:.2f} %"
+
+
 def summary_line(res):
+    """The default against the finest run, against order 3 on its own mesh, the next finer
+    order-1 mesh (whether the default's error is converged or a crossing), the knee."""
     ref = res["ref"]
     d = next((r for r in res["rows"] if r["default"]), None)
     if d is None:
         return ""
-    others = [r for r in res["rows"] if not r["ref"]]
-    knee = None
-    ok = [r for r in others if r["err"] <= 0.01]
-    if ok:
-        knee = min(ok, key=lambda r: r["time"])
+    rows = res["rows"]
+    within = d["err"] <= 0.01
     s = (f"**{res['case']} / {res['model']}**: the case default (maxh {d['maxh']}, order 1) is "
-         f"within {100 * d['err']:.2g} % of the finest objective (maxh {ref['maxh']}, order "
-         f"{ref['order']}, {ref['dofs']} dofs) at {100 * d['time'] / ref['time']:.2g} % of its "
-         f"time.")
-    if knee is not None:
-        s += (f" Cheapest run within 1 %: maxh {knee['maxh']}, order {knee['order']} "
-              f"({knee['dofs']} dofs, {knee['time']:.3f} s, error {100 * knee['err']:.2g} %).")
+         f"{_pct(d['err'])} from the finest objective (maxh {ref['maxh']}, order {ref['order']}, "
+         f"{ref['dofs']} dofs) at {100 * d['time'] / ref['time']:.2g} % of its time: "
+         f"{'within' if within else '**not** within'} 1 %.")
+    same = [r for r in rows if r["maxh"] == d["maxh"] and r["order"] == 3]
+    if same:
+        e = abs(d["f"] - same[0]["f"]) / abs(same[0]["f"])
+        s += (f" On its own mesh (the design's resolution) order 1 is {_pct(e)} from order 3.")
+    finer = sorted((r for r in rows if r["order"] == 1 and r["maxh"] < d["maxh"]),
+                   key=lambda r: -r["maxh"])
+    if finer:
+        s += f" Order 1 on the next finer mesh (maxh {finer[0]['maxh']}): {_pct(finer[0]['err'])}."
+    ok = [r for r in rows if not r["ref"] and r["err"] <= 0.01]
+    if ok:
+        k = min(ok, key=lambda r: r["time"])
+        s += (f" Cheapest run within 1 %: maxh {k['maxh']}, order {k['order']} "
+              f"({k['dofs']} dofs, {k['time']:.3f} s, {_pct(k['err'])}, "
+              f"{k['time'] / d['time']:.2g}x the default's time).")
     else:
         s += " No run other than the reference is within 1 %."
     return s
@@ -172,7 +224,8 @@ def summary_line(res):
 def markdown(results):
     out = []
     for res in results:
-        load = f" at {NH_LOAD:g} Pa" if res["model"] != "linear" and res["case"] != "cantilever" else ""
+        load = (f" at {NL_LOAD:g} Pa" if res["model"] != "linear"
+                and res["rows"][0]["case"] in PRESSURE_CASES else "")
         out.append(f"#### {res['case']}, {res['model']}{load}")
         out.append("")
         out.append("| maxh | order | elements | dofs | time [s] | objective | output Δ | "
@@ -199,9 +252,13 @@ def plot(results, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(results), figsize=(4.5 * len(results), 4), squeeze=False)
+    ncol = min(3, len(results))
+    nrow = -(-len(results) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.5 * ncol, 4 * nrow), squeeze=False)
     markers = {1: "o", 2: "s", 3: "^"}
-    for ax, res in zip(axes[0], results):
+    for ax in axes.flat[len(results):]:
+        ax.set_visible(False)
+    for ax, res in zip(axes.flat, results):
         rows = [r for r in res["rows"] if not r["ref"]]
         for k in (1, 2, 3):
             rr = sorted((r for r in rows if r["order"] == k), key=lambda r: r["time"])
@@ -234,8 +291,11 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--plot", default="")
+    ap.add_argument("--cases", default="", help="comma-separated cases (default: all)")
+    ap.add_argument("--models", default="", help="comma-separated models (default: linear)")
     args = ap.parse_args(argv)
-    res = study(args.quick, args.repeat)
+    res = study(args.quick, args.repeat, cases=[c for c in args.cases.split(",") if c],
+                models=[m for m in args.models.split(",") if m])
     print(markdown(res))
     if args.plot:
         plot(res, args.plot)

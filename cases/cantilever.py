@@ -21,7 +21,8 @@ def _h(p: Parameters) -> float:
 
 
 def _layout(p: Parameters):
-    return geo.layout(1.0, 0.25, load_halfwidth=2.0 * _h(p))
+    half = 0.5 * p.load_width if p.load_width > 0 else 2.0 * _h(p)
+    return geo.layout(1.0, 0.25, load_halfwidth=half)
 
 
 def _setup(p: Parameters) -> Setup:

@@ -22,7 +22,8 @@ def _h(p: Parameters) -> float:
 
 
 def _layout(p: Parameters):
-    return geo.layout(150e-6, 75e-6, clamp=7.5e-6, input_height=2.0 * _h(p))
+    height = p.load_width if p.load_width > 0 else 2.0 * _h(p)
+    return geo.layout(150e-6, 75e-6, clamp=7.5e-6, input_height=height)
 
 
 def _setup(p: Parameters) -> Setup:

@@ -9,7 +9,7 @@ NGSolve's ``Variation`` (automatic differentiation).  Equilibrium is found by
 :func:`~pacto_ng.physics.newton.solve_with_continuation`.  A linear, conservative problem
 (``linear=True``, no residual terms, no body load) whose energy is quadratic in ``∇u`` instead assembles
 ``K`` from the symbolic Hessian ``∂²(tφ)/∂G²`` of the same energy and evaluates
-``R(u) = K u - s f`` by a matrix-vector product (:class:`_LinearSystem`; equal to round-off).
+``R(u) = K u - s f`` element by element (:class:`_LinearSystem`; equal to round-off).
 
 Loads that are not the derivative of a potential (follower loads) enter the residual directly:
 
@@ -190,7 +190,6 @@ class _LinearSystem:
         for t in terms:
             self.f += t
         self.has_load = bool(terms)
-        self._Ku = mech.gfu.vec.CreateVector()
         # ∂C/∂field for the element-wise fields (quadratic energies), evaluated on demand
         self._dC, self._dC_version = {}, -1
         if self.quadratic:
@@ -254,7 +253,11 @@ class _LinearSystem:
 
     def residual(self, vec, out, load):
         self.assemble()
-        out.data = self.a.mat * vec
+        # element by element (Apply), not K u: the product with the assembled K cancels large
+        # terms where the structure moves rigidly; from the element gradients the residual is
+        # exact to round-off of ∇u (measured on a PneuNet design: K u gave Newton a residual
+        # floor whose noise reached SE at 4e-11 and the finite differences at 1e-5)
+        self.a.Apply(vec, out)
         out.data -= load * self.f.vec
 
     def load_norm(self):
@@ -263,16 +266,11 @@ class _LinearSystem:
 
     # -- quadratic energies: strain energy and its derivatives from C ---------------------------
     def energy_gradient(self, vec, out):
-        """``∂/∂u t∫φ(∇u) = K u - K_springs u``."""
+        """``∂/∂u t∫φ(∇u) = K u - K_springs u`` (element by element, as :meth:`residual`)."""
         self.assemble()
-        out.data = self.a.mat * vec
+        self.a.Apply(vec, out)
         if self.springs is not None:
             out.data -= self.springs.mat * vec
-
-    def energy(self, vec):
-        """``t∫φ(∇u) = ½ u·(K - K_springs) u``."""
-        self.energy_gradient(vec, self._Ku)
-        return 0.5 * float(self._Ku.InnerProduct(vec))
 
     def field_form(self, name, gu, gw, factor=1.0, extra=None):
         """LinearForm ``factor ∫ (∂C/∂field ∇gu) : ∇gw q (+ extra q)`` on the element space;
@@ -429,12 +427,10 @@ class Mechanics:
             self.a += self.hot(self.residual_density(u, self.fes.TestFunction())) * self.DX
         if residual_terms is not None:
             self.a += residual_terms(u, self.fes.TestFunction(), self.load)
-        # a linear, conservative problem: R(u) = K u - s f with K independent of u and s
+        # a linear, conservative problem: R(u) = K u - s f with K independent of u and s (also
+        # with a design-dependent body load: f is then assembled once per design)
         self._lin = None
-        # (not with a design-dependent body load: there the finite-difference checks of the
-        # pressure cases lost two to three digits, e.g. pneunet d(SE)/dx 4.5e-5 against 1.5e-7
-        # with the Variation route, measured with one thread; the cause is not yet found)
-        if linear and conservative and body is None:
+        if linear and conservative:
             lin = _LinearSystem(self)
             self._lin = lin if lin.valid else None
         # vector of the external load at unit load factor (for norms)

@@ -309,6 +309,13 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
             centroid[(min(a, b), max(a, b))] = c
     segs = list(ngm.Elements1D())
     ends = np.array([[v.nr - 1 for v in s.vertices][:2] for s in segs])
+    unmeshed = [k for k, (a, b) in enumerate(ends) if (min(a, b), max(a, b)) not in centroid]
+    if unmeshed:
+        # Netgen left a face without triangles (it prints "NOT ALL FACES HAVE BEEN MESHED")
+        raise ValueError(f"Netgen could not mesh the part: {len(unmeshed)} boundary edges have "
+                         f"no triangle (a face of the traced geometry was left empty, "
+                         f"threshold {th.threshold:g}, maxh {maxh:g}); try another threshold "
+                         f"or maxh")
     mid = 0.5 * (coords[ends[:, 0]] + coords[ends[:, 1]])
     tang = coords[ends[:, 1]] - coords[ends[:, 0]]
     length = np.linalg.norm(tang, axis=1)
