@@ -37,6 +37,8 @@ from pathlib import Path
 NL = ["--set", "load_adapt=1.2", "--set", "realcompile=1"]
 PA = ["--set", "load_ramp=30"] + NL
 FC = ["--set", "load_ramp=20"] + NL
+#: the thesis meshes of the cases whose defaults are finer (the knee of their trade curves)
+GRIP, PN = ["--maxh", "0.004"], ["--maxh", "0.003"]
 
 #: name -> (case, arguments); the order is the order of the tables
 RUNS = {
@@ -55,23 +57,23 @@ RUNS = {
                                      "--set", "load_type=follower"] + PA),
     "inv_nh_1e7": ("pa-inverter", ["--model", "neohookean", "--load", "1e7"] + PA),
     # pa-gripper (thesis limit 1e7 Pa)
-    "grip_lin": ("pa-gripper", ["--model", "linear", "--load", "1e6"]),
-    "grip_w_1e6": ("pa-gripper", ["--model", "wang", "--load", "1e6"] + PA),
-    "grip_w_1e7": ("pa-gripper", ["--model", "wang", "--load", "1e7"] + PA),
-    "grip_w_5e7": ("pa-gripper", ["--model", "wang", "--load", "5e7"] + PA),
+    "grip_lin": ("pa-gripper", GRIP + ["--model", "linear", "--load", "1e6"]),
+    "grip_w_1e6": ("pa-gripper", GRIP + ["--model", "wang", "--load", "1e6"] + PA),
+    "grip_w_1e7": ("pa-gripper", GRIP + ["--model", "wang", "--load", "1e7"] + PA),
+    "grip_w_5e7": ("pa-gripper", GRIP + ["--model", "wang", "--load", "5e7"] + PA),
     # pneunet (thesis limit 1e5 Pa), mm-gripper (thesis limit 5e5 Pa)
-    "pn_w_1e6": ("pneunet", ["--model", "wang", "--load", "1e6"] + PA),
-    "pn_nh_1e6": ("pneunet", ["--model", "neohookean", "--load", "1e6"] + PA),
+    "pn_w_1e6": ("pneunet", PN + ["--model", "wang", "--load", "1e6"] + PA),
+    "pn_nh_1e6": ("pneunet", PN + ["--model", "neohookean", "--load", "1e6"] + PA),
     # a sharper projection (β doubling to 64), and the objective "maximise Δ, SE <= se_max"
-    "pn_w_1e6_b64": ("pneunet", ["--model", "wang", "--load", "1e6", "--set", "beta_max=64"] + PA),
-    "pn_w_1e6_ose": ("pneunet", ["--model", "wang", "--load", "1e6", "--set",
+    "pn_w_1e6_b64": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set", "beta_max=64"] + PA),
+    "pn_w_1e6_ose": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set",
                                  "objective=output_se"] + PA),
     # Wang et al.'s sharper schedule and interpolation settings on the PneuNet
-    "pn_w2014_1e6": ("pneunet", ["--model", "wang", "--load", "1e6", "--set", "penal_step=0.05",
+    "pn_w2014_1e6": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set", "penal_step=0.05",
                                  "--set", "beta=4", "--set", "beta_max=64", "--set",
                                  "beta_every=10", "--set", "wang_beta=500", "--set",
                                  "wang_eta=0.01"] + PA),
-    "mm_w_5e6": ("mm-gripper", ["--model", "wang", "--load", "5e6"] + PA),
+    "mm_w_5e6": ("mm-gripper", GRIP + ["--model", "wang", "--load", "5e6"] + PA),
     # cantilever (thesis: NH 150 kN, Wang 250 kN; Wang et al. 2014: NH 240 kN, Wang 500 kN)
     **{f"cant_{m}_{F}": ("cantilever", ["--model", {"nh": "neohookean", "w": "wang"}[m],
                                         "--load", f"{F}e3"] + FC)

@@ -32,21 +32,22 @@ from benchmarks.__main__ import threads
 
 DESIGN_ITERATIONS = 20
 
-#: case -> (models, structured mesh of the design run, maxh levels, default maxh, overrides)
+#: case -> (models, structured mesh of the design run, maxh levels, overrides); the default
+#: marked is the case's own (its maxh and order)
 STUDIES = {
-    "pa-inverter": (("linear", "wang"), (50, 25), (0.008, 0.004, 0.002, 0.001), 0.004, {}),
-    "pa-gripper": (("linear",), (50, 25), (0.008, 0.004, 0.002, 0.001), 0.004, {}),
-    "mm-gripper": (("linear",), (50, 25), (0.008, 0.004, 0.002, 0.001), 0.004, {}),
-    "pneunet": (("linear",), (60, 30), (0.006, 0.003, 0.0015, 0.00075), 0.003, {}),
-    "cantilever": (("linear", "wang"), (80, 20), (0.04, 0.02, 0.01, 0.005), 0.01,
+    "pa-inverter": (("linear", "wang"), (50, 25), (0.008, 0.004, 0.002, 0.001), {}),
+    "pa-gripper": (("linear",), (50, 25), (0.008, 0.004, 0.002, 0.001), {}),
+    "mm-gripper": (("linear",), (50, 25), (0.008, 0.004, 0.002, 0.001), {}),
+    "pneunet": (("linear",), (60, 30), (0.006, 0.003, 0.0015, 0.00075), {}),
+    "cantilever": (("linear", "wang"), (80, 20), (0.04, 0.02, 0.01, 0.005),
                    {"load_width": "0.04"}),
-    "inverter": (("linear",), (60, 30), (6e-6, 3e-6, 1.5e-6, 0.75e-6), 1.5e-6,
+    "inverter": (("linear",), (60, 30), (6e-6, 3e-6, 1.5e-6, 0.75e-6),
                  {"load_width": "3e-6"}),
 }
 #: the nonlinear rows (``--models``): Neo-Hookean/Wang at this load of the pressure cases
 #: (the force cases at their default loads)
 NL_LOAD = 1e6
-QUICK = {"pa-inverter": (("linear",), (50, 25), (0.008, 0.004), 0.004, {})}
+QUICK = {"pa-inverter": (("linear",), (50, 25), (0.008, 0.004), {})}
 MAX_DOFS = 400_000
 MAX_DOFS_NONLINEAR = 160_000  # a Newton solve costs 4-8 linear ones
 PRESSURE_CASES = ("pa-inverter", "pa-gripper", "mm-gripper", "pneunet")
@@ -152,7 +153,10 @@ def study(quick=False, repeat=3, log=print, cases=None, models=None):
                              f"(choose from {', '.join(STUDIES)})")
         plan = {c: STUDIES[c] for c in cases}
     results, failed = [], []
-    for case_name, (case_models, grid, levels, default, extra) in plan.items():
+    from pacto_ng.case import get_case
+
+    for case_name, (case_models, grid, levels, extra) in plan.items():
+        defaults = get_case(case_name).defaults
         design = fixed_design(case_name, grid, 8 if quick else DESIGN_ITERATIONS)
         for model in models or case_models:
             rows = []
@@ -169,7 +173,7 @@ def study(quick=False, repeat=3, log=print, cases=None, models=None):
                         log(f"  trade {case_name} {model} maxh={maxh} order={order}: {err}")
                         failed.append((model, maxh, order, str(err)))
                         continue
-                    r["default"] = (maxh == default and order == 1)
+                    r["default"] = (maxh == defaults.maxh and order == defaults.order)
                     rows.append(r)
                     log(f"  trade {case_name} {model} maxh={maxh} order={order}: "
                         f"{r['dofs']} dofs, {r['time']:.3f} s, f={r['f']:.8g}")

@@ -9,7 +9,9 @@ whose boundary is the pressure inlet; zero pressure on the whole outer boundary 
 left edge included).  Output: the bottom-right corner, Δ = -u_y (the member bends down), with
 an output spring k_ss = k_out = 1e4 N/m (the thesis also shows 1e3).  E1 = 1e8 Pa,
 E0 = 1e-6 E1, ν = 0.4, plane strain, t = 1e-3 m, volume fraction 0.2, ηk = 0.2, ηh = 0.3,
-triangles of 0.003 m; load 1e5 Pa by default (the thesis limit).
+triangles of 0.0015 m; load 1e5 Pa by default (the thesis limit).  The thesis mesh (0.003 m,
+``--maxh 0.003``) is 3.8 % from the finest objective of the trade study (docs/benchmarks.md),
+0.0015 m 0.19 % at 4x its time: the default.
 
 Objective ``mechanism``: minimise -sΔ/SE (thesis eq. 3.9); ``--set objective=output_se``
 maximises Δ subject to SE <= se_max.  Structured quads ``--nelx 120 --nely 60``; unit elements
@@ -45,7 +47,7 @@ CASE = Case(
     name="pneunet",
     summary="PneuNet member: internal chamber pressure (Darcy), minimise -Δ/SE, bends down",
     source="Thesis §6.3; Kumar (2023); Liu et al. (2020) for PneuNets",
-    defaults=Parameters(model="linear", maxh=0.003, plane="strain", thickness=1e-3, E1=1e8,
+    defaults=Parameters(model="linear", maxh=0.0015, plane="strain", thickness=1e-3, E1=1e8,
                         E0=1e2, nu=0.4, volfrac=0.2, filter="helmholtz",
                         filter_radius=0.009, penal=3.0,
                         penal_start=1.0, penal_step=0.04, beta=1.0, beta_max=32.0,
