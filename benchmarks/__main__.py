@@ -187,7 +187,7 @@ def run_profile(quick):
             "checked once) is now the norm of the loads' LinearForm instead of an `Apply` of "
             "the whole energy at u = 0.  Timed interleaved on the same state (1 thread, "
             "median of 7):", "", PR.fast_ab_markdown(fast), "",
-            "A whole optimisation iteration of the Wang profile (`python -m benchmarks.profile_nonlinear --model wang --iterations 3`, 2 threads) went from 5.71 / 5.75 s to 2.30 / 1.97 s, Neo-Hookean from 1.94 / 1.14 s to 2.26 / 2.30 s (before / after run interleaved twice on 2026-12-01 at load average 4-6: the Neo-Hookean figures are within the noise of the loaded machine; the parts changed are timed in the table above).", "",
+            "A whole optimisation iteration of the Wang profile (`python -m benchmarks.profile_nonlinear --model wang --iterations 3`, 2 threads) went from 5.71 / 5.75 s to 2.30 / 1.97 s, Neo-Hookean from 1.94 / 1.14 s to 2.26 / 2.30 s (before / after run interleaved twice on 2026-12-01 at load average 4-6: the Neo-Hookean figures are within the noise of the loaded machine; the parts changed are timed in the table above).  The profile table at the top is measured with all these changes (the table of 2026-11-23, before them and at a load average of 10, gave 4.09 s per Neo-Hookean iteration).", "",
             "Other findings: in plane stress, Neo-Hookean residual and tangent cost 6-7x "
             "plane strain (the local Newton iteration for F33, unrolled at every quadrature "
             "point); the Wang energy costs about 2x Neo-Hookean in plane strain (φ_H(γG) plus "
@@ -201,8 +201,9 @@ def run_profile(quick):
             "quadrature as `Apply` of a `BilinearForm(Variation(t φ(∇u)))`, built once.  Timed "
             "interleaved on the same state (median of 7):", "", PR.ab_markdown(ab), "",
             "(For the linear row: a linear problem with a quadratic energy now takes ∂SE/∂u "
-            "as K u - K_springs u from the tangent matrix instead; the row times the "
-            "`Variation` form that non-quadratic energies still use.)", "",
+            "as K u - K_springs u, applied element by element (`Apply` of the tangent's "
+            "symbolic form, not a product with the assembled matrix: see the peer section); "
+            "the row times the `Variation` form that non-quadratic energies use.)", "",
             _regen("profile")]
     return "\n".join(text)
 
