@@ -7,7 +7,8 @@ The total potential is
 with thickness ``t`` and load factor ``s``.  The residual ``R = ∂Π/∂u`` and the tangent come from
 NGSolve's ``Variation`` (automatic differentiation).  Equilibrium is found by
 :func:`~pacto_ng.physics.newton.solve_with_continuation`.  A linear, conservative problem
-(``linear=True``, no residual terms, no body load) whose energy is quadratic in ``∇u`` instead assembles
+(``linear=True``, no residual terms; a body load is assembled once per design) whose energy is
+quadratic in ``∇u`` instead assembles
 ``K`` from the symbolic Hessian ``∂²(tφ)/∂G²`` of the same energy and evaluates
 ``R(u) = K u - s f`` element by element (:class:`_LinearSystem`; equal to round-off).
 
