@@ -36,18 +36,16 @@ def machine() -> str:
     import ngsolve
     import scipy
 
+    from pacto_ng.threads import thread_count
+
+    n = thread_count()
+
     load = os.getloadavg()
     return (f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC; "
             f"{os.cpu_count()} cores ({cpu}); load average at the start of the study "
             f"{load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} (1 / 5 / 15 min); Python "
             f"{platform.python_version()}, NGSolve {ngsolve.__version__}, SciPy "
-            f"{scipy.__version__}; {threads()} NGSolve thread{'s' if threads() > 1 else ''}")
-
-
-def threads() -> int:
-    """NGSolve threads of a study: ``PACTO_THREADS`` if set (e.g. 1 when two studies share the
-    machine), else 2."""
-    return int(os.environ.get("PACTO_THREADS", "2"))
+            f"{scipy.__version__}; {n} NGSolve thread{'s' if n > 1 else ''}")
 
 
 def replace_block(path: str, name: str, body: str) -> None:

@@ -158,23 +158,28 @@ CROSS = {
 }
 
 
-def cross_evaluate(folder: Path, model: str, load: float, load_type: str,
-                   follower_wang: bool = True) -> dict:
-    """The final design of a run (its density field, the run's last penalty and β) analysed
-    with ``model`` at inlet pressure ``load`` under a ``load_type`` Darcy load: −Δ/SE, Δ, SE,
-    or the load factor Newton reached.  ``follower_wang``: the Wang follower load follows
-    I + γ∇u (False: F everywhere)."""
+def rebuilt(folder: Path, **changes):
+    """(run, problem): the final design of a run folder analysed again with ``changes`` to its
+    parameters (no load ramp, no machine-code forms: one analysis)."""
     import dataclasses
 
     from pacto_ng.post.cli_commands import load_run, rebuild
     from pacto_ng.threads import compute
 
     run = load_run(folder, "extreme")
-    run.params = dataclasses.replace(run.params, model=model, load=load, load_type=load_type,
-                                     load_ramp=0, realcompile=False, newton_increment=0.25,
-                                     follower_wang=follower_wang)
+    run.params = dataclasses.replace(run.params, load_ramp=0, realcompile=False, **changes)
     with compute():
-        problem = rebuild(run)
+        return run, rebuild(run)
+
+
+def cross_evaluate(folder: Path, model: str, load: float, load_type: str,
+                   follower_wang: bool = True) -> dict:
+    """The final design of a run (its density field, the run's last penalty and β) analysed
+    with ``model`` at inlet pressure ``load`` under a ``load_type`` Darcy load: −Δ/SE, Δ, SE,
+    or the load factor Newton reached.  ``follower_wang``: the Wang follower load follows
+    I + γ∇u (False: F everywhere)."""
+    _, problem = rebuilt(folder, model=model, load=load, load_type=load_type,
+                         newton_increment=0.25, follower_wang=follower_wang)
     if problem.failure:
         reached = problem.mech.result.load_reached if problem.mech.result else 0.0
         return dict(ok=False, reached=reached)
@@ -406,17 +411,11 @@ CROSS_INVERTER = (["inv_f_lin_04", "inv_f_w_002", "inv_f_w_01", "inv_f_w_02", "i
 def cross_force(root: Path, name: str, model: str, load: float) -> dict:
     """The final design of a force-case run analysed with ``model`` at ``load``: Δ and the
     strain concentration of that state (its design.vtu is written to DIR/cross_force/...)."""
-    import dataclasses
-
-    from pacto_ng.post.cli_commands import load_run, rebuild
     from pacto_ng.run import write_vtu
     from pacto_ng.threads import compute
 
-    run = load_run(root / name, "extreme")
-    run.params = dataclasses.replace(run.params, model=model, load=load, load_ramp=0,
-                                     realcompile=False)
+    run, problem = rebuilt(root / name, model=model, load=load)
     with compute():
-        problem = rebuild(run)
         if problem.failure:
             return dict(ok=False, reached=problem.mech.result.load_reached)
         out = root / "cross_force" / f"{name}_{model}_{load:g}"

@@ -22,7 +22,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from benchmarks.__main__ import threads
+from pacto_ng.threads import thread_count
 
 LOADS = (1e5, 1e6, 3e6, 1e7, 3e7, 1e8)
 BASE = {"maxh": "0.004", "order": "1", "filter": "none", "beta": "0", "beta_max": "0",
@@ -72,7 +72,7 @@ def sweep(overrides, design, loads=LOADS):
     from pacto_ng.physics.mechanics import NewtonFailure
     from benchmarks.trade import sample
 
-    SetNumThreads(threads())
+    SetNumThreads(thread_count())
     case = get_case("pa-inverter")
     params = case.defaults.with_overrides({**BASE, **overrides, "load": str(loads[0])})
     images, W, H = design

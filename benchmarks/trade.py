@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from benchmarks.__main__ import threads
+from pacto_ng.threads import thread_count
 
 DESIGN_ITERATIONS = 20
 
@@ -50,7 +50,6 @@ NL_LOAD = 1e6
 QUICK = {"pa-inverter": (("linear",), (50, 25), (0.008, 0.004), {})}
 MAX_DOFS = 400_000
 MAX_DOFS_NONLINEAR = 160_000  # a Newton solve costs 4-8 linear ones
-PRESSURE_CASES = ("pa-inverter", "pa-gripper", "mm-gripper", "pneunet")
 
 
 def _cache_dir():
@@ -72,7 +71,7 @@ def fixed_design(case_name, grid, iterations=DESIGN_ITERATIONS):
     if os.path.exists(path):
         d = np.load(path)
         return d["image"], float(d["W"]), float(d["H"])
-    SetNumThreads(threads())
+    SetNumThreads(thread_count())
     with TaskManager():
         problem, _ = short_optimisation(case_name, nelx, nely, iterations)
         names = ["rho_bar"] if "rho_bar" in problem.values else ["rho_bar1", "rho_bar2"]
@@ -109,7 +108,7 @@ def run_point(case_name, model, maxh, order, design, repeat=3, extra=None):
 
     from pacto_ng.case import build_problem, get_case
 
-    SetNumThreads(threads())
+    SetNumThreads(thread_count())
     case = get_case(case_name)
     over = {"model": model, "maxh": str(maxh), "order": str(order), "filter": "none",
             "beta": "0", "beta_max": "0", "penal_start": "0", **(extra or {})}
@@ -143,6 +142,7 @@ def run_point(case_name, model, maxh, order, design, repeat=3, extra=None):
 
 
 def study(quick=False, repeat=3, log=print, cases=None, models=None):
+    from pacto_ng.case import get_case
     from pacto_ng.physics.mechanics import NewtonFailure
 
     plan = QUICK if quick else STUDIES
@@ -153,8 +153,6 @@ def study(quick=False, repeat=3, log=print, cases=None, models=None):
                              f"(choose from {', '.join(STUDIES)})")
         plan = {c: STUDIES[c] for c in cases}
     results, failed = [], []
-    from pacto_ng.case import get_case
-
     for case_name, (case_models, grid, levels, extra) in plan.items():
         defaults = get_case(case_name).defaults
         design = fixed_design(case_name, grid, 8 if quick else DESIGN_ITERATIONS)
@@ -202,7 +200,7 @@ def summary_line(res):
         return ""
     rows = res["rows"]
     within = d["err"] <= 0.01
-    s = (f"**{res['case']} / {res['model']}**: the case default (maxh {d['maxh']}, order 1) is "
+    s = (f"**{res['case']} / {res['model']}**: the case default (maxh {d['maxh']}, order {d['order']}) is "
          f"{_pct(d['err'])} from the finest objective (maxh {ref['maxh']}, order {ref['order']}, "
          f"{ref['dofs']} dofs) at {100 * d['time'] / ref['time']:.2g} % of its time: "
          f"{'within' if within else '**not** within'} 1 %.")
@@ -228,8 +226,10 @@ def summary_line(res):
 def markdown(results):
     out = []
     for res in results:
+        from pacto_ng.case import get_case
+
         load = (f" at {NL_LOAD:g} Pa" if res["model"] != "linear"
-                and res["rows"][0]["case"] in PRESSURE_CASES else "")
+                and get_case(res["case"]).load_unit == "Pa" else "")
         out.append(f"#### {res['case']}, {res['model']}{load}")
         out.append("")
         out.append("| maxh | order | elements | dofs | time [s] | objective | output Δ | "
@@ -296,7 +296,7 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--plot", default="")
     ap.add_argument("--cases", default="", help="comma-separated cases (default: all)")
-    ap.add_argument("--models", default="", help="comma-separated models (default: linear)")
+    ap.add_argument("--models", default="", help="comma-separated models (default: each case's models in STUDIES)")
     args = ap.parse_args(argv)
     res = study(args.quick, args.repeat, cases=[c for c in args.cases.split(",") if c],
                 models=[m for m in args.models.split(",") if m])
