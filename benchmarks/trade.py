@@ -154,7 +154,8 @@ def study(quick=False, repeat=3, log=print, cases=None, models=None):
         plan = {c: STUDIES[c] for c in cases}
     results, failed = [], []
     for case_name, (case_models, grid, levels, extra) in plan.items():
-        defaults = get_case(case_name).defaults
+        case = get_case(case_name)
+        defaults = case.defaults
         design = fixed_design(case_name, grid, 8 if quick else DESIGN_ITERATIONS)
         for model in models or case_models:
             rows = []
@@ -171,7 +172,8 @@ def study(quick=False, repeat=3, log=print, cases=None, models=None):
                         log(f"  trade {case_name} {model} maxh={maxh} order={order}: {err}")
                         failed.append((model, maxh, order, str(err)))
                         continue
-                    r["default"] = (maxh == defaults.maxh and order == defaults.order)
+                    r["default"] = (maxh == defaults.maxh
+                                    and order == (defaults.order or case.order_for(model)))
                     rows.append(r)
                     log(f"  trade {case_name} {model} maxh={maxh} order={order}: "
                         f"{r['dofs']} dofs, {r['time']:.3f} s, f={r['f']:.8g}")
@@ -207,11 +209,13 @@ def summary_line(res):
     same = [r for r in rows if r["maxh"] == d["maxh"] and r["order"] == 3]
     if same:
         e = abs(d["f"] - same[0]["f"]) / abs(same[0]["f"])
-        s += (f" On its own mesh (the design's resolution) order 1 is {_pct(e)} from order 3.")
-    finer = sorted((r for r in rows if r["order"] == 1 and r["maxh"] < d["maxh"]),
-                   key=lambda r: -r["maxh"])
+        s += (f" On its own mesh (the design's resolution) order {d['order']} is {_pct(e)} from "
+              "order 3.")
+    finer = sorted((r for r in rows if r["order"] == d["order"] and r["maxh"] < d["maxh"]
+                    and not r["ref"]), key=lambda r: -r["maxh"])
     if finer:
-        s += f" Order 1 on the next finer mesh (maxh {finer[0]['maxh']}): {_pct(finer[0]['err'])}."
+        s += (f" Order {d['order']} on the next finer mesh (maxh {finer[0]['maxh']}): "
+              f"{_pct(finer[0]['err'])}.")
     ok = [r for r in rows if not r["ref"] and r["err"] <= 0.01]
     if ok:
         k = min(ok, key=lambda r: r["time"])

@@ -47,6 +47,7 @@ def run_analysis_case(case, params, out, *, quiet: bool = False) -> int:
         raise InputError(f"case '{case.name}' has no analysis driver")
     if params.model not in ("linear", "gnl", "neohookean", "wang"):
         raise InputError(f"model: '{params.model}' cannot be used for the C-beam analysis")
+    params = case.resolve(params)
     path = prepare_output(out)
     t0 = time.perf_counter()
     mesh_kind, h = ("quad", 10.0 / params.nelx) if params.nelx > 0 else ("trig", params.maxh)

@@ -9,6 +9,7 @@ objective and the constraints.
 """
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from dataclasses import dataclass, field
 from typing import Callable
@@ -80,6 +81,19 @@ class Case:
     load_unit: str = "N"
     analysis_only: bool = False
     notes: str = ""
+    #: displacement order per model where it is not 1 (``order`` = 0, the default, resolves
+    #: through this): the knee of the case's trade curve (docs/benchmarks.md)
+    model_orders: dict = field(default_factory=dict)
+
+    def order_for(self, model: str) -> int:
+        """The case's displacement order for ``model`` (1 unless ``model_orders`` says)."""
+        return int(self.model_orders.get(model, 1))
+
+    def resolve(self, params: Parameters) -> Parameters:
+        """``params`` with ``order`` = 0 replaced by the case's order for its model."""
+        if params.order or params.model == "auto":
+            return params
+        return dataclasses.replace(params, order=self.order_for(params.model))
 
 
 def get_case(name: str) -> Case:
@@ -216,6 +230,10 @@ def build_problem(case: Case, params: Parameters) -> Problem:
 
     if case.analysis_only:
         raise InputError(f"case '{case.name}' is an analysis, not an optimisation")
+    params = case.resolve(params)
+    if params.model == "auto":
+        raise InputError("model: 'auto' is chosen by 'pacto run' (pacto_ng.auto.choose_model), "
+                         "not by build_problem")
     mesh, h, layout = mesh_for(case, params)
     setup = case.setup(params)
     try:

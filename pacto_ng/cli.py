@@ -203,7 +203,7 @@ def _main(argv) -> int:
     params = params_from_args(case, args)
     if args.command == "run":
         if args.show_parameters:
-            _show_parameters(case, params)
+            _show_parameters(case, case.resolve(params))
             return 0
         if case.analysis_only:
             from .analysis_case import run_analysis_case

@@ -64,5 +64,5 @@ def check_case(case, params, *, seed: int = 0, quiet: bool = False, explicit_mes
         worst = max(worst, res.rel_error)
         if not quiet:
             print(f"  {case.name}/{params.model}: d({name})/dx  {res}  "
-                  f"[{problem.mesh.ne} elements, order {params.order}]")
+                  f"[{problem.mesh.ne} elements, order {problem.params.order}]")
     return worst

@@ -19,7 +19,8 @@ def _p(default, unit="", help=""):
 class Parameters:
     # -- model and discretisation
     model: str = _p("linear", "", "mechanics: linear | gnl | neohookean | wang")
-    order: int = _p(1, "", "element order of the displacement (1, 2, 3)")
+    order: int = _p(0, "", "element order of the displacement (1, 2, 3; 0: the case's order for the "
+                    "model, see Case.model_orders)")
     maxh: float = _p(0.01, "m", "Netgen triangle size (used when nelx = 0)")
     nelx: int = _p(0, "", "structured quads in x (0: Netgen triangles)")
     nely: int = _p(0, "", "structured quads in y")
@@ -77,6 +78,8 @@ class Parameters:
     obj_tol: float = _p(1e-4, "", "... or the objective changed less than this (relative) over 5 iterations")
     objective: str = _p("", "", "case objective variant (empty: the case's default)")
     seed_density: float = _p(0.0, "", "initial design density (0: volfrac)")
+    init_design: str = _p("", "", "start from the design x of this run folder (its checkpoint.npz; "
+                          "the same case and mesh), e.g. a run at a lower load")
     # -- Newton
     newton_rtol: float = _p(1e-10, "", "Newton residual tolerance (relative to the load)")
     newton_max_iter: int = _p(30, "", "Newton iterations per load step")
@@ -89,8 +92,8 @@ class Parameters:
 
         if self.model not in MODELS + ("auto",):
             raise InputError(f"model: unknown model '{self.model}' (choose from {', '.join(MODELS)})")
-        if self.order not in (1, 2, 3):
-            raise InputError(f"order: must be 1, 2 or 3 (got {self.order})")
+        if self.order not in (0, 1, 2, 3):
+            raise InputError(f"order: must be 1, 2 or 3, or 0 for the case's choice (got {self.order})")
         if self.plane not in ("strain", "stress"):
             raise InputError(f"plane: must be 'strain' or 'stress' (got '{self.plane}')")
         if self.filter not in ("helmholtz", "cone", "none"):

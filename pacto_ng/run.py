@@ -58,11 +58,32 @@ def schedule_of(p: Parameters) -> Schedule:
 
 def initial_design(problem: Problem) -> np.ndarray:
     p = problem.params
+    if p.init_design:
+        return design_of_run(p.init_design, problem)
     x0 = p.seed_density if p.seed_density > 0 else p.volfrac
     x = np.full(problem.field.n, x0)
     if problem.n_design_fields == 2:
         x = np.concatenate([x, np.full(problem.field.n, 0.5)])
     return x
+
+
+def design_of_run(folder: str | os.PathLike, problem: Problem) -> np.ndarray:
+    """The design variables x of a run folder's checkpoint, for a run on the same mesh."""
+    ckpt = Path(folder) / "checkpoint.npz"
+    if not ckpt.is_file():
+        raise InputError(f"init_design: no checkpoint.npz in '{folder}'")
+    try:
+        with np.load(ckpt, allow_pickle=False) as data:
+            x = np.asarray(data["x"], dtype=float)
+    except (OSError, ValueError, KeyError) as err:
+        raise InputError(f"init_design: cannot read '{ckpt}' ({err})") from None
+    n = problem.field.n * problem.n_design_fields
+    if x.shape != (n,):
+        raise InputError(f"init_design: '{ckpt}' holds {x.size} design variables, this run has {n} "
+                         "(another case or mesh)")
+    if not np.all(np.isfinite(x)):
+        raise InputError(f"init_design: '{ckpt}' holds non-finite design variables")
+    return np.clip(x, 0.0, 1.0)
 
 
 def _progress(row: dict, total: int) -> str:
@@ -136,6 +157,7 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         params, model_choice = choose_model(case, params)
         if not quiet:
             print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
+    params = case.resolve(params)  # order 0: the case's order for the (chosen) model
     (path / "params.json").write_text(json.dumps({"case": case.name, "params": params.to_dict(),
                                                   "model_choice": model_choice}, indent=1))
     problem = build_problem(case, params)

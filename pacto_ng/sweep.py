@@ -143,9 +143,11 @@ def sweep_grid(models, loads) -> list[SweepRun]:
     return [SweepRun(m, float(f), folder_name(m, f)) for m in models for f in loads]
 
 
-def run_parameters(base: Parameters, run: SweepRun) -> Parameters:
-    """The parameters of one grid point: ``base`` with the run's model and load."""
-    return base.with_overrides({"model": run.model, "load": repr(run.load)})
+def run_parameters(base: Parameters, run: SweepRun, case=None) -> Parameters:
+    """The parameters of one grid point: ``base`` with the run's model and load (and, given the
+    case, ``order`` = 0 resolved to the case's order for that model, as ``pacto run`` does)."""
+    p = base.with_overrides({"model": run.model, "load": repr(run.load)})
+    return case.resolve(p) if case is not None else p
 
 
 # -- state of the folders ------------------------------------------------------------------
@@ -429,7 +431,7 @@ def run_sweep(case, base: Parameters, models, loads, out: str | os.PathLike, *,
         raise InputError("--workers: only for the local cluster (a scheduler has its own workers)")
     root = prepare_output(out).resolve()
     runs = sweep_grid(models, loads)
-    params = {r.folder: run_parameters(base, r) for r in runs}
+    params = {r.folder: run_parameters(base, r, case) for r in runs}
     status = {r.folder: run_status(root / r.folder) for r in runs}
     for r in runs:
         check_same_parameters(root / r.folder, params[r.folder], status[r.folder])
