@@ -71,6 +71,36 @@ class Remeshed:
     p_in: float | None = None
 
 
+def _unmeshed_edges(ngm) -> int:
+    """The boundary segments of a Netgen mesh that border no triangle (an empty face)."""
+    edges = set()
+    for el in ngm.Elements2D():
+        vs = [v.nr for v in el.vertices]
+        edges.update((min(a, b), max(a, b)) for a, b in zip(vs, vs[1:] + vs[:1]))
+    ends = ([v.nr for v in s.vertices][:2] for s in ngm.Elements1D())
+    return sum((min(a, b), max(a, b)) not in edges for a, b in ends)
+
+
+def _generate(shape, maxh: float, threshold: float):
+    """The Netgen mesh of ``shape`` at ``maxh``; ValueError (one line) when Netgen fails: an
+    OCC triangulation error, or a face left without triangles ("NOT ALL FACES HAVE BEEN
+    MESHED").  (Retrying at 0.7 and 0.5 maxh was tried on two such PneuNet parts and did not
+    help, so there is no retry.)"""
+    from netgen import occ
+
+    try:
+        ngm = occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh)
+    except Exception as err:  # netgen's NgException, e.g. "OCC-Triangulation could not be built"
+        what = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+    else:
+        bad = _unmeshed_edges(ngm)
+        if not bad:
+            return ngm
+        what = f"{bad} boundary edges have no triangle (a face of the traced geometry was left empty)"
+    raise ValueError(f"Netgen could not mesh the part: {what}; threshold {threshold:g}, maxh "
+                     f"{maxh:g}: try another threshold or maxh")
+
+
 # ---------------------------------------------------------------------------------------
 def _clean(points, labels, tol):
     """Merge consecutive points closer than ``tol`` (the merged edge keeps the longer label)."""
@@ -267,7 +297,6 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
         If no solid touches the clamp boundary, or ``maxh`` is not positive.
     """
     import ngsolve
-    from netgen import occ
     from netgen.meshing import Element0D
 
     if maxh <= 0:
@@ -293,7 +322,7 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
     locator = _BoundaryLocator(seg, names, 1e-8 * max(diam, th.h))
     shape = build_geometry(kept, th.h, min_spacing=min_spacing, spline_tol=spline_tol,
                            locator=locator)
-    ngm = occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh)
+    ngm = _generate(shape, maxh, th.threshold)
 
     # -- the wetting rule, segment by segment ----------------------------------------------
     coords = np.asarray(ngm.Coordinates(), dtype=float)
@@ -309,13 +338,6 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
             centroid[(min(a, b), max(a, b))] = c
     segs = list(ngm.Elements1D())
     ends = np.array([[v.nr - 1 for v in s.vertices][:2] for s in segs])
-    unmeshed = [k for k, (a, b) in enumerate(ends) if (min(a, b), max(a, b)) not in centroid]
-    if unmeshed:
-        # Netgen left a face without triangles (it prints "NOT ALL FACES HAVE BEEN MESHED")
-        raise ValueError(f"Netgen could not mesh the part: {len(unmeshed)} boundary edges have "
-                         f"no triangle (a face of the traced geometry was left empty, "
-                         f"threshold {th.threshold:g}, maxh {maxh:g}); try another threshold "
-                         f"or maxh")
     mid = 0.5 * (coords[ends[:, 0]] + coords[ends[:, 1]])
     tang = coords[ends[:, 1]] - coords[ends[:, 0]]
     length = np.linalg.norm(tang, axis=1)

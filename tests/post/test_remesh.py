@@ -101,3 +101,40 @@ def test_wetted_by_boundary_name():
     assert _length(rm.mesh, "inlet") == 0.0
     assert _length(rm.mesh, "fixed") == pytest.approx(0.02, rel=1e-9)
     assert rm.p_in is None
+
+
+def test_a_netgen_failure_is_one_line(chamber_quads, monkeypatch):
+    """Netgen's own exception (e.g. "OCC-Triangulation could not be built for face 1", met on a
+    PneuNet part) and a face left without triangles both become one-line ValueErrors."""
+    from netgen import occ
+
+    th = threshold(chamber_quads, chamber_density(chamber_quads))
+
+    class Failing:
+        def __init__(self, *a, **k):
+            pass
+
+        def GenerateMesh(self, **k):
+            raise RuntimeError("OCC-Triangulation could not be built for face 1\nmore")
+
+    monkeypatch.setattr(occ, "OCCGeometry", Failing)
+    with pytest.raises(ValueError, match="^Netgen could not mesh the part: OCC-Triangulation") as err:
+        remesh(th, 0.003)
+    assert "\n" not in str(err.value) and "maxh 0.003" in str(err.value)
+
+
+def test_unmeshed_edges_counts_segments_without_a_triangle():
+    from netgen.meshing import Element1D, Element2D, FaceDescriptor, Mesh, MeshPoint, Pnt
+
+    from pacto_ng.post.remesh import _unmeshed_edges
+
+    m = Mesh(dim=2)
+    p = [m.Add(MeshPoint(Pnt(x, y, 0))) for x, y in ((0, 0), (1, 0), (0, 1), (1, 1))]
+    m.Add(FaceDescriptor(surfnr=1, domin=1, bc=1))
+    m.Add(Element2D(1, [p[0], p[1], p[2]]))
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        m.Add(Element1D([p[a], p[b]], index=1))
+    assert _unmeshed_edges(m) == 0
+    m.Add(Element1D([p[1], p[3]], index=1))  # an edge of a face with no triangle
+    m.Add(Element1D([p[3], p[2]], index=1))
+    assert _unmeshed_edges(m) == 2
