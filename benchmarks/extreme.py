@@ -39,28 +39,43 @@ PA = ["--set", "load_ramp=30"] + NL
 FC = ["--set", "load_ramp=20"] + NL
 #: the thesis meshes of the cases whose defaults are finer (the knee of their trade curves)
 GRIP, PN = ["--maxh", "0.004"], ["--maxh", "0.003"]
+#: order 1, the thesis's, for the pa-inverter Wang runs (the case's Wang default is order 2)
+O1 = ["--order", "1"]
 
 #: name -> (case, arguments); the order is the order of the tables
 RUNS = {
     # pa-inverter (thesis limit 1e7 Pa)
     "inv_lin": ("pa-inverter", ["--model", "linear", "--load", "1e6"]),
-    "inv_w_1e6": ("pa-inverter", ["--model", "wang", "--load", "1e6"] + PA),
-    "inv_w_1e7": ("pa-inverter", ["--model", "wang", "--load", "1e7"] + PA),
-    "inv_w_5e7": ("pa-inverter", ["--model", "wang", "--load", "5e7"] + PA),
-    "inv_w_5e7_b64": ("pa-inverter", ["--model", "wang", "--load", "5e7", "--set", "beta_max=64"] + PA),
-    "inv_wf_5e7": ("pa-inverter", ["--model", "wang", "--load", "5e7", "--set", "load_type=follower"] + PA),
-    "inv_wf_1e7": ("pa-inverter", ["--model", "wang", "--load", "1e7", "--set", "load_type=follower"] + PA),
+    "inv_w_1e6": ("pa-inverter", O1 + ["--model", "wang", "--load", "1e6"] + PA),
+    "inv_w_1e7": ("pa-inverter", O1 + ["--model", "wang", "--load", "1e7"] + PA),
+    "inv_w_5e7": ("pa-inverter", O1 + ["--model", "wang", "--load", "5e7"] + PA),
+    "inv_w_5e7_b64": ("pa-inverter", O1 + ["--model", "wang", "--load", "5e7", "--set", "beta_max=64"] + PA),
+    "inv_wf_5e7": ("pa-inverter", O1 + ["--model", "wang", "--load", "5e7", "--set", "load_type=follower"] + PA),
+    "inv_wf_1e7": ("pa-inverter", O1 + ["--model", "wang", "--load", "1e7", "--set", "load_type=follower"] + PA),
     # 5e7 Pa on the coarse mesh, fixed and follower load (the thesis mesh's follower run was
     # too slow to finish)
-    "inv_w_5e7_c": ("pa-inverter", ["--model", "wang", "--load", "5e7", "--maxh", "0.008"] + PA),
-    "inv_wf_5e7_c": ("pa-inverter", ["--model", "wang", "--load", "5e7", "--maxh", "0.008",
+    "inv_w_5e7_c": ("pa-inverter", O1 + ["--model", "wang", "--load", "5e7", "--maxh", "0.008"] + PA),
+    "inv_wf_5e7_c": ("pa-inverter", O1 + ["--model", "wang", "--load", "5e7", "--maxh", "0.008",
                                      "--set", "load_type=follower"] + PA),
+    # a slow load ramp (100 iterations): the layout forms at the lower pressures, as in the
+    # 1e7 Pa run, before the full load acts
+    "inv_w_5e7_r100": ("pa-inverter", O1 + ["--model", "wang", "--load", "5e7", "--set", "load_ramp=100"] + NL),
+    "inv_wf_5e7_r100": ("pa-inverter", O1 + ["--model", "wang", "--load", "5e7", "--set", "load_ramp=100",
+                                        "--set", "load_type=follower"] + NL),
+    # plain Neo-Hookean with a stiffer void (E0 = 1e-4 E1) and the slow ramp
+    "inv_nh_5e7_e4_r100": ("pa-inverter", ["--model", "neohookean", "--load", "5e7", "--set", "E0=3e5",
+                                           "--set", "load_ramp=100"] + NL),
+    "inv_nhf_5e7_e4_r100": ("pa-inverter", ["--model", "neohookean", "--load", "5e7", "--set", "E0=3e5",
+                                            "--set", "load_ramp=100", "--set", "load_type=follower"] + NL),
     "inv_nh_1e7": ("pa-inverter", ["--model", "neohookean", "--load", "1e7"] + PA),
     # pa-gripper (thesis limit 1e7 Pa)
     "grip_lin": ("pa-gripper", GRIP + ["--model", "linear", "--load", "1e6"]),
     "grip_w_1e6": ("pa-gripper", GRIP + ["--model", "wang", "--load", "1e6"] + PA),
     "grip_w_1e7": ("pa-gripper", GRIP + ["--model", "wang", "--load", "1e7"] + PA),
     "grip_w_5e7": ("pa-gripper", GRIP + ["--model", "wang", "--load", "5e7"] + PA),
+    "grip_w_5e7_r100": ("pa-gripper", GRIP + ["--model", "wang", "--load", "5e7", "--set", "load_ramp=100"] + NL),
+    "grip_nh_5e7_e4_r100": ("pa-gripper", GRIP + ["--model", "neohookean", "--load", "5e7", "--set",
+                                                 "E0=3e5", "--set", "load_ramp=100"] + NL),
     # pneunet (thesis limit 1e5 Pa), mm-gripper (thesis limit 5e5 Pa)
     "pn_w_1e6": ("pneunet", PN + ["--model", "wang", "--load", "1e6"] + PA),
     "pn_nh_1e6": ("pneunet", PN + ["--model", "neohookean", "--load", "1e6"] + PA),
@@ -73,7 +88,53 @@ RUNS = {
                                  "--set", "beta=4", "--set", "beta_max=64", "--set",
                                  "beta_every=10", "--set", "wang_beta=500", "--set",
                                  "wang_eta=0.01"] + PA),
+    "pn_w_1e6_r100": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set", "load_ramp=100"] + NL),
+    # the same with β stopping at 16: in pn_w_1e6_r100 the step of β to 32 at the full load
+    # dropped the load factor to 0.001
+    "pn_w_1e6_r100_b16": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set", "load_ramp=100",
+                                           "--set", "beta_max=16"] + NL),
+    # a stiffer void, E0 = 1e-3 E1 (the stability map: Neo-Hookean then carries 3e7 Pa)
+    "pn_nh_1e6_e3": ("pneunet", PN + ["--model", "neohookean", "--load", "1e6", "--set", "load_ramp=100",
+                                      "--set", "E0=1e5"] + NL),
+    "pn_w_1e6_e3": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set", "load_ramp=100",
+                                     "--set", "E0=1e5"] + NL),
+    # a filter twice as wide (0.018 m): no wall thinner than the gaps the runs above open
+    "pn_w_1e6_r100_f2": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set", "load_ramp=100",
+                                          "--set", "beta_max=16", "--set", "filter_radius=0.018"] + NL),
+    # the wide filter with the default β (to 32): β's steps at the full load (r100, 250
+    # iterations to recover), or a load ramp slower than β's continuation (r150)
+    "pn_w_1e6_r100_f2_b32": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--iterations", "250",
+                                              "--set", "load_ramp=100", "--set", "filter_radius=0.018"] + NL),
+    "pn_w_1e6_r150_f2_b32": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--iterations", "250",
+                                              "--set", "load_ramp=150", "--set", "filter_radius=0.018"] + NL),
+    # Neo-Hookean with a stiffer void, the wide filter and the slow ramp
+    **{f"pn_nh_1e6_{tag}_f2_r150": ("pneunet", PN + ["--model", "neohookean", "--load", "1e6", "--iterations",
+                                                    "250", "--set", "load_ramp=150", "--set",
+                                                    "filter_radius=0.018", "--set", f"E0={E0}"] + NL)
+       for tag, E0 in (("e3", "1e5"), ("e4", "1e4"))},
+    # E0 = 1e-4 E1 with the case's filter, and from the linear design
+    "pn_nh_1e6_e4_r150": ("pneunet", PN + ["--model", "neohookean", "--load", "1e6", "--iterations", "250",
+                                           "--set", "load_ramp=150", "--set", "E0=1e4"] + NL),
+    "pn_nh_1e6_e4_init_b8": ("pneunet", PN + ["--model", "neohookean", "--load", "1e6", "--set", "E0=1e4",
+                                              "--set", "init_design={root}/pn_lin_1e6", "--set",
+                                              "load_ramp=30", "--set", "penal_start=3", "--set",
+                                              "beta=8"] + NL),
+    # Wang from the linear design (a closed chamber) of the same pressure, the schedule
+    # restarted (a) or continued at p = 3, β = 8 (b)
+    "pn_lin_1e6": ("pneunet", PN + ["--model", "linear", "--load", "1e6"]),
+    "pn_w_1e6_init": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set",
+                                       "init_design={root}/pn_lin_1e6", "--set", "load_ramp=30"] + NL),
+    "pn_w_1e6_init_b8": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set",
+                                          "init_design={root}/pn_lin_1e6", "--set", "load_ramp=30",
+                                          "--set", "penal_start=3", "--set", "beta=8"] + NL),
+    # an output spring 10x stiffer (1e5 N/m): the spring-to-pressure ratio of the thesis's 1e5 Pa
+    # runs (a variant of the case, not the case)
+    "pn_w_1e6_r100_k1e5": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set", "load_ramp=100",
+                                            "--set", "beta_max=16", "--set", "k_out=1e5"] + NL),
     "mm_w_5e6": ("mm-gripper", GRIP + ["--model", "wang", "--load", "5e6"] + PA),
+    "mm_w_5e6_r100": ("mm-gripper", GRIP + ["--model", "wang", "--load", "5e6", "--set", "load_ramp=100"] + NL),
+    "mm_nh_5e6_e4_r100": ("mm-gripper", GRIP + ["--model", "neohookean", "--load", "5e6", "--set", "E0=3e4",
+                                               "--set", "load_ramp=100"] + NL),
     # cantilever (thesis: NH 150 kN, Wang 250 kN; Wang et al. 2014: NH 240 kN, Wang 500 kN)
     **{f"cant_{m}_{F}": ("cantilever", ["--model", {"nh": "neohookean", "w": "wang"}[m],
                                         "--load", f"{F}e3"] + FC)
@@ -102,10 +163,17 @@ RUNS = {
 #: grey joint that a 0.5 threshold cuts off (the part then floats and is dropped; measured)
 ANALYSES = {
     "pa-inverter": (["inv_lin", "inv_w_1e6", "inv_w_1e7", "inv_wf_1e7", "inv_w_5e7", "inv_w_5e7_b64",
-                     "inv_wf_5e7", "inv_w_5e7_c", "inv_wf_5e7_c"],
+                     "inv_wf_5e7", "inv_w_5e7_c", "inv_wf_5e7_c", "inv_w_5e7_r100",
+                     "inv_wf_5e7_r100", "inv_nh_5e7_e4_r100", "inv_nhf_5e7_e4_r100"],
                     "1e5,1e6,1e7,5e7", 0.4),
-    "pa-gripper": (["grip_lin", "grip_w_1e6", "grip_w_1e7", "grip_w_5e7"], "1e5,1e6,1e7,5e7", 0.5),
-    "pneunet": (["pn_w_1e6", "pn_nh_1e6", "pn_w2014_1e6", "pn_w_1e6_b64", "pn_w_1e6_ose"],
+    "pa-gripper": (["grip_lin", "grip_w_1e6", "grip_w_1e7", "grip_w_5e7", "grip_w_5e7_r100",
+                    "grip_nh_5e7_e4_r100"], "1e5,1e6,1e7,5e7", 0.5),
+    "pneunet": (["pn_w_1e6", "pn_nh_1e6", "pn_w2014_1e6", "pn_w_1e6_b64", "pn_w_1e6_ose",
+                 "pn_w_1e6_r100", "pn_w_1e6_r100_b16",
+                 "pn_nh_1e6_e3", "pn_w_1e6_e3", "pn_w_1e6_r100_f2", "pn_w_1e6_r100_k1e5",
+                 "pn_w_1e6_r100_f2_b32", "pn_w_1e6_r150_f2_b32",
+                 "pn_nh_1e6_e3_f2_r150", "pn_nh_1e6_e4_f2_r150", "pn_lin_1e6", "pn_w_1e6_init",
+                 "pn_w_1e6_init_b8", "pn_nh_1e6_e4_r150", "pn_nh_1e6_e4_init_b8"],
                 "1e4,1e5,1e6", 0.5),
 }
 
@@ -123,6 +191,7 @@ EXTEND = {"cantilever": 300, "inverter": 400}
 def run(root: Path, name: str) -> None:
     out = root / name
     case, args = RUNS[name]
+    args = [a.replace("{root}", str(root)) for a in args]  # a run that starts from another's design
     if not (out / "summary.json").exists():
         print(f"[extreme] {command(name)} --out {out}", flush=True)
         subprocess.run([sys.executable, "-m", "pacto_ng.cli", "run", case, *args, "--out",
@@ -150,10 +219,10 @@ def analyse(root: Path, name: str, pressures: str, threshold: float) -> None:
 #: cross analyses: every design of a case analysed with the Wang model (Neo-Hookean wherever
 #: material is) on its density field, at each pressure, with the fixed and the follower load
 CROSS = {
-    "pa-inverter": (["inv_lin", "inv_w_1e6", "inv_w_1e7", "inv_w_5e7"],
+    "pa-inverter": (["inv_lin", "inv_w_1e6", "inv_w_1e7", "inv_w_5e7", "inv_w_5e7_r100"],
                     [(1e6, "fixed"), (1e7, "fixed"), (5e7, "fixed"), (1e7, "follower"),
                      (5e7, "follower")]),
-    "pa-gripper": (["grip_lin", "grip_w_1e6", "grip_w_1e7", "grip_w_5e7"],
+    "pa-gripper": (["grip_lin", "grip_w_1e6", "grip_w_1e7", "grip_w_5e7", "grip_w_5e7_r100"],
                    [(1e6, "fixed"), (1e7, "fixed"), (5e7, "fixed"), (5e7, "follower")]),
 }
 
@@ -220,10 +289,9 @@ def cross_markdown(root: Path, case: str, cache: Path) -> str:
 
 #: follower design against fixed-load designs at 1e7 Pa, Wang mechanics, follower_wang on
 FOLLOWER_1E7 = ["inv_wf_1e7", "inv_w_1e7", "inv_lin"]
-#: at 5e7 Pa: no follower-load optimisation finished there (the thesis mesh's took 30-85 s per
-#: iteration and was stopped; on the coarse mesh both runs, fixed and follower, ended in a
-#: Newton failure), so the 1e7 Pa follower design against the 5e7 and 1e7 Pa fixed-load ones
-FOLLOWER_5E7 = ["inv_wf_1e7", "inv_w_5e7", "inv_w_1e7"]
+#: at 5e7 Pa: the follower and the fixed-load designs optimised there with the 100-iteration
+#: load ramp, and the 1e7 Pa designs of each load type
+FOLLOWER_5E7 = ["inv_wf_5e7_r100", "inv_w_5e7_r100", "inv_wf_1e7", "inv_w_1e7"]
 
 
 def follower_markdown(root: Path, cache: Path, designs=FOLLOWER_1E7, load=1e7) -> str:
@@ -305,6 +373,8 @@ def command_of(folder: Path) -> str:
     for key, val in info["params"].items():
         if ref.get(key) == val:
             continue
+        if key == "order" and val == (ref["order"] or case.order_for(info["params"]["model"])):
+            continue  # the case's order for the run's model
         if key in ("model", "load", "maxh", "order", "nelx", "nely", "iterations"):
             args += [f"--{key}", f"{val:g}" if isinstance(val, float) else str(val)]
         else:
@@ -510,8 +580,8 @@ def main(argv=None):
     text += ["", "### pa-inverter at 1e7 Pa: the follower-load design against the fixed-load "
              "designs (Wang mechanics on the density field, the follower load through I + γ∇u)",
              "", follower_markdown(root, root / "cross_follower_1e7.json")]
-    text += ["", "### pa-inverter at 5e7 Pa: the 1e7 Pa follower-load design against the "
-             "fixed-load designs of 5e7 and 1e7 Pa (as above, at 5e7 Pa)", "",
+    text += ["", "### pa-inverter at 5e7 Pa: the follower-load designs against the fixed-load "
+             "designs, optimised at 5e7 and at 1e7 Pa (as above, at 5e7 Pa)", "",
              follower_markdown(root, root / "cross_follower_5e7.json", FOLLOWER_5E7, 5e7)]
     if args.cross:
         for case in CROSS:
