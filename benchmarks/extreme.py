@@ -15,7 +15,9 @@ the nonlinear designs are compared under the same Neo-Hookean analysis.
 The optimisation settings of the nonlinear runs: the case defaults plus load continuation over
 the first iterations (``load_ramp``), adaptive load continuation past a Newton failure
 (``load_adapt``) and machine-code forms (``realcompile``); the command of each run, as read
-back from its ``params.json``, is in the table.  A cantilever or force-inverter run that reaches its iteration cap (150, 200) without meeting the
+back from its ``params.json``, is in the table (the pa-inverter's Wang runs pin ``--order 1``,
+the thesis's order; a run that starts from another's design names its folder in
+``init_design``).  A cantilever or force-inverter run that reaches its iteration cap (150, 200) without meeting the
 convergence test is continued from its checkpoint with ``pacto resume DIR --iterations N``
 (N = 300, 400): its command in the table then shows ``--iterations N``.  "valid" means: the run finished at the full load (``load_factor_reached``
 = 1, so every accepted state had det F > 0 where the model needs it), the volume constraint is

@@ -40,9 +40,9 @@ CASE = Case(
     layout=_layout,
     setup=_setup,
     load_unit="N",
-    # linear at order 2: 0.26 % from the finest objective at 1.3x order 1's time (order 1:
-    # 1.04 %); the nonlinear models keep order 1, at which every extreme-load run was made
-    # (order 2 costs their optimisations 3-4x the time)
+    # linear at order 2: 0.23-0.26 % from the finest objective (order 1: 1.0 %, at the edge),
+    # 1.2-2.3x order 1's time per analysis; the nonlinear models keep order 1, at which every
+    # extreme-load run was made (order 2 cost the Wang optimisation at 144 kN 4x the time)
     model_orders={"linear": 2},
 )
 
