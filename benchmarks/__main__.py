@@ -112,11 +112,8 @@ def run_peer(quick):
                 "digits (PneuNet 5e-7 to 1.2e-5 against 1e-9), the round-off of products with "
                 "K, whose entries cancel where the structure moves rigidly.  Evaluated element "
                 "by element they are exact to the round-off of ∇u (PneuNet 5e-10 to 2.4e-9, "
-                "tests/physics/test_linear_fast.py).  Where the time goes at 120 x 80 (one "
-                "thread, cProfile, new designs): the two factorisations (Darcy and mechanics) "
-                "0.12 s, λᵀ∂R/∂p by automatic differentiation 0.08 s, the residual and ∂SE/∂u "
-                "applications 0.09 s, the ∂C/∂ρ evaluation 0.08 s, of 0.6 s per evaluation; "
-                "scipy's whole evaluation takes 0.3 s.  The aim of 2x is not met.")
+                "tests/physics/test_linear_fast.py).  Where the time goes: the section after "
+                "this block (a profile, measured separately).")
     tol = 1e-2
     if quick:
         ref, orows, picks = P.order_study(levels=(30,), fine=60, repeat=1, tol=tol)
