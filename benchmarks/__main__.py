@@ -118,8 +118,8 @@ def run_peer(quick):
     if quick:
         ref, orows, picks = P.order_study(levels=(30,), fine=60, repeat=1, tol=tol)
     else:
-        ref, orows, picks = P.order_study(levels=(30, 60, 120), fine=240, repeat=3, tol=tol,
-                                          max_dofs=150_000)
+        ref, orows, picks = P.order_study(levels=(30, 60, 120, 240), fine=480, repeat=3,
+                                          tol=tol, max_dofs=260_000)
     text += ["", "### Same accuracy with higher order",
              "", "The physical pa-inverter (0.2 x 0.1 m, plane stress, E1 = 1, P_in = 1, "
              "Δs = 0.01 m, no filter, no projection) with a fixed piecewise-constant design on "

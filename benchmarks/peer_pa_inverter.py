@@ -349,6 +349,18 @@ def order_markdown(ref, rows, picks, tol):
     if missing:
         out.append(f"- no mesh of order {', '.join(map(str, missing))} in the study is within "
                    f"{tol:.0e} of the fine Q1 objective")
+    # how far each order is from convergence: the change between its two finest meshes
+    steps = []
+    for k in (1, 2, 3):
+        seq = sorted((r for r in rows + ([dict(ref, order=1)] if k == 1 else [])
+                      if r["order"] == k), key=lambda r: r["dofs"])
+        if len(seq) >= 2:
+            a, b = seq[-2], seq[-1]
+            steps.append(f"order {k} {a['mesh']} → {b['mesh']}: "
+                         f"{abs(b['f'] - a['f']) / abs(b['f']):.1%}")
+    if steps:
+        out.append("- change of the objective between the two finest meshes of each order: "
+                   + "; ".join(steps))
     for k in (2, 3):
         ok = [r for r in rows if r["order"] == k and r is not best
               and abs(r["f"] - best["f"]) / abs(best["f"]) <= e_ref]
