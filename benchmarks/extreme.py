@@ -375,7 +375,7 @@ def command_of(folder: Path) -> str:
     for key, val in info["params"].items():
         if ref.get(key) == val:
             continue
-        if key == "order" and val == (ref["order"] or case.order_for(info["params"]["model"])):
+        if key == "order" and val == case.order_for(info["params"]["model"]):
             continue  # the case's order for the run's model
         if key in ("model", "load", "maxh", "order", "nelx", "nely", "iterations"):
             args += [f"--{key}", f"{val:g}" if isinstance(val, float) else str(val)]

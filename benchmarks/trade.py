@@ -155,7 +155,6 @@ def study(quick=False, repeat=3, log=print, cases=None, models=None):
     results, failed = [], []
     for case_name, (case_models, grid, levels, extra) in plan.items():
         case = get_case(case_name)
-        defaults = case.defaults
         design = fixed_design(case_name, grid, 8 if quick else DESIGN_ITERATIONS)
         for model in models or case_models:
             rows = []
@@ -172,8 +171,7 @@ def study(quick=False, repeat=3, log=print, cases=None, models=None):
                         log(f"  trade {case_name} {model} maxh={maxh} order={order}: {err}")
                         failed.append((model, maxh, order, str(err)))
                         continue
-                    r["default"] = (maxh == defaults.maxh
-                                    and order == (defaults.order or case.order_for(model)))
+                    r["default"] = maxh == case.defaults.maxh and order == case.order_for(model)
                     rows.append(r)
                     log(f"  trade {case_name} {model} maxh={maxh} order={order}: "
                         f"{r['dofs']} dofs, {r['time']:.3f} s, f={r['f']:.8g}")

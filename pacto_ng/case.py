@@ -86,8 +86,9 @@ class Case:
     model_orders: dict = field(default_factory=dict)
 
     def order_for(self, model: str) -> int:
-        """The case's displacement order for ``model`` (1 unless ``model_orders`` says)."""
-        return int(self.model_orders.get(model, 1))
+        """The case's displacement order for ``model``: its defaults' order if they fix one,
+        else ``model_orders`` (1 for a model it does not name)."""
+        return int(self.defaults.order or self.model_orders.get(model, 1))
 
     def resolve(self, params: Parameters) -> Parameters:
         """``params`` with ``order`` = 0 replaced by the case's order for its model."""

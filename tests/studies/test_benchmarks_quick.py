@@ -1,6 +1,7 @@
 """The benchmark studies in their ``--quick`` mode (the CI smoke run of ``python -m benchmarks
 all``): every study runs and writes its block of the report, and the peer study's two
 implementations (ours and the numpy/scipy one) agree on the objective and the gradient."""
+import os
 import re
 import subprocess
 import sys
@@ -13,7 +14,7 @@ def test_benchmarks_all_quick(tmp_path):
     out = tmp_path / "benchmarks.md"
     r = subprocess.run([sys.executable, "-m", "benchmarks", "all", "--quick", "--out", str(out),
                         "--plots", str(tmp_path)], cwd=ROOT, capture_output=True, text=True,
-                       timeout=900, env={**__import__("os").environ, "PACTO_THREADS": "1"})
+                       timeout=900, env={**os.environ, "PACTO_THREADS": "1"})
     assert r.returncode == 0, r.stderr[-2000:]
     text = out.read_text()
     for name in ("peer", "trade", "stability", "profile"):
