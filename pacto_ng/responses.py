@@ -84,7 +84,9 @@ class StrainEnergy:
         self._quad = lin if (lin is not None and lin.quadratic) else None
         self._dfield = {}
         for f in mech.fields:
-            if self._quad is not None and f.name in lin._dC:
+            if not getattr(mech, "_energy_fields", {}).get(f.name, True):
+                self._dfield[f.name] = None  # the energy does not depend on it (the pressure)
+            elif self._quad is not None and f.name in lin._dC:
                 self._dfield[f.name] = lin.field_form(f.name, self.gfu, self.gfu, 0.5)
             else:
                 self._dfield[f.name] = FieldGradient(
@@ -111,7 +113,10 @@ class StrainEnergy:
         du.data = float(g) * self._du_vec
         out = [du]
         for f in self.mech.fields:
-            lf = self._dfield[f.name]  # a LinearForm or a FieldGradient
+            lf = self._dfield[f.name]  # a LinearForm, a FieldGradient or None (no dependence)
+            if lf is None:
+                out.append(None)
+                continue
             lf.Assemble()
             if f.space is self.mech.l2:
                 out.append(float(g) * lf.vec.FV().NumPy().copy())

@@ -107,12 +107,10 @@ def test_design_dependent_body_load_takes_the_symbolic_route(kind, order):
     _compare(mech, rng, elementwise=True, quadratic=True)
     mech.lam.vec.FV().NumPy()[:] = np.where(mech.free, rng.standard_normal(len(mech.free)), 0.0)
     mech._lin.prepare_fields()
-    for f in mech.fields:
-        fast = mech._sens[f.name]
-        fast.Assemble()
+    for f, g in zip(mech.fields, mech.backward(mech.lam.vec)):
         gen = _diff_form(mech.volume_density(mech.gfu).Diff(mech.gfu, mech.lam), f, mech.DX)
-        a, b = fast.vec.FV().NumPy(), gen.vec.FV().NumPy()
-        assert _rel(a, b) <= 1e-12, f.name
+        a = g if isinstance(g, np.ndarray) else g.FV().NumPy()
+        assert _rel(-a, gen.vec.FV().NumPy()) <= 1e-12, f.name
 
 
 def test_pressure_case_finite_differences_at_the_round_off_floor():
