@@ -80,7 +80,7 @@ def run_peer(quick):
     sizes = [(60, 40)] if quick else [(60, 40), (120, 80), (240, 160)]
     rows = []
     for nx, ny in sizes:
-        rows.append(P.compare(nx, ny, repeat=3))
+        rows.append(P.compare(nx, ny, repeat=5))
         print(f"  peer {nx}x{ny}: rel diff {rows[-1]['rel_f']:.1e}, scipy/ours "
               f"{rows[-1]['ratio']:.2f}", flush=True)
     bad = [r for r in rows if not (r["rel_f"] < 1e-8 and r["rel_grad"] < 1e-6)]
@@ -90,30 +90,25 @@ def run_peer(quick):
     if bad:
         text.append(f"**VALIDATION FAILED** for {', '.join(r['mesh'] for r in bad)}: the two "
                     "implementations disagree; the timings are meaningless there.")
-    text.append("Times are medians of 3 evaluations after a warm-up; the ratio > 1 means "
-                "ours is faster.  The scipy peer uses `splu` with the `MMD_AT_PLUS_A` "
-                "ordering (scipy has no sparse Cholesky), ours NGSolve's `sparsecholesky` "
-                "with a numeric refactorisation (`Update`) per evaluation.  Every evaluation "
-                "repeats the same design, so our warm-started forward pass finds the state "
-                "already in equilibrium and skips its Newton step (the tangent is still "
-                "assembled and factorised, for the adjoint); a new design costs one "
-                "solve and two matrix-vector products more (measured +5-15 %).")
+    text.append("Times are medians of 5 evaluations after a warm-up; the ratio > 1 means "
+                "ours is faster.  Each evaluation is on the other of two designs (the test "
+                "design and a 1 % perturbation of it) than the one before, as in an "
+                "optimisation, so every forward pass solves.  The scipy peer uses `splu` with "
+                "the `MMD_AT_PLUS_A` ordering (scipy has no sparse Cholesky), ours NGSolve's "
+                "`sparsecholesky` with a numeric refactorisation (`Update`) per evaluation.")
     text.append("")
     text.append("What the linear block does here (`_LinearSystem`, "
-                "pacto_ng/physics/mechanics.py): the tangent from the symbolic Hessian "
-                "C = ∂²(tφ)/∂G² evaluated once per element, the Darcy body load as a LinearForm "
-                "assembled once per design, the residual R(u) = K u - s f and ∂SE/∂u element by "
-                "element (`Apply`), SE as the integral of the energy density, ∂SE/∂ρ and "
-                "λᵀ∂R/∂ρ from ∂C/∂ρ, λᵀ∂R/∂p by automatic differentiation (`FieldGradient`).  "
-                "Until 2026-12-01 the pressure cases kept the slower `Variation` route "
-                "(automatic differentiation of the energy for the tangent; 1.16x the time per "
-                "evaluation at 120 x 80, one thread, new designs, median of 7 interleaved): with R = K u - s f and SE = ½ u·K_φ u "
-                "from the assembled matrix their finite-difference checks lost three to four "
-                "digits (PneuNet 5e-7 to 1.2e-5 against 1e-9), the round-off of products with "
-                "K, whose entries cancel where the structure moves rigidly.  Evaluated element "
-                "by element they are exact to the round-off of ∇u (PneuNet 5e-10 to 2.4e-9, "
-                "tests/physics/test_linear_fast.py).  Where the time goes: the section after "
-                "this block (a profile, measured separately).")
+                "pacto_ng/physics/mechanics.py): C = ∂²(tφ)/∂G² is found to be a modulus "
+                "times a fixed tensor per element (SIMP), so K and the Darcy matrix come from "
+                "element matrices computed once (pacto_ng/physics/scatter.py: a sparse product "
+                "per design, no integration), and so do ∂SE/∂ρ, λᵀ∂R/∂ρ and the Darcy "
+                "sensitivity; the Darcy load is a design-independent coupling matrix B (f = B p, "
+                "λᵀ∂R/∂p = -s Bᵀλ); the residual R(u) = K u - s f and ∂SE/∂u are evaluated "
+                "element by element (`Apply` of the symbolic form, exact to the round-off of "
+                "∇u where the structure moves rigidly; with products with the assembled K the "
+                "PneuNet's finite-difference checks lost three to four digits), SE is the "
+                "integral of the energy density.  Where the time goes: the section after this "
+                "block (a profile, measured separately).")
     tol = 1e-2
     if quick:
         ref, orows, picks = P.order_study(levels=(30,), fine=60, repeat=1, tol=tol)

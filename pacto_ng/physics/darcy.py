@@ -171,6 +171,19 @@ class DarcyPressure:
                        + self._dD * (self.gfp - self.p_out) * self.lam) * q0 * DX
         self._rhs = self.gfp.vec.CreateVector()
         self._ready = False
+        # A(ρ̄) = Σ_e K_e L_e + D_e M_e from precomputed element matrices (ElementMatrices):
+        # a sparse product per design instead of an assembly; the sensitivities from the same
+        # element matrices.  None (then the forms are assembled) if the check fails.
+        from .scatter import ElementMatrices
+
+        def set_coefficients(cs):
+            self.K.vec.FV().NumPy()[:] = cs[0]
+            self.D.vec.FV().NumPy()[:] = cs[1]
+
+        self._scatter = ElementMatrices.build(self.a, self.fes, set_coefficients, 2)
+        one = GridFunction(self.fes)
+        one.Set(1.0)
+        self._one = one.vec.FV().NumPy().copy()  # the constant 1 (p - p_out in the sensitivity)
 
     # -- validation --------------------------------------------------------------------------
     @staticmethod
@@ -217,11 +230,18 @@ class DarcyPressure:
             raise ValueError(f"{self.inputs[0]}: expected {self.l2.ndof} element values "
                              f"(got shape {rho.shape})")
         self.rho.vec.FV().NumPy()[:] = rho
-        self.K.vec.FV().NumPy()[:] = self.Kv - (self.Kv - self.Ks) * heaviside_np(
-            rho, self.eta_k, self.beta_k)
-        self.D.vec.FV().NumPy()[:] = self._drain * heaviside_np(rho, self.eta_h, self.beta_h)
-        self.a.Assemble()
-        self.f.Assemble()
+        Kvals = self.Kv - (self.Kv - self.Ks) * heaviside_np(rho, self.eta_k, self.beta_k)
+        Dvals = self._drain * heaviside_np(rho, self.eta_h, self.beta_h)
+        self.K.vec.FV().NumPy()[:] = Kvals
+        self.D.vec.FV().NumPy()[:] = Dvals
+        if self._scatter is not None:
+            self._scatter.assemble([Kvals, Dvals])
+        else:
+            self.a.Assemble()
+        if self.p_out == 0.0:
+            self.f.vec[:] = 0.0  # ∫ D p_out q = 0
+        else:
+            self.f.Assemble()
         if self._inv is None:
             self._inv = self.a.mat.Inverse(self.fes.FreeDofs(), inverse=self.inverse_type)
         else:
@@ -253,10 +273,17 @@ class DarcyPressure:
             return (np.zeros(self.l2.ndof),)
         self.lam.vec.data = self.adjoint(grad_output)
         rho = self.rho.vec.FV().NumPy()
-        self._dK.vec.FV().NumPy()[:] = -(self.Kv - self.Ks) * heaviside_deriv_np(
-            rho, self.eta_k, self.beta_k)
-        self._dD.vec.FV().NumPy()[:] = self._drain * heaviside_deriv_np(rho, self.eta_h,
-                                                                         self.beta_h)
+        dK = -(self.Kv - self.Ks) * heaviside_deriv_np(rho, self.eta_k, self.beta_k)
+        dD = self._drain * heaviside_deriv_np(rho, self.eta_h, self.beta_h)
+        if self._scatter is not None:
+            lam = self.lam.vec.FV().NumPy()
+            p = self.gfp.vec.FV().NumPy()
+            qK, qD = self._scatter.quadratic(lam, p)
+            if self.p_out != 0.0:
+                _, qD = self._scatter.quadratic(lam, p - self.p_out * self._one)
+            return (-(dK * qK + dD * qD),)
+        self._dK.vec.FV().NumPy()[:] = dK
+        self._dD.vec.FV().NumPy()[:] = dD
         self._sens.Assemble()
         return (-self._sens.vec.FV().NumPy().copy(),)
 

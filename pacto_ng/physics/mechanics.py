@@ -239,6 +239,7 @@ class _LinearSystem:
                              VOL, IntegrationRule)
 
         self.mech = mech
+        self._Ku, self._Ku_at = None, None  # K u of the last residual and (version, u) of it
         mesh, fes, DX = mech.mesh, mech.fes, mech.DX
         d = self.d = mesh.dim
         dd = d * d
@@ -304,6 +305,55 @@ class _LinearSystem:
                 if f.space is mech.l2:
                     self._dC[f.name] = (self.C.Diff(f.gf, mech.one).Compile(),
                                         GridFunction(self.l2C))
+        # C = g(fields) C1 (one modulus times a fixed tensor per element, e.g. SIMP): the matrix
+        # from precomputed element matrices (ElementMatrices), g from the energy at a fixed G
+        self.scatter = None
+        if self.quadratic:
+            self._setup_scatter(mech)
+
+    def _setup_scatter(self, mech, tol=1e-12):
+        """Use :class:`~pacto_ng.physics.scatter.ElementMatrices` when ``C = g(fields) C1`` per
+        element, checked on two random states of the fields (restored afterwards):
+        ``C(state 2) = (φ(G*; state 2) / φ(G*; state 1)) C(state 1)`` with the energy ``φ`` at a
+        fixed ``G*``.  Then per design only ``g`` and ``∂g/∂field`` are evaluated (one CF at
+        the centroids) instead of the 16 entries of ``C`` and of every ``∂C/∂field``."""
+        from ngsolve import CF
+
+        from .scatter import ElementMatrices
+
+        d = self.d
+        ne = mech.mesh.ne
+        names = list(self._dC)
+        G = CF(tuple(0.1 * (k + 1) for k in range(d * d)), dims=(d, d))
+        phi = mech.thickness * mech._energy(G, mech.coeffs)
+        gcf = CF((phi,) + tuple(phi.Diff(mech.coeffs[n], mech.one) for n in names)).Compile()
+        rng = np.random.default_rng(1357)
+        saved = [f.gf.vec.FV().NumPy().copy() for f in mech.fields]
+        try:
+            states = []
+            for _ in range(2):
+                _random_fields(mech, rng)
+                states.append((np.asarray(self.C(self._centroids)).reshape(ne, -1),
+                               np.asarray(gcf(self._centroids)).reshape(ne, -1)[:, 0]))
+            (c1, phi1), (c2, phi2) = states
+            if not (np.all(np.isfinite(c1)) and np.all(phi1 > 0)):
+                return
+            g = phi2 / phi1
+            if not np.max(np.abs(c2 - g[:, None] * c1)) <= tol * float(np.max(np.abs(c2))):
+                return
+            gfc = self.gfC.vec.FV().NumPy()
+            setc = lambda cs: gfc.__setitem__(slice(None), (cs[0][:, None] * c1).ravel())
+            scatter = ElementMatrices.build(self.a, mech.fes, setc, 1)
+        except Exception:
+            return
+        finally:
+            for f, v in zip(mech.fields, saved):
+                f.gf.vec.FV().NumPy()[:] = v
+        if scatter is None:
+            return
+        self.scatter, self._gcf, self._C1, self._phi1 = scatter, gcf, c1, phi1
+        self._names = names
+        self._g = self._dg = None
 
     @staticmethod
     def _check(Cs, phis, Gs, mesh, mech, tol=1e-12):
@@ -348,9 +398,16 @@ class _LinearSystem:
         """Assemble ``K`` and ``f`` for the current fields (once per design)."""
         if not self.stale:
             return
-        if self.C is not None:
-            self.gfC.vec.FV().NumPy()[:] = np.asarray(self.C(self._centroids)).ravel()
-        self.a.Assemble()
+        if self.scatter is not None:
+            vals = np.asarray(self._gcf(self._centroids)).reshape(len(self._phi1), -1)
+            self._g = vals[:, 0] / self._phi1
+            self._dg = vals[:, 1:] / self._phi1[:, None]
+            self.gfC.vec.FV().NumPy()[:] = (self._g[:, None] * self._C1).ravel()
+            self.scatter.assemble([self._g])
+        else:
+            if self.C is not None:
+                self.gfC.vec.FV().NumPy()[:] = np.asarray(self.C(self._centroids)).ravel()
+            self.a.Assemble()
         if self._coupling is not None:
             self.f.vec.data = self._fpoints + self._coupling.load()
         elif self.has_load:
@@ -367,6 +424,11 @@ class _LinearSystem:
         # exact to round-off of ∇u (measured on a PneuNet design: K u gave Newton a residual
         # floor whose noise reached SE at 4e-11 and the finite differences at 1e-5)
         self.a.Apply(vec, out)
+        # K u of this state, for energy_gradient (Newton's last residual is at the solution)
+        if self._Ku is None:
+            self._Ku = out.CreateVector()
+        self._Ku.data = out
+        self._Ku_at = (self.version, vec.FV().NumPy().copy())
         out.data -= load * self.f.vec
 
     def load_norm(self):
@@ -377,7 +439,11 @@ class _LinearSystem:
     def energy_gradient(self, vec, out):
         """``∂/∂u t∫φ(∇u) = K u - K_springs u`` (element by element, as :meth:`residual`)."""
         self.assemble()
-        self.a.Apply(vec, out)
+        at = self._Ku_at
+        if at is not None and at[0] == self.version and np.array_equal(at[1], vec.FV().NumPy()):
+            out.data = self._Ku  # the residual's K u at this state (the same Apply)
+        else:
+            self.a.Apply(vec, out)
         if self.springs is not None:
             out.data -= self.springs.mat * vec
 
@@ -387,6 +453,8 @@ class _LinearSystem:
         from ngsolve import Grad, LinearForm
 
         m, dd = self.mech, self.d * self.d
+        if self.scatter is not None and extra is None:
+            return _ScatterFieldForm(self, name, gu, gw, factor)
         dC = self._dC[name][1].Reshape((dd, dd))
         cf = factor * ((dC * Grad(gu).Reshape((dd,))) * Grad(gw).Reshape((dd,)))
         lf = LinearForm(m.l2)
@@ -400,9 +468,27 @@ class _LinearSystem:
         self.assemble()
         if self._dC_version == self.version:
             return
+        if self.scatter is not None:  # ∂g/∂field came with g (assemble)
+            self._dC_version = self.version
+            return
         for cf, gf in self._dC.values():
             gf.vec.FV().NumPy()[:] = np.asarray(cf(self._centroids)).ravel()
         self._dC_version = self.version
+
+
+class _ScatterFieldForm:
+    """``factor ∫ (∂C/∂field ∇gu) : ∇gw q dΩ`` per element as ``factor ∂g/∂field · gw_eᵀ K1_e gu_e``
+    (element matrices of :class:`~pacto_ng.physics.scatter.ElementMatrices`); used like the
+    LinearForm it replaces: ``Assemble()``, then ``vec``."""
+
+    def __init__(self, lin, name, gu, gw, factor):
+        self.lin, self.j, self.gu, self.gw, self.factor = lin, lin._names.index(name), gu, gw, factor
+        self.vec = lin.mech.one.vec.CreateVector()
+
+    def Assemble(self):
+        lin = self.lin
+        q = lin.scatter.quadratic(self.gw.vec.FV().NumPy(), self.gu.vec.FV().NumPy())[0]
+        self.vec.FV().NumPy()[:] = self.factor * lin._dg[:, self.j] * q
 
 
 @dataclass
@@ -574,7 +660,7 @@ class Mechanics:
             elif self._lin is not None and f.name in self._lin._dC:
                 # λᵀ ∂R/∂ρ = ∫ (∂C/∂ρ ∇u) : ∇λ - s t ∂(b·λ)/∂ρ (quadratic energy, b·u linear)
                 extra = None
-                if body is not None:
+                if body is not None and self._coupling is None:
                     extra = (-self.load * self.thickness * body(self.lam, self.coeffs)).Diff(
                         f.gf, self.one)
                 self._sens[f.name] = self._lin.field_form(f.name, self.gfu, self.lam, 1.0, extra)
@@ -677,6 +763,19 @@ class Mechanics:
         self.a.Apply(vec, out)
         if self._fbody is not None:
             out.data -= load * self._body_load()
+
+    def predictor_residual(self, vec, out, load):
+        """``K u - s f`` with the assembled ``K`` (linear systems; one sparse product): Newton's
+        first residual, from which the correction is computed.  Its round-off (products with
+        K cancel where the structure moves rigidly) is corrected by the next iteration, whose
+        convergence test uses :meth:`residual` (element by element)."""
+        if self._lin is None:
+            self.residual(vec, out, load)
+            return
+        self.load.Set(load)
+        self._lin.assemble()
+        out.data = self._lin.a.mat * vec
+        out.data -= load * self._lin.f.vec
 
     def _body_load(self):
         """The body-load vector ``t ∫ b·v dΩ`` of the current fields (assembled once per design)."""

@@ -1,0 +1,147 @@
+"""Sparse matrices that are linear in element-wise coefficients, from precomputed element matrices.
+
+A bilinear form whose integrand is ``Σ_k c_k(e) a_k(u, v)`` with element-wise constant
+coefficients ``c_k`` (SIMP: ``E(ρ̄_e)`` times the unit-modulus elasticity; Darcy: ``K(ρ̄_e)``
+times the Laplacian plus ``D(ρ̄_e)`` times the mass) has the matrix
+
+    ``A(c) = A_0 + Σ_k Σ_e c_k(e) A_{k,e}``,
+
+with fixed element matrices ``A_{k,e}`` and a constant part ``A_0`` (springs).  The values of
+``A`` (in the storage order of NGSolve's sparse matrix) are then ``v_0 + Σ_k S_k c_k`` with
+sparse ``S_k`` (one column per element) computed once; a new design costs a sparse product
+instead of a numerical integration (measured, 120 x 80 Q1 elasticity: 25 ms against 1 ms).
+The element quadratic forms the sensitivities need, ``x_eᵀ A_{k,e} y_e`` for every element,
+are ``S_kᵀ w`` with ``w`` the products ``x_i y_j`` of the stored entries.
+
+``S_k`` is found by assembling the form itself with ``c_k`` the indicator of a set of elements
+that share no vertex (a colouring): every stored entry then belongs to one element of the set.
+The result is checked against a direct assembly with random coefficients before it is used.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+
+def element_colours(mesh) -> np.ndarray:
+    """A colour per volume element such that elements of one colour share no vertex (greedy)."""
+    from ngsolve import VOL
+
+    verts = [[v.nr for v in el.vertices] for el in mesh.Elements(VOL)]
+    ne = len(verts)
+    lens = np.fromiter((len(v) for v in verts), int, ne)
+    E = sp.csr_matrix((np.ones(lens.sum()), (np.repeat(np.arange(ne), lens),
+                                            np.concatenate(verts))), shape=(ne, mesh.nv))
+    adj = (E @ E.T).tocsr()
+    colour = np.full(ne, -1)
+    ip, ind = adj.indptr, adj.indices
+    for e in range(ne):
+        used = set(colour[ind[ip[e]:ip[e + 1]]].tolist())
+        c = 0
+        while c in used:
+            c += 1
+        colour[e] = c
+    return colour
+
+
+def element_dofs(fes):
+    """``(dofs, elements)``: the dof numbers of every volume element, flattened, and the element
+    each belongs to."""
+    from ngsolve import VOL, ElementId
+
+    ne = fes.mesh.ne
+    per = [np.asarray(fes.GetDofNrs(ElementId(VOL, e)), dtype=np.int64) for e in range(ne)]
+    per = [d[d >= 0] for d in per]
+    return (np.concatenate(per), np.repeat(np.arange(ne), [len(d) for d in per]),
+            max(len(d) for d in per))
+
+
+class ElementMatrices:
+    """``form.mat = A_0 + Σ_k Σ_e c_k(e) A_{k,e}`` for element-wise coefficients ``c_k``.
+
+    Parameters
+    ----------
+    form : ngsolve.BilinearForm
+        The form; its matrix is written in place by :meth:`assemble`.
+    set_coefficients : callable ``(list of nterms arrays of length ne) -> None``
+        Sets the form's coefficient fields so that its integrand is ``Σ_k c_k a_k``.
+    nterms : int
+    max_entries : int
+        Above this many entries of the ``S_k`` together, :meth:`build` returns None (the memory
+        of high orders on fine meshes), and the form is assembled as before.
+    """
+
+    def __init__(self, form, values, v0, rows, cols, S, lower):
+        self.form, self.values, self.v0 = form, values, v0
+        self.rows, self.cols, self.S, self.lower = rows, cols, S, lower
+        self._off = rows != cols
+
+    @classmethod
+    def build(cls, form, fes, set_coefficients, nterms, *, max_entries=40_000_000,
+              tol=1e-12, seed=8642):
+        mesh = fes.mesh
+        ne = mesh.ne
+        dofs, owners, nmax = element_dofs(fes)
+        if nterms * ne * nmax * nmax > max_entries:
+            return None
+        zero = [np.zeros(ne) for _ in range(nterms)]
+        set_coefficients(zero)
+        form.Assemble()
+        mat = form.mat
+        values = mat.AsVector().FV().NumPy()  # a view: writing it writes the matrix
+        v0 = values.copy()
+        _, ind, ip = mat.CSR()  # (values, column indices, row pointers), as scipy's
+        ip, cols = np.array(ip, dtype=np.int64), np.array(ind, dtype=np.int64)
+        rows = np.repeat(np.arange(len(ip) - 1), np.diff(ip))
+        if len(rows) != len(values):
+            return None
+        lower = bool(np.all(cols <= rows))  # symmetric storage: the lower triangle only
+        colour = element_colours(mesh)
+        S = []
+        for k in range(nterms):
+            r_, c_, d_ = [], [], []
+            for col in range(colour.max() + 1):
+                sel = colour[owners] == col
+                owner = np.full(fes.ndof, -1)
+                owner[dofs[sel]] = owners[sel]
+                ind_c = [z.copy() for z in zero]
+                ind_c[k] = (colour == col).astype(float)
+                set_coefficients(ind_c)
+                form.Assemble()
+                dv = values - v0
+                mine = (owner[rows] >= 0) & (owner[rows] == owner[cols])
+                if np.any(dv[~mine] != 0.0):
+                    set_coefficients(zero)
+                    return None  # an entry no single element explains: not of this form
+                nz = np.flatnonzero(mine & (dv != 0.0))
+                r_.append(nz)
+                c_.append(owner[rows[nz]])
+                d_.append(dv[nz])
+            S.append(sp.csr_matrix((np.concatenate(d_), (np.concatenate(r_), np.concatenate(c_))),
+                                   shape=(len(values), ne)))
+        out = cls(form, values, v0, rows, cols, S, lower)
+        # the check: random coefficients, assembled by NGSolve and by the scatter
+        rng = np.random.default_rng(seed)
+        c = [rng.uniform(0.1, 1.0, ne) for _ in range(nterms)]
+        set_coefficients(c)
+        form.Assemble()
+        ref = values.copy()
+        out.assemble(c)
+        scale = max(float(np.max(np.abs(ref))), 1e-300)
+        if not np.max(np.abs(values - ref)) <= tol * scale:
+            return None
+        return out
+
+    def assemble(self, coeffs):
+        """Write ``A(c)`` into the form's matrix."""
+        v = self.v0.copy()
+        for S, c in zip(self.S, coeffs):
+            v += S @ c
+        self.values[:] = v
+
+    def quadratic(self, x, y):
+        """``[x_eᵀ A_{k,e} y_e for every element e]`` for each term ``k`` (numpy dof vectors)."""
+        w = x[self.rows] * y[self.cols]
+        if self.lower:
+            w[self._off] += x[self.cols[self._off]] * y[self.rows[self._off]]
+        return [S.T @ w for S in self.S]

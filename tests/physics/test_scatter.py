@@ -1,0 +1,106 @@
+"""Matrices from precomputed element matrices (:mod:`pacto_ng.physics.scatter`) against
+NGSolve's assembly of the same forms, and where each block uses them."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from pacto_ng.interpolation import simp_cf
+from pacto_ng.physics.darcy import DarcyPressure
+from pacto_ng.physics.loads import PointLoad, Spring
+from pacto_ng.physics.materials import linear_energy
+from pacto_ng.physics.mechanics import Mechanics, Supports
+from pacto_ng.physics.scatter import ElementMatrices, element_colours
+from tests.small_cases import small_pa_mesh
+
+
+def _csr(mat):
+    r, c, v = mat.COO()
+    return sp.csr_matrix((np.array(v), (np.array(r), np.array(c))), shape=(mat.height, mat.width))
+
+
+@pytest.mark.parametrize("kind", ["trig", "quads"])
+def test_colours_share_no_vertex(kind):
+    from ngsolve import VOL
+
+    mesh = small_pa_mesh(kind)
+    colour = element_colours(mesh)
+    seen = {}
+    for e, el in enumerate(mesh.Elements(VOL)):
+        for v in el.vertices:
+            assert (v.nr, colour[e]) not in seen, "two elements of one colour share a vertex"
+            seen[(v.nr, colour[e])] = e
+    assert colour.min() == 0 and colour.max() < 20
+
+
+@pytest.mark.parametrize("kind,order", [("trig", 1), ("trig", 3), ("quads", 2)])
+def test_darcy_matrix_and_sensitivity_equal_the_assembled_forms(kind, order):
+    mesh = small_pa_mesh(kind)
+    dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e4, p_out=300.0, order=order)
+    assert dar._scatter is not None
+    rng = np.random.default_rng(5)
+    k, d = rng.uniform(1e-7, 1.0, mesh.ne), rng.uniform(0.0, 50.0, mesh.ne)
+    dar._scatter.assemble([k, d])
+    A = _csr(dar.a.mat).copy()
+    dar.K.vec.FV().NumPy()[:] = k
+    dar.D.vec.FV().NumPy()[:] = d
+    dar.a.Assemble()
+    A_ref = _csr(dar.a.mat)
+    assert abs(A - A_ref).max() <= 1e-13 * abs(A_ref).max()
+    # the element quadratic forms against the LinearForm sensitivity (dK = 1, dD = 0 and back)
+    x, y = rng.standard_normal(dar.fes.ndof), rng.standard_normal(dar.fes.ndof)
+    qK, qD = dar._scatter.quadratic(x, y)
+    dar.gfp.vec.FV().NumPy()[:] = y + dar.p_out * dar._one  # (p - p_out) = y
+    dar.lam.vec.FV().NumPy()[:] = x
+    for dk, dd, q in ((1.0, 0.0, qK), (0.0, 1.0, qD)):
+        dar._dK.vec.FV().NumPy()[:] = dk
+        dar._dD.vec.FV().NumPy()[:] = dd
+        dar._sens.Assemble()
+        ref = dar._sens.vec.FV().NumPy()
+        assert np.max(np.abs(q - ref)) <= 1e-12 * np.max(np.abs(ref))
+
+
+def _mech(kind, order, energy):
+    mesh = small_pa_mesh(kind)
+    mech = Mechanics(mesh, order=order, energy=energy, supports=Supports(clamp=("fixed",)),
+                     loads=(PointLoad("output", (0.0, -1.0)),),
+                     springs=(Spring("output", 1e4, (1.0, 0.0)),), thickness=1e-3, linear=True)
+    return mech, mesh
+
+
+@pytest.mark.parametrize("kind,order", [("trig", 1), ("quads", 2)])
+def test_simp_stiffness_from_element_matrices(kind, order):
+    """SIMP: C = E(ρ̄) C1, so the tangent comes from the element matrices; equal to the
+    symbolic form's assembly, springs included."""
+    energy = lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4, "stress")
+    mech, mesh = _mech(kind, order, energy)
+    lin = mech._lin
+    assert lin.scatter is not None
+    rho = np.random.default_rng(2).uniform(0.01, 1.0, mesh.ne)
+    mech.set_fields(rho)
+    lin.assemble()
+    K = _csr(lin.a.mat).copy()
+    lin.gfC.vec.FV().NumPy()[:] = np.asarray(lin.C(lin._centroids)).ravel()
+    lin.a.Assemble()
+    K_ref = _csr(lin.a.mat)
+    assert abs(K - K_ref).max() <= 1e-12 * abs(K_ref).max()
+
+
+def test_not_proportional_stiffness_keeps_the_assembly():
+    """ν depending on ρ̄: C(ρ̄) is not a multiple of one tensor, so no element matrices."""
+    energy = lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0),
+                                        0.2 + 0.2 * c["rho_bar"], "stress")
+    mech, _ = _mech("trig", 1, energy)
+    assert mech._lin is not None and mech._lin.elementwise
+    assert mech._lin.scatter is None
+
+
+def test_element_matrix_budget_falls_back():
+    """Above ``max_entries`` the build declines (and the form is assembled as before)."""
+    mesh = small_pa_mesh("trig")
+    dar = DarcyPressure(mesh, inlet="inlet", zero="zero", order=1)
+
+    def setc(cs):
+        dar.K.vec.FV().NumPy()[:] = cs[0]
+        dar.D.vec.FV().NumPy()[:] = cs[1]
+
+    assert ElementMatrices.build(dar.a, dar.fes, setc, 2, max_entries=10) is None
