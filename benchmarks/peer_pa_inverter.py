@@ -257,12 +257,12 @@ def compare(nelx, nely, repeat=3):
 
 
 # ------------------------------------------------------------------------------------------
-def _physical_params(nelx, nely, order):
+def _physical_params(nelx, nely, order, k_out=0.1):
     """The physical pa-inverter domain (0.2 x 0.1 m, plane stress, E1 = 1) on a structured mesh,
     no filter, no projection (the design is exactly the same function on every mesh)."""
     return {"nelx": str(nelx), "nely": str(nely), "plane": "stress", "E1": "1", "E0": "1e-6",
             "nu": "0.3", "thickness": "1", "load": "1", "delta_s": "0.01", "filter": "none",
-            "beta": "0", "beta_max": "0", "penal": "3", "penal_start": "0", "k_out": "0.1",
+            "beta": "0", "beta_max": "0", "penal": "3", "penal_start": "0", "k_out": str(k_out),
             "order": str(order)}
 
 
@@ -274,14 +274,14 @@ def coarse_design(cen, L=0.2, H=0.1, nx=30, ny=15):
     return test_design(c, L, H)
 
 
-def order_point(nelx, nely, order, repeat=3):
+def order_point(nelx, nely, order, repeat=3, k_out=0.1):
     from ngsolve import SetNumThreads, TaskManager
 
     from pacto_ng.case import build_problem, get_case
 
-    SetNumThreads(2)
+    SetNumThreads(1)  # as the scipy peer (one thread); 2 threads are slower at 2e4-3e4 dofs here
     case = get_case("pa-inverter")
-    params = case.defaults.with_overrides(_physical_params(nelx, nely, order))
+    params = case.defaults.with_overrides(_physical_params(nelx, nely, order, k_out))
     with TaskManager():
         problem = build_problem(case, params)
         cen = problem.field.centroids()[problem.field.design_index]
@@ -293,9 +293,9 @@ def order_point(nelx, nely, order, repeat=3):
 
 
 def order_study(levels=(30, 60, 120, 240), fine=480, orders=(1, 2, 3), tol=1e-2, repeat=3,
-                max_dofs=400_000):
+                max_dofs=400_000, k_out=0.1):
     """Objective of a fixed design per (mesh, order) against the finest Q1 mesh."""
-    ref = order_point(fine, fine // 2, 1, repeat=1)
+    ref = order_point(fine, fine // 2, 1, repeat=1, k_out=k_out)
     rows = []
     for k in orders:
         for n in levels:
@@ -304,7 +304,7 @@ def order_study(levels=(30, 60, 120, 240), fine=480, orders=(1, 2, 3), tol=1e-2,
             est = 3 * (k * n + 1) * (k * n // 2 + 1)
             if est > max_dofs:
                 continue
-            r = order_point(n, n // 2, k, repeat)
+            r = order_point(n, n // 2, k, repeat, k_out=k_out)
             r["err"] = abs(r["f"] - ref["f"]) / abs(ref["f"])
             rows.append(r)
     picks = {}
@@ -313,6 +313,85 @@ def order_study(levels=(30, 60, 120, 240), fine=480, orders=(1, 2, 3), tol=1e-2,
         if ok:
             picks[k] = min(ok, key=lambda r: r["time"])
     return ref, rows, picks
+
+
+def peer_time(nelx, nely, repeat=3):
+    """Median time of one evaluation of the scipy peer on an nelx x nely Q1 mesh (the same
+    matrix sizes as our Q1 run on that mesh; unit elements)."""
+    peer = ScipyPAInverter(nelx, nely)
+    I, J = np.meshgrid(np.arange(nelx), np.arange(nely))
+    cen = np.stack([I.ravel() + 0.5, J.ravel() + 0.5], 1)[peer.design]
+    return _median_time(peer.evaluate, _designs(test_design(cen, nelx, nely)), repeat)
+
+
+def equal_accuracy(ref, rows, tols=(1e-3, 3e-4), repeat=3, peer=True):
+    """For each tolerance: the cheapest run of each order whose error against the best estimate
+    (the highest order on its finest mesh) is within it *on that mesh and every finer one of
+    the same order* (so that a lucky crossing of an oscillating sequence does not count); the
+    time of order 2 and 3 against our Q1 and against the scipy peer on the Q1 mesh."""
+    allrows = rows + [dict(ref, order=1)]
+    best = max(rows, key=lambda r: (r["order"], r["dofs"]))
+    err = lambda r: abs(r["f"] - best["f"]) / abs(best["f"])
+    out = []
+    for tol in tols:
+        picks = {}
+        for k in (1, 2, 3):
+            seq = sorted((r for r in allrows if r["order"] == k and r is not best),
+                         key=lambda r: r["dofs"])
+            for i, r in enumerate(seq):
+                if all(err(q) <= tol for q in seq[i:]):
+                    picks[k] = r
+                    break
+        entry = {"tol": tol, "picks": picks, "best": best}
+        q1 = picks.get(1)
+        if q1 is not None and peer:
+            entry["peer_time"] = peer_time(q1["nelx"], q1["nelx"] // 2, repeat)
+        out.append(entry)
+    return out
+
+
+def decrement_line(ref, rows, order=1):
+    """The objective's change per halving of h for one order: a change that stays the same from
+    one halving to the next is a logarithmic divergence, one that halves (or faster) converges."""
+    seq = sorted((r for r in rows + [dict(ref, order=1)] if r["order"] == order),
+                 key=lambda r: r["dofs"])
+    d = [b["f"] - a["f"] for a, b in zip(seq, seq[1:])]
+    if len(d) < 2:
+        return ""
+    ratios = ", ".join(f"{b / a:.2f}" for a, b in zip(d, d[1:]) if a != 0)
+    return (f"- order {order}: change of the objective per halving of h "
+            f"{', '.join(f'{x:+.4g}' for x in d)} ({seq[0]['mesh']} → {seq[-1]['mesh']}); "
+            f"ratio of successive changes {ratios} (about 0.5 or less: converging; near 1: "
+            f"growing like log(1/h))")
+
+
+def equal_accuracy_markdown(entries):
+    out = []
+    for e in entries:
+        picks, q1 = e["picks"], e["picks"].get(1)
+        best = e["best"]
+        line = f"- within {e['tol']:.0e} of the best estimate (order {best['order']} on {best['mesh']}): "
+        parts = []
+        for k in (1, 2, 3):
+            r = picks.get(k)
+            parts.append(f"order {k}: " + ("none in the study" if r is None else
+                                           f"{r['mesh']}, {r['dofs']} dofs, {r['time']:.3f} s"))
+        line += "; ".join(parts)
+        if q1 is not None:
+            ratios = []
+            for k in (2, 3):
+                r = picks.get(k)
+                if r is None:
+                    continue
+                txt = f"order {k} is {q1['time'] / r['time']:.1f}x faster than our Q1"
+                if "peer_time" in e:
+                    txt += (f" and {e['peer_time'] / r['time']:.1f}x faster than the scipy Q1 "
+                            f"peer on {q1['mesh']} ({e['peer_time']:.3f} s)")
+                ratios.append(txt)
+            if ratios:
+                line += " — " + "; ".join(ratios)
+        out.append(line)
+    return "\n".join(out)
 
 
 # ------------------------------------------------------------------------------------------
@@ -329,7 +408,7 @@ def peer_markdown(rows):
     return "\n".join(out)
 
 
-def order_markdown(ref, rows, picks, tol):
+def order_markdown(ref, rows, picks, tol, fine_q1_lines=True):
     """Table of the order study.  Besides the error against the fine Q1 run, the difference
     from the best estimate (the highest order on its finest mesh): fine Q1 is itself only
     first-order accurate, so the question "which coarse P2/P3 run is as accurate as fine Q1"
@@ -349,14 +428,14 @@ def order_markdown(ref, rows, picks, tol):
                    f"{r['time']:.3f} |")
     out.append("")
     q1 = picks.get(1)
-    for k, r in sorted(picks.items()):
+    for k, r in sorted(picks.items() if fine_q1_lines else ()):
         line = (f"- cheapest order-{k} mesh within {tol:.0e} of the fine Q1 objective: "
                 f"{r['mesh']} ({r['dofs']} dofs, {r['time']:.3f} s")
         if q1 is not None and k != 1:
             line += f"; {q1['time'] / r['time']:.2f}x faster than the cheapest Q1 ({q1['mesh']})"
         out.append(line + ")")
     missing = [k for k in (1, 2, 3) if k not in picks]
-    if missing:
+    if missing and fine_q1_lines:
         out.append(f"- no mesh of order {', '.join(map(str, missing))} in the study is within "
                    f"{tol:.0e} of the fine Q1 objective")
     # how far each order is from convergence: the change between its two finest meshes
@@ -371,7 +450,7 @@ def order_markdown(ref, rows, picks, tol):
     if steps:
         out.append("- change of the objective between the two finest meshes of each order: "
                    + "; ".join(steps))
-    for k in (2, 3):
+    for k in (2, 3) if fine_q1_lines else ():
         ok = [r for r in rows if r["order"] == k and r is not best
               and abs(r["f"] - best["f"]) / abs(best["f"]) <= e_ref]
         if ok:
