@@ -32,7 +32,14 @@ fixed: ``Apply`` of a ``Variation`` form of ``L`` on the field's own space (auto
 differentiation in ρ).  The residual density is built once with the
 trial/test functions (residual, tangent) and once with ``(u, λ)`` as GridFunctions
 (sensitivity), so its field dependence is differentiated by NGSolve too.  ``residual_terms``
-must not depend on the fields (they are left out of ``∂R/∂ρ``).  The same quadrature rule is
+must not depend on the fields (they are left out of ``∂R/∂ρ``).
+
+Two shortcuts, each checked on random states when the block is built and used only where the
+check passes: a field that enters only through a body load linear in it (the Darcy pressure)
+gives the load as ``B p`` and ``λᵀ∂R/∂p = -s Bᵀλ`` with a design-independent matrix ``B``
+(:class:`_BodyCoupling`); and a linear energy whose ``C`` is a modulus times a fixed tensor per
+element (SIMP) gets ``K`` and its element sensitivities from element matrices computed once
+(:class:`~pacto_ng.physics.scatter.ElementMatrices`).  The same quadrature rule is
 pinned in the residual, tangent and sensitivity forms (see docs: a mismatch gives 1e-2 adjoint
 errors at order 2).
 """
