@@ -122,6 +122,16 @@ class FieldGradient:
         self.form.Apply(self.field.gf.vec, self.vec)
 
 
+def _save_fields(mech):
+    """Copies of the values of every field of ``mech`` (for :func:`_restore_fields`)."""
+    return [f.gf.vec.FV().NumPy().copy() for f in mech.fields]
+
+
+def _restore_fields(mech, saved):
+    for f, v in zip(mech.fields, saved):
+        f.gf.vec.FV().NumPy()[:] = v
+
+
 def _random_fields(mech, rng):
     """Random values for every field of ``mech`` (densities in [0.2, 1], others in [-1, 1])."""
     for f in mech.fields:
@@ -138,7 +148,7 @@ def _energy_depends_on(mech, name, tol=1e-14) -> bool:
     G = CF(tuple(0.05 * (k + 1) for k in range(d * d)), dims=(d, d))
     rng = np.random.default_rng(2468)
     field = next(f for f in mech.fields if f.name == name)
-    saved = [f.gf.vec.FV().NumPy().copy() for f in mech.fields]
+    saved = _save_fields(mech)
     try:
         pts = mech.mesh.MapToAllElements(mech.rules, VOL)
         cf = (mech.thickness * mech._energy(G, mech.coeffs)).Compile()
@@ -152,8 +162,7 @@ def _energy_depends_on(mech, name, tol=1e-14) -> bool:
     except Exception:
         return True  # cannot tell: treat as dependent (the general path)
     finally:
-        for f, v in zip(mech.fields, saved):
-            f.gf.vec.FV().NumPy()[:] = v
+        _restore_fields(mech, saved)
 
 
 class _BodyCoupling:
@@ -181,7 +190,7 @@ class _BodyCoupling:
 
         if field.space is mech.l2:
             return None
-        saved = [f.gf.vec.FV().NumPy().copy() for f in mech.fields]
+        saved = _save_fields(mech)
         try:
             c = dict(mech.coeffs)
             c[field.name] = field.space.TrialFunction()
@@ -205,8 +214,7 @@ class _BodyCoupling:
         except Exception:
             return None  # e.g. a body NGSolve cannot write as a bilinear form: the general path
         finally:
-            for f, v in zip(mech.fields, saved):
-                f.gf.vec.FV().NumPy()[:] = v
+            _restore_fields(mech, saved)
 
     def load(self):
         """``t ∫ b(v) dΩ`` for the field's current values: ``B p``."""
@@ -335,7 +343,7 @@ class _LinearSystem:
         phi = mech.thickness * mech._energy(G, mech.coeffs)
         gcf = CF((phi,) + tuple(phi.Diff(mech.coeffs[n], mech.one) for n in names)).Compile()
         rng = np.random.default_rng(1357)
-        saved = [f.gf.vec.FV().NumPy().copy() for f in mech.fields]
+        saved = _save_fields(mech)
         try:
             states = []
             for _ in range(2):
@@ -354,8 +362,7 @@ class _LinearSystem:
         except Exception:
             return
         finally:
-            for f, v in zip(mech.fields, saved):
-                f.gf.vec.FV().NumPy()[:] = v
+            _restore_fields(mech, saved)
         if scatter is None:
             return
         self.scatter, self._gcf, self._C1, self._phi1 = scatter, gcf, c1, phi1
@@ -373,7 +380,7 @@ class _LinearSystem:
         from ngsolve import L2, VOL, GridFunction
 
         rng = np.random.default_rng(12345)
-        saved = [f.gf.vec.FV().NumPy().copy() for f in mech.fields]
+        saved = _save_fields(mech)
         try:
             for f in mech.fields:
                 f.gf.vec.FV().NumPy()[:] = rng.uniform(0.2, 1.0, len(f.gf.vec))
@@ -398,8 +405,7 @@ class _LinearSystem:
         except Exception:
             return False, False, False
         finally:
-            for f, v in zip(mech.fields, saved):
-                f.gf.vec.FV().NumPy()[:] = v
+            _restore_fields(mech, saved)
 
     def assemble(self):
         """Assemble ``K`` and ``f`` for the current fields (once per design)."""
@@ -699,7 +705,7 @@ class Mechanics:
         from ngsolve import CF, VOL, GridFunction, Grad
 
         rng = np.random.default_rng(54321)
-        saved = [f.gf.vec.FV().NumPy().copy() for f in self.fields]
+        saved = _save_fields(self)
         try:
             for f in self.fields:
                 f.gf.vec.FV().NumPy()[:] = rng.uniform(0.2, 1.0, len(f.gf.vec))
@@ -715,8 +721,7 @@ class Mechanics:
         except Exception:
             return False
         finally:
-            for f, v in zip(self.fields, saved):
-                f.gf.vec.FV().NumPy()[:] = v
+            _restore_fields(self, saved)
 
     # -- the energy ------------------------------------------------------------------------
     def hot(self, cf):
