@@ -67,8 +67,9 @@ class ElementMatrices:
         Sets the form's coefficient fields so that its integrand is ``Σ_k c_k a_k``.
     nterms : int
     max_entries : int
-        Above this many entries of the ``S_k`` together, :meth:`build` returns None (the memory
-        of high orders on fine meshes), and the form is assembled as before.
+        Above this many entries of the ``S_k`` together (about 12 bytes each), :meth:`build`
+        returns None (the memory of high orders on fine meshes), and the form is assembled as
+        before.  The build costs one assembly per colour and term (about 4-12 colours).
     """
 
     def __init__(self, form, values, v0, rows, cols, S, lower):
@@ -77,7 +78,7 @@ class ElementMatrices:
         self._off = rows != cols
 
     @classmethod
-    def build(cls, form, fes, set_coefficients, nterms, *, max_entries=40_000_000,
+    def build(cls, form, fes, set_coefficients, nterms, *, max_entries=20_000_000,
               tol=1e-12, seed=8642):
         mesh = fes.mesh
         ne = mesh.ne
