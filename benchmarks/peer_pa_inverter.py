@@ -203,7 +203,8 @@ def _median_time(fn, designs, repeat):
     """Median time of ``fn(x)`` over ``repeat`` calls, each on the other of two designs than
     the call before (as in an optimisation: every evaluation is a new design, so a warm-started
     solve cannot find the state already in equilibrium); after one warm-up."""
-    fn(designs[1])  # warm-up (first factorisation, compilation)
+    fn(designs[1])  # warm-up: first factorisation, compilation, and (at the second design)
+    fn(designs[0])  # the element matrices of the linear path
     ts = []
     for k in range(repeat):
         x = designs[k % 2]

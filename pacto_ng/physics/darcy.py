@@ -171,16 +171,13 @@ class DarcyPressure:
                        + self._dD * (self.gfp - self.p_out) * self.lam) * q0 * DX
         self._rhs = self.gfp.vec.CreateVector()
         self._ready = False
-        # A(ρ̄) = Σ_e K_e L_e + D_e M_e from precomputed element matrices (ElementMatrices):
-        # a sparse product per design instead of an assembly; the sensitivities from the same
-        # element matrices.  None (then the forms are assembled) if the check fails.
-        from .scatter import ElementMatrices
-
-        def set_coefficients(cs):
-            self.K.vec.FV().NumPy()[:] = cs[0]
-            self.D.vec.FV().NumPy()[:] = cs[1]
-
-        self._scatter = ElementMatrices.build(self.a, self.fes, set_coefficients, 2)
+        # A(ρ̄) = Σ_e K_e L_e + D_e M_e from precomputed element matrices (ElementMatrices),
+        # built at the second design (a single analysis does not pay for them): a sparse
+        # product per design instead of an assembly; the sensitivities from the same element
+        # matrices.  None (then the forms are assembled) until then or if the check fails.
+        self._scatter = None
+        self._scatter_pending = True
+        self._designs = 0
         one = GridFunction(self.fes)
         one.Set(1.0)
         self._one = one.vec.FV().NumPy().copy()  # the constant 1 (p - p_out in the sensitivity)
@@ -232,6 +229,9 @@ class DarcyPressure:
         self.rho.vec.FV().NumPy()[:] = rho
         Kvals = self.Kv - (self.Kv - self.Ks) * heaviside_np(rho, self.eta_k, self.beta_k)
         Dvals = self._drain * heaviside_np(rho, self.eta_h, self.beta_h)
+        if self._scatter_pending and self._designs >= 1:
+            self._build_scatter()
+        self._designs += 1
         self.K.vec.FV().NumPy()[:] = Kvals
         self.D.vec.FV().NumPy()[:] = Dvals
         if self._scatter is not None:
@@ -288,6 +288,16 @@ class DarcyPressure:
         return (-self._sens.vec.FV().NumPy().copy(),)
 
     # -- helpers --------------------------------------------------------------------------------
+    def _build_scatter(self):
+        from .scatter import ElementMatrices
+
+        def set_coefficients(cs):
+            self.K.vec.FV().NumPy()[:] = cs[0]
+            self.D.vec.FV().NumPy()[:] = cs[1]
+
+        self._scatter_pending = False
+        self._scatter = ElementMatrices.build(self.a, self.fes, set_coefficients, 2)
+
     def field(self) -> Field:
         """The :class:`~pacto_ng.physics.mechanics.Field` through which ``p`` enters Mechanics."""
         return Field(self.output, self.fes)

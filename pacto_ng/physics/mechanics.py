@@ -320,21 +320,22 @@ class _LinearSystem:
                 if f.space is mech.l2:
                     self._dC[f.name] = (self.C.Diff(f.gf, mech.one).Compile(),
                                         GridFunction(self.l2C))
-        # C = g(fields) C1 (one modulus times a fixed tensor per element, e.g. SIMP): the matrix
-        # from precomputed element matrices (ElementMatrices), g from the energy at a fixed G
+        # C = g(fields) C1 (one modulus times a fixed tensor per element, e.g. SIMP): from the
+        # second design on, the matrix from precomputed element matrices (ElementMatrices; not
+        # for the first, so that a single analysis does not pay for building them), g from the
+        # energy at a fixed G
         self.scatter = None
+        self._separable = None
         if self.quadratic:
-            self._setup_scatter(mech)
+            self._check_separable(mech)
 
-    def _setup_scatter(self, mech, tol=1e-12):
-        """Use :class:`~pacto_ng.physics.scatter.ElementMatrices` when ``C = g(fields) C1`` per
-        element, checked on two random states of the fields (restored afterwards):
-        ``C(state 2) = (φ(G*; state 2) / φ(G*; state 1)) C(state 1)`` with the energy ``φ`` at a
-        fixed ``G*``.  Then per design only ``g`` and ``∂g/∂field`` are evaluated (one CF at
-        the centroids) instead of the 16 entries of ``C`` and of every ``∂C/∂field``."""
+    def _check_separable(self, mech, tol=1e-12):
+        """Whether ``C = g(fields) C1`` per element, checked on two random states of the fields
+        (restored afterwards): ``C(state 2) = (φ(G*; state 2) / φ(G*; state 1)) C(state 1)`` with
+        the energy ``φ`` at a fixed ``G*``.  Then :class:`~pacto_ng.physics.scatter.ElementMatrices`
+        can give ``K``, and per design only ``g`` and ``∂g/∂field`` are evaluated (one CF at the
+        centroids) instead of the 16 entries of ``C`` and of every ``∂C/∂field``."""
         from ngsolve import CF
-
-        from .scatter import ElementMatrices
 
         d = self.d
         ne = mech.mesh.ne
@@ -356,18 +357,26 @@ class _LinearSystem:
             g = phi2 / phi1
             if not np.max(np.abs(c2 - g[:, None] * c1)) <= tol * float(np.max(np.abs(c2))):
                 return
-            gfc = self.gfC.vec.FV().NumPy()
-            setc = lambda cs: gfc.__setitem__(slice(None), (cs[0][:, None] * c1).ravel())
-            scatter = ElementMatrices.build(self.a, mech.fes, setc, 1)
         except Exception:
             return
         finally:
             _restore_fields(mech, saved)
-        if scatter is None:
-            return
-        self.scatter, self._gcf, self._C1, self._phi1 = scatter, gcf, c1, phi1
-        self._names = names
+        self._separable = True
+        self._gcf, self._C1, self._phi1, self._names = gcf, c1, phi1, names
         self._g = self._dg = None
+
+    def _build_scatter(self):
+        """Build the element matrices (once; on failure the assembly stays symbolic)."""
+        from .scatter import ElementMatrices
+
+        self._separable = None
+        gfc = self.gfC.vec.FV().NumPy()
+        c1 = self._C1
+        setc = lambda cs: gfc.__setitem__(slice(None), (cs[0][:, None] * c1).ravel())
+        try:
+            self.scatter = ElementMatrices.build(self.a, self.mech.fes, setc, 1)
+        except Exception:
+            self.scatter = None
 
     @staticmethod
     def _check(Cs, phis, Gs, mesh, mech, tol=1e-12):
@@ -411,6 +420,8 @@ class _LinearSystem:
         """Assemble ``K`` and ``f`` for the current fields (once per design)."""
         if not self.stale:
             return
+        if self._separable and self.version >= 1:
+            self._build_scatter()  # a second design: from now on worth the element matrices
         if self.scatter is not None:
             vals = np.asarray(self._gcf(self._centroids)).reshape(len(self._phi1), -1)
             self._g = vals[:, 0] / self._phi1
@@ -466,14 +477,14 @@ class _LinearSystem:
         from ngsolve import Grad, LinearForm
 
         m, dd = self.mech, self.d * self.d
-        if self.scatter is not None and extra is None:
-            return _ScatterFieldForm(self, name, gu, gw, factor)
         dC = self._dC[name][1].Reshape((dd, dd))
         cf = factor * ((dC * Grad(gu).Reshape((dd,))) * Grad(gw).Reshape((dd,)))
         lf = LinearForm(m.l2)
         lf += cf * m.l2.TestFunction() * m.DX
         if extra is not None:
             lf += extra.Compile() * m.l2.TestFunction() * m.DX
+        if self._separable and extra is None:
+            return _FieldForm(self, name, gu, gw, factor, lf)
         return lf
 
     def prepare_fields(self):
@@ -489,19 +500,27 @@ class _LinearSystem:
         self._dC_version = self.version
 
 
-class _ScatterFieldForm:
-    """``factor ∫ (∂C/∂field ∇gu) : ∇gw q dΩ`` per element as ``factor ∂g/∂field · gw_eᵀ K1_e gu_e``
-    (element matrices of :class:`~pacto_ng.physics.scatter.ElementMatrices`); used like the
-    LinearForm it replaces: ``Assemble()``, then ``vec``."""
+class _FieldForm:
+    """``factor ∫ (∂C/∂field ∇gu) : ∇gw q dΩ`` per element: with the element matrices of
+    :class:`~pacto_ng.physics.scatter.ElementMatrices` (once built) as
+    ``factor ∂g/∂field · gw_eᵀ K1_e gu_e``, before that the LinearForm ``lf``.  Used like a
+    LinearForm: ``Assemble()``, then ``vec``."""
 
-    def __init__(self, lin, name, gu, gw, factor):
+    def __init__(self, lin, name, gu, gw, factor, lf):
         self.lin, self.j, self.gu, self.gw, self.factor = lin, lin._names.index(name), gu, gw, factor
-        self.vec = lin.mech.one.vec.CreateVector()
+        self.lf = lf
+        self._vec = lin.mech.one.vec.CreateVector()
+        self.vec = lf.vec
 
     def Assemble(self):
         lin = self.lin
+        if lin.scatter is None:
+            self.lf.Assemble()
+            self.vec = self.lf.vec
+            return
         q = lin.scatter.quadratic(self.gw.vec.FV().NumPy(), self.gu.vec.FV().NumPy())[0]
-        self.vec.FV().NumPy()[:] = self.factor * lin._dg[:, self.j] * q
+        self._vec.FV().NumPy()[:] = self.factor * lin._dg[:, self.j] * q
+        self.vec = self._vec
 
 
 @dataclass

@@ -23,9 +23,17 @@ import numpy as np
 import scipy.sparse as sp
 
 
+_last_colouring = (None, None)  # (mesh, colours): the blocks of one problem share a mesh
+
+
 def element_colours(mesh) -> np.ndarray:
-    """A colour per volume element such that elements of one colour share no vertex (greedy)."""
+    """A colour per volume element such that elements of one colour share no vertex (greedy).
+    The last mesh's colouring is kept (NGSolve meshes cannot be weakly referenced or hashed)."""
+    global _last_colouring
     from ngsolve import VOL
+
+    if _last_colouring[0] is mesh:
+        return _last_colouring[1]
 
     verts = [[v.nr for v in el.vertices] for el in mesh.Elements(VOL)]
     ne = len(verts)
@@ -41,6 +49,7 @@ def element_colours(mesh) -> np.ndarray:
         while c in used:
             c += 1
         colour[e] = c
+    _last_colouring = (mesh, colour)
     return colour
 
 
