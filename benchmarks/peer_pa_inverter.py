@@ -32,6 +32,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from benchmarks import perturbed
+
 # the benchmark set-up (element units)
 SETUP = dict(E1=1.0, E0=1e-6, nu=0.3, t=1.0, P_in=1.0, delta_s=2.0, r=0.1, Kv=1.0, Ks=1e-7,
              eta_k=0.3, beta_k=10.0, eta_h=0.2, beta_h=10.0, rmin=2.4, penal=3.0, k_out=0.1)
@@ -215,8 +217,8 @@ def _median_time(fn, designs, repeat):
 
 
 def _designs(x):
-    """The design and a perturbed one (1 % of the range, smooth in the element index)."""
-    return [x, np.clip(x + 0.01 * np.sin(np.arange(len(x)) * 0.37), 0.0, 1.0)]
+    """The design and a perturbed one (:func:`benchmarks.perturbed`)."""
+    return [x, perturbed(x)]
 
 
 def compare(nelx, nely, repeat=3):

@@ -30,6 +30,7 @@ import time
 
 import numpy as np
 
+from benchmarks import perturbed
 from pacto_ng.threads import thread_count
 
 DESIGN_ITERATIONS = 20
@@ -131,7 +132,7 @@ def run_point(case_name, model, maxh, order, design, repeat=3, extra=None):
         # the timed evaluations alternate between x and a 1 % perturbation of it, as in an
         # optimisation: every one is a new design, so the warm-started Newton solve (or the
         # linear solve) cannot find the state already in equilibrium
-        x2 = np.clip(x + 0.01 * np.sin(np.arange(len(x)) * 0.37), 0.0, 1.0)
+        x2 = perturbed(x)
         problem.evaluate(x2)  # (untimed) a second design: the linear path's element matrices
         problem.evaluate(x)
         ts = []

@@ -84,7 +84,7 @@ class StrainEnergy:
         self._quad = lin if (lin is not None and lin.quadratic) else None
         self._dfield = {}
         for f in mech.fields:
-            if not getattr(mech, "_energy_fields", {}).get(f.name, True):
+            if not mech._energy_fields[f.name]:
                 self._dfield[f.name] = None  # the energy does not depend on it (the pressure)
             elif self._quad is not None and f.name in lin._dC:
                 self._dfield[f.name] = lin.field_form(f.name, self.gfu, self.gfu, 0.5)

@@ -139,28 +139,37 @@ def _random_fields(mech, rng):
         f.gf.vec.FV().NumPy()[:] = rng.uniform(lo, 1.0, len(f.gf.vec))
 
 
-def _energy_depends_on(mech, name, tol=1e-14) -> bool:
-    """Whether the energy density changes with the field ``name`` (checked at the quadrature
-    points for a fixed ``∇u`` and random values of every field, restored afterwards)."""
+def _energy_dependence(mech, tol=1e-14) -> dict:
+    """``{field name: whether the energy density changes with it}``, checked at the quadrature
+    points for a fixed ``∇u``: random values of every field, then new random values of that
+    field alone (the values are restored afterwards).  A field that cannot be told counts as
+    a dependence (the general path)."""
     from ngsolve import CF, VOL
 
     d = mech.mesh.dim
     G = CF(tuple(0.05 * (k + 1) for k in range(d * d)), dims=(d, d))
-    rng = np.random.default_rng(2468)
-    field = next(f for f in mech.fields if f.name == name)
+    out = {}
     saved = _save_fields(mech)
     try:
         pts = mech.mesh.MapToAllElements(mech.rules, VOL)
         cf = (mech.thickness * mech._energy(G, mech.coeffs)).Compile()
-        _random_fields(mech, rng)
-        a = np.asarray(cf(pts)).ravel()
-        field.gf.vec.FV().NumPy()[:] = rng.uniform(0.2 if field.space is mech.l2 else -1.0, 1.0,
-                                                   len(field.gf.vec))
-        b = np.asarray(cf(pts)).ravel()
-        scale = max(float(np.max(np.abs(a))), 1e-300)
-        return not (np.all(np.isfinite(a)) and np.max(np.abs(a - b)) <= tol * scale)
     except Exception:
-        return True  # cannot tell: treat as dependent (the general path)
+        return {f.name: True for f in mech.fields}
+    try:
+        for field in mech.fields:
+            rng = np.random.default_rng(2468)
+            try:
+                _random_fields(mech, rng)
+                a = np.asarray(cf(pts)).ravel()
+                field.gf.vec.FV().NumPy()[:] = rng.uniform(
+                    0.2 if field.space is mech.l2 else -1.0, 1.0, len(field.gf.vec))
+                b = np.asarray(cf(pts)).ravel()
+                scale = max(float(np.max(np.abs(a))), 1e-300)
+                out[field.name] = not (np.all(np.isfinite(a))
+                                       and np.max(np.abs(a - b)) <= tol * scale)
+            except Exception:
+                out[field.name] = True
+        return out
     finally:
         _restore_fields(mech, saved)
 
@@ -652,7 +661,7 @@ class Mechanics:
         self._fbody_stale = True
         # which fields the energy depends on; a field that enters only through a body load
         # linear in it (the Darcy pressure) gives the load as B p (_BodyCoupling)
-        self._energy_fields = {f.name: _energy_depends_on(self, f.name) for f in self.fields}
+        self._energy_fields = _energy_dependence(self)
         self._coupling = None
         if self._fbody is not None:
             for f in self.fields:

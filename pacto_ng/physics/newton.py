@@ -119,8 +119,6 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
         u.data = trial
         res = new
         it += 1
-        if linear and res <= tol:
-            break
     return True, it, "", res
 
 

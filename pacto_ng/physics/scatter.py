@@ -107,28 +107,30 @@ class ElementMatrices:
             return None
         lower = bool(np.all(cols <= rows))  # symmetric storage: the lower triangle only
         colour = element_colours(mesh)
-        S = []
-        for k in range(nterms):
-            r_, c_, d_ = [], [], []
-            for col in range(colour.max() + 1):
-                sel = colour[owners] == col
-                owner = np.full(fes.ndof, -1)
-                owner[dofs[sel]] = owners[sel]
+        parts = [([], [], []) for _ in range(nterms)]  # (entries, elements, values) per term
+        for col in range(colour.max() + 1):
+            # the element of this colour that owns each dof (-1: none), and the stored entries
+            # whose row and column belong to one such element
+            sel = colour[owners] == col
+            owner = np.full(fes.ndof, -1)
+            owner[dofs[sel]] = owners[sel]
+            mine = (owner[rows] >= 0) & (owner[rows] == owner[cols])
+            indicator = (colour == col).astype(float)
+            for k in range(nterms):
                 ind_c = [z.copy() for z in zero]
-                ind_c[k] = (colour == col).astype(float)
+                ind_c[k] = indicator
                 set_coefficients(ind_c)
                 form.Assemble()
                 dv = values - v0
-                mine = (owner[rows] >= 0) & (owner[rows] == owner[cols])
                 if np.any(dv[~mine] != 0.0):
                     set_coefficients(zero)
                     return None  # an entry no single element explains: not of this form
                 nz = np.flatnonzero(mine & (dv != 0.0))
-                r_.append(nz)
-                c_.append(owner[rows[nz]])
-                d_.append(dv[nz])
-            S.append(sp.csr_matrix((np.concatenate(d_), (np.concatenate(r_), np.concatenate(c_))),
-                                   shape=(len(values), ne)))
+                parts[k][0].append(nz)
+                parts[k][1].append(owner[rows[nz]])
+                parts[k][2].append(dv[nz])
+        S = [sp.csr_matrix((np.concatenate(d_), (np.concatenate(r_), np.concatenate(c_))),
+                           shape=(len(values), ne)) for r_, c_, d_ in parts]
         out = cls(form, values, v0, rows, cols, S, lower)
         # the check: random coefficients, assembled by NGSolve and by the scatter
         rng = np.random.default_rng(seed)
