@@ -15,8 +15,8 @@ the nonlinear designs are compared under the same Neo-Hookean analysis.
 The optimisation settings of the nonlinear runs: the case defaults plus load continuation over
 the first iterations (``load_ramp``), adaptive load continuation past a Newton failure
 (``load_adapt``) and machine-code forms (``realcompile``); the command of each run, as read
-back from its ``params.json``, is in the table (the pa-inverter's Wang runs pin ``--order 1``,
-the thesis's order; a run that starts from another's design names its folder in
+back from its ``params.json``, is in the table (the Wang runs of the pa-inverter and the
+cantilever pin ``--order 1``, the thesis's order; a run that starts from another's design names its folder in
 ``init_design``).  A cantilever or force-inverter run that reaches its iteration cap (150, 200) without meeting the
 convergence test is continued from its checkpoint with ``pacto resume DIR --iterations N``
 (N = 300, 400): its command in the table then shows ``--iterations N``.  "valid" means: the run finished at the full load (``load_factor_reached``
@@ -41,7 +41,8 @@ PA = ["--set", "load_ramp=30"] + NL
 FC = ["--set", "load_ramp=20"] + NL
 #: the thesis meshes of the cases whose defaults are finer (the knee of their trade curves)
 GRIP, PN = ["--maxh", "0.004"], ["--maxh", "0.003"]
-#: order 1, the thesis's, for the pa-inverter Wang runs (the case's Wang default is order 2)
+#: order 1, the thesis's, for the Wang runs of the pa-inverter and the cantilever (whose Wang
+#: default is order 2); harmless on the Neo-Hookean rows (their default is order 1)
 O1 = ["--order", "1"]
 
 #: name -> (case, arguments); the order is the order of the tables
@@ -138,16 +139,17 @@ RUNS = {
     "mm_nh_5e6_e4_r100": ("mm-gripper", GRIP + ["--model", "neohookean", "--load", "5e6", "--set", "E0=3e4",
                                                "--set", "load_ramp=100"] + NL),
     # cantilever (thesis: NH 150 kN, Wang 250 kN; Wang et al. 2014: NH 240 kN, Wang 500 kN)
-    **{f"cant_{m}_{F}": ("cantilever", ["--model", {"nh": "neohookean", "w": "wang"}[m],
-                                        "--load", f"{F}e3"] + FC)
+    **{f"cant_{m}_{F}": ("cantilever", O1 + ["--model", {"nh": "neohookean", "w": "wang"}[m],
+                                             "--load", f"{F}e3"] + FC)
        for F in (80, 144, 240, 300, 500, 800) for m in ("nh", "w")},
     # cantilever on Wang et al.'s 120 x 30 quad mesh
-    **{f"cant_q_{m}_{F}": ("cantilever", ["--model", {"nh": "neohookean", "w": "wang"}[m],
-                                          "--load", f"{F}e3", "--nelx", "120", "--nely", "30"] + FC)
+    **{f"cant_q_{m}_{F}": ("cantilever", O1 + ["--model", {"nh": "neohookean", "w": "wang"}[m],
+                                               "--load", f"{F}e3", "--nelx", "120", "--nely",
+                                               "30"] + FC)
        for F in (80, 144, 240, 300) for m in ("nh", "w")},
     # Wang et al.'s own schedule, as data: p 1 -> 3 by 0.05, beta 4 -> 64 doubling every 10,
     # their interpolation settings beta1 = 500, eta1 = 0.01; quads and the thesis mesh
-    **{f"cant{q}_w2014_w_{F}": ("cantilever", ["--model", "wang", "--load", f"{F}e3"] + mesh
+    **{f"cant{q}_w2014_w_{F}": ("cantilever", O1 + ["--model", "wang", "--load", f"{F}e3"] + mesh
                                 + ["--set", "penal_start=1", "--set", "penal_step=0.05", "--set",
                                    "beta=4", "--set", "beta_max=64", "--set", "beta_every=10",
                                    "--set", "wang_beta=500", "--set", "wang_eta=0.01"] + FC)
@@ -209,8 +211,9 @@ def run(root: Path, name: str) -> None:
 def analyse(root: Path, name: str, pressures: str, threshold: float) -> None:
     out = root / name
     done = _load(out / "analysis" / "analysis.json")
-    if not (out / "summary.json").exists() or (
-            done is not None and done["settings"]["threshold"] == threshold):
+    asked = None if done is None else done["settings"].get(
+        "threshold_choice", {"requested": done["settings"]["threshold"]})["requested"]
+    if not (out / "summary.json").exists() or asked == threshold:
         return
     print(f"[extreme] pacto analyse {out} --pressures {pressures} --threshold {threshold}",
           flush=True)
