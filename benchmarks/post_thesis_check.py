@@ -88,7 +88,9 @@ def main(argv=None) -> int:
                    "converged_runs": summ.get("stopped") != "newton",
                    "delta_run": summ.get("output_displacement")}
             if thr is not None:
-                pacto(["analyse", str(folders[m]), "--threshold", f"{thr:g}", "--quiet"])
+                # both designs at the one threshold chosen above (not lowered per design)
+                pacto(["analyse", str(folders[m]), "--threshold", f"{thr:g}", "--keep-threshold",
+                       "--quiet"])
                 ana = json.loads((folders[m] / "analysis" / "analysis.json").read_text())
                 last = ana["pressures"][-1]
                 row.update(

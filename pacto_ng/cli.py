@@ -9,7 +9,8 @@
     pacto resume DIR [--quiet]
     pacto sweep CASE --loads L1,L2,... [--models M1,M2] [--scheduler ADDRESS] [--workers N]
                 [run options but --model/--load]
-    pacto analyse DIR [--pressures P1,P2,...] [--threshold T] [--maxh H] [--order K]
+    pacto analyse DIR [--pressures P1,P2,...] [--threshold T|volume] [--keep-threshold]
+                  [--maxh H] [--order K]
                   [--kinds darcy,fixed,follower] [--quiet]
     pacto export DIR --format stl|vtk|msh [--out FILE] [--threshold T] [--maxh H]
     pacto compare DIR1 DIR2 ... [--out FILE.png]
@@ -98,7 +99,11 @@ def _post_parsers(sub):
     a.add_argument("dir", help="a finished run folder")
     a.add_argument("--pressures", help="comma-separated inlet pressures in Pa (default: 5 "
                    "log-spaced values from load/100 to the run's load)")
-    a.add_argument("--threshold", type=float, default=0.5, help="density threshold in (0, 1)")
+    a.add_argument("--threshold", default="0.5", help="density threshold in (0, 1), or 'volume': "
+                   "the threshold at which the part has the design's material volume")
+    a.add_argument("--keep-threshold", action="store_true", help="do not lower the threshold "
+                   "when the part kept on the clamp does not contain the output point (by "
+                   "default it is lowered, to at least 0.1, until it does)")
     a.add_argument("--maxh", type=float, help="element size of the new mesh (default: half the "
                    "run's)")
     a.add_argument("--order", type=int, default=2, help="displacement order of the re-analysis")
@@ -129,7 +134,8 @@ def _post_command(args) -> int:
         pressures = pc.parse_pressures(args.pressures) if args.pressures is not None else None
         kinds = tuple(k.strip() for k in args.kinds.split(",") if k.strip())
         return pc.analyse_run(args.dir, pressures=pressures, threshold_value=args.threshold,
-                              maxh=args.maxh, order=args.order, kinds=kinds, quiet=args.quiet)
+                              maxh=args.maxh, order=args.order, kinds=kinds, quiet=args.quiet,
+                              connect=not args.keep_threshold)
     if args.command == "export":
         return pc.export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
                              maxh=args.maxh, quiet=args.quiet)

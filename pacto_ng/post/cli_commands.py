@@ -78,7 +78,20 @@ def parse_pressures(text: str) -> list[float]:
     return sorted(set(out))
 
 
-def check_threshold(value: float) -> float:
+def check_threshold(value, *, allow_volume: bool = False):
+    """A threshold in (0, 1), or (with ``allow_volume``) the word ``volume``: the
+    volume-preserving threshold of :func:`~pacto_ng.post.threshold.volume_threshold`."""
+    if isinstance(value, str):
+        if value.strip().lower() == "volume":
+            if not allow_volume:
+                raise InputError("--threshold: 'volume' is an option of 'pacto analyse' only; "
+                                 "give a number in (0, 1)")
+            return "volume"
+        try:
+            value = float(value)
+        except ValueError:
+            raise InputError(f"--threshold: expected a number in (0, 1)"
+                             f"{' or volume' if allow_volume else ''}, got '{value}'") from None
     if not (0.0 < float(value) < 1.0) or not math.isfinite(float(value)):
         raise InputError(f"--threshold: must lie in (0, 1), got {value:g}")
     return float(value)
@@ -240,15 +253,60 @@ def _say(quiet, msg):
         print(msg, flush=True)
 
 
-def analyse_run(folder, *, pressures=None, threshold_value: float = 0.5, maxh=None,
-                order: int = 2, kinds=KINDS, quiet: bool = False) -> int:
+def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
+                     connect: bool = True) -> dict:
+    """The threshold ``pacto analyse`` uses, and why.
+
+    ``requested`` is a number in (0, 1) or ``"volume"`` (the volume-preserving threshold).
+    With ``connect``, when the part kept on the clamp at that threshold does not contain the
+    output point, the threshold is lowered to the largest value (down to 0.1, to within 0.005)
+    at which it does: a joint to the output that is still grey is kept, at the price of the
+    grey material around it.  The record says what was asked, what was used, the design's
+    material volume and the area of the part at the threshold used.
+    """
+    from .remesh import _source_points
+    from .threshold import (connecting_threshold, design_volume, part_contains, threshold,
+                            volume_threshold)
+
+    start = volume_threshold(mesh, rho) if requested == "volume" else float(requested)
+    port = _source_points(mesh).get(output_region)
+    rec = {"requested": requested, "start": start, "used": start, "lowered": False,
+           "missed": False, "connect": bool(connect), "design_volume": design_volume(mesh, rho)}
+    what = (f"threshold {start:.4g} (volume-preserving)" if requested == "volume"
+            else f"threshold {start:g}")
+    if port is None or not connect:
+        th = threshold(mesh, rho, start)
+        rec["reaches_output"] = None if port is None else part_contains(th, port, clamp)
+        rec["note"] = what + ("" if port is None else
+                              (": the part on the clamp contains the output point"
+                               if rec["reaches_output"] else
+                               ": the part on the clamp does not contain the output point "
+                               "(not lowered: --keep-threshold)"))
+    else:
+        used, th = connecting_threshold(mesh, rho, start, port, clamp)
+        if used is None:
+            rec.update(missed=True, reaches_output=False)
+            rec["note"] = (f"{what}: the part on the clamp does not contain the output point, "
+                           f"nor at threshold 0.1; analysed at {start:.4g}")
+        else:
+            rec.update(used=used, lowered=used < start, reaches_output=True)
+            rec["note"] = (what + ": the part on the clamp contains the output point"
+                           if used == start else
+                           f"{what} lowered to {used:.4g}: above it the part on the clamp "
+                           f"does not contain the output point (a grey joint)")
+    rec["part_area"] = th.area
+    return rec
+
+
+def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
+                order: int = 2, kinds=KINDS, quiet: bool = False, connect: bool = True) -> int:
     """``pacto analyse``: see the module docstring.  Returns the exit code (0)."""
     from ..physics.newton import NewtonSettings
     from .remesh import pressure_sampler
     from .report import post_analyse
     from .threshold import threshold
 
-    threshold_value = check_threshold(threshold_value)
+    threshold_value = check_threshold(threshold_value, allow_volume=True)
     if maxh is not None and not maxh > 0:
         raise InputError(f"--maxh: must be positive, got {maxh:g}")
     if order not in (1, 2, 3):
@@ -295,15 +353,21 @@ def analyse_run(folder, *, pressures=None, threshold_value: float = 0.5, maxh=No
         f"{r['pressure']:.3g} Pa -> {r['delta']:.4g}" if r["converged"] else
         f"{r['pressure']:.3g} Pa -> failed" for r in expected))
 
+    supports = setup.supports
+    output = _output_of(setup)
+    choice = choose_threshold(problem.mesh, rho, threshold_value, output.region,
+                              supports.clamp, connect=connect)
+    threshold_value = choice["used"]
+    # (a part that still misses the output is reported once the part is built: the warning on
+    # the output port's shift below; a design with no solid on the clamp is an error there)
+    _say(quiet, "  " + choice["note"])
+
     # the Darcy field of the thresholded design (same block, same P_in = load)
     th = threshold(problem.mesh, rho, threshold_value)
     rho_thr = thresholded_elements(th)
     with compute():
         block.forward(rho_thr)
     p_thr = _copy_gf(block.gfp)
-
-    supports = setup.supports
-    output = _output_of(setup)
     newton = NewtonSettings(rtol=p.newton_rtol, max_iter=p.newton_max_iter,
                             initial_increment=p.newton_increment)
     out_dir = run.path / "analysis"
@@ -339,7 +403,7 @@ def analyse_run(folder, *, pressures=None, threshold_value: float = 0.5, maxh=No
                         (p_shown or run.load) / run.load)
 
     data = _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, order,
-                          threshold_value, maxh, output, supports, p_shown, rho_thr,
+                          choice, maxh, output, supports, p_shown, rho_thr,
                           time.perf_counter() - t0)
     (out_dir / "analysis.json").write_text(json.dumps(data, indent=1))
     shift = data["remesh"]["output_port_shift"]
@@ -382,7 +446,7 @@ def _num(v):
     return v if math.isfinite(v) else None
 
 
-def _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, order, thr, maxh,
+def _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, order, choice, maxh,
                    output, supports, p_shown, rho_thr, wall) -> dict:
     rm, th = res.remeshed, res.thresholded
     p = run.params
@@ -413,7 +477,8 @@ def _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, ord
                 "stopped": run.summary.get("stopped"),
                 "output_displacement_summary": run.summary.get("output_displacement"),
                 "output_displacement_rebuilt": delta_run, "mesh_h": problem.h},
-        "settings": {"threshold": thr, "maxh": maxh,
+        "settings": {"threshold": choice["used"],
+                     "threshold_choice": {k: v for k, v in choice.items()}, "maxh": maxh,
                      "order": order, "kinds": list(kinds), "E": p.E1, "nu": p.nu,
                      "thickness": p.thickness, "material": "Neo-Hookean, plane strain",
                      "supports": {"clamp": list(supports.clamp), "fix_x": list(supports.fix_x),
@@ -486,6 +551,11 @@ def _report_md(d) -> str:
     L.append(f"ρ̄ thresholded at {s['threshold']:g} (iso-line of the area-weighted nodal density) "
              f"and remeshed with Netgen triangles of {s['maxh']:.4g} m ({rm['elements']} "
              f"elements).")
+    ch = s.get("threshold_choice")
+    if ch:
+        L.append(f"The threshold: {ch['note']}.  Material volume of the design "
+                 f"{ch['design_volume']:.6g} m², area of the part at the threshold used "
+                 f"{ch['part_area']:.6g} m².")
     L.append("")
     L.append("| area (m²) | value |")
     L.append("|---|---|")

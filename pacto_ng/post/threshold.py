@@ -392,3 +392,118 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
         comps.append(Component(lp, tuple(holes)))
     comps.sort(key=lambda c: -c.area)
     return Thresholded(tuple(comps), solid_area, threshold, nodal, solid, h, mesh, float(removed))
+
+
+# ---------------------------------------------------------------------------------------
+# choosing the threshold
+def design_volume(mesh, rho) -> float:
+    """``Σ_e A_e ρ̄_e``: the material volume (area) of the density design."""
+    grid = mesh_to_pyvista(mesh)
+    rho = np.asarray(rho, dtype=float).ravel()
+    if rho.shape[0] != grid.n_cells:
+        raise ValueError(f"rho has {rho.shape[0]} values but the mesh has {grid.n_cells} elements")
+    return float(np.dot(_cell_areas(grid), rho))
+
+
+def volume_threshold(mesh, rho, *, tol: float = 1e-4) -> float:
+    """The threshold whose solid has the design's material volume (a volume-preserving threshold).
+
+    The area of the solid ``{ρ_nodal >= t}`` (clipped as in :func:`threshold`, specks included)
+    falls as ``t`` rises, so ``t`` is found by bisection to within ``tol`` such that that area
+    equals :func:`design_volume`.  A crisp design gives a value near 0.5; grey material (ρ̄
+    between 0 and 1, counted at its density by the volume) moves it.
+
+    Raises
+    ------
+    ValueError
+        If the design has no material.
+    """
+    grid = mesh_to_pyvista(mesh)
+    rho = np.asarray(rho, dtype=float).ravel()
+    if rho.shape[0] != grid.n_cells:
+        raise ValueError(f"rho has {rho.shape[0]} values but the mesh has {grid.n_cells} elements")
+    area = _cell_areas(grid)
+    target = float(np.dot(area, rho))
+    if not target > 0.0:
+        raise ValueError("the design has no material: no volume-preserving threshold")
+    grid.point_data["rho"] = _nodal(grid, rho, area)
+
+    def solid_area(t):
+        part = grid.clip_scalar(scalars="rho", value=t, invert=False)
+        return float(_cell_areas(part).sum()) if part.n_cells else 0.0
+
+    lo, hi = 1e-3, 1.0 - 1e-3  # solid_area(lo) >= target >= solid_area(hi) (or the ends)
+    if solid_area(hi) >= target:
+        return hi
+    if solid_area(lo) <= target:
+        return lo
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        if solid_area(mid) >= target:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def _near(loop: Loop, point, tol: float) -> bool:
+    """Whether ``point`` is within ``tol`` of an edge of ``loop``."""
+    a = loop.points
+    d = np.roll(a, -1, axis=0) - a
+    lam = np.clip(np.einsum("ij,ij->i", point - a, d) / np.einsum("ij,ij->i", d, d), 0.0, 1.0)
+    return bool(np.min(np.linalg.norm(a + lam[:, None] * d - point, axis=1)) <= tol)
+
+
+def _inside(loop: Loop, point) -> bool:
+    from matplotlib.path import Path
+
+    return bool(Path(loop.points).contains_point(point))
+
+
+def part_contains(th: Thresholded, point, clamp=("fixed",)) -> bool:
+    """Whether ``point`` lies in (or on the boundary of) a piece of ``th`` touching ``clamp``.
+
+    That piece is what :func:`~pacto_ng.post.remesh.remesh` keeps; with an empty ``clamp``
+    every piece counts.  A point on a hole's boundary counts as in the piece.
+    """
+    point = np.asarray(point, dtype=float).ravel()[:2]
+    tol = 1e-6 * th.h
+    clamp = set((clamp,) if isinstance(clamp, str) else clamp)
+    for comp in th.components:
+        if clamp and not comp.names & clamp:
+            continue
+        if not (_near(comp.outer, point, tol) or _inside(comp.outer, point)):
+            continue
+        if not any(_inside(h, point) and not _near(h, point, tol) for h in comp.holes):
+            return True
+    return False
+
+
+def connecting_threshold(mesh, rho, start: float, point, clamp=("fixed",), *,
+                         floor: float = 0.1, resolution: float = 0.005):
+    """The largest threshold ``t <= start`` at which the part kept on ``clamp`` contains ``point``.
+
+    A lower threshold only adds solid, so whether the point is in the kept part is monotone in
+    ``t`` and bisection between ``floor`` and ``start`` finds ``t`` to within ``resolution``
+    (the value returned is the lower end of the last bracket: one that contains the point).
+
+    Returns
+    -------
+    (t, Thresholded) or (None, Thresholded at ``start``)
+        ``None`` if the point is not in the kept part even at ``floor``.
+    """
+    th = threshold(mesh, rho, start)
+    if part_contains(th, point, clamp):
+        return start, th
+    low = threshold(mesh, rho, floor) if floor < start else th
+    if not part_contains(low, point, clamp):
+        return None, th
+    lo, hi = floor, start
+    while hi - lo > resolution:
+        mid = 0.5 * (lo + hi)
+        cand = threshold(mesh, rho, mid)
+        if part_contains(cand, point, clamp):
+            lo, low = mid, cand
+        else:
+            hi = mid
+    return lo, low

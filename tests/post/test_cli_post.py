@@ -270,3 +270,19 @@ def test_cli_end_to_end_one_line(pa_run):
 # Not a test: it needs four pa-inverter optimisations, and the Neo-Hookean ones take 10-40 min
 # each on the shared machine (the one at 1e7 Pa currently stops on a Newton failure at iteration
 # 56).  It is benchmarks/post_thesis_check.py; its measured figures are in docs/postprocessing.md.
+
+
+def test_analyse_records_its_threshold_choice(analysed):
+    """The threshold asked (0.35) and the one used: equal when the part kept on the clamp
+    contains the output point, lower otherwise; the record and the report say which."""
+    folder, data = analysed
+    ch = data["settings"]["threshold_choice"]
+    assert ch["requested"] == 0.35 and ch["start"] == 0.35 and ch["connect"] is True
+    assert data["settings"]["threshold"] == ch["used"] <= 0.35
+    assert ch["reaches_output"] is True and not ch["missed"]
+    assert ch["lowered"] == (ch["used"] < 0.35)
+    assert ch["part_area"] == pytest.approx(data["areas"]["thresholded"], rel=1e-12)
+    assert 0 < ch["design_volume"] < ch["part_area"] * 2
+    # the output point lies in the part: the remeshed part's nearest vertex is within an element
+    assert data["remesh"]["output_port_shift"] < data["run"]["mesh_h"]
+    assert "The threshold: threshold 0.35" in (folder / "report.md").read_text()
