@@ -253,6 +253,22 @@ def _say(quiet, msg):
         print(msg, flush=True)
 
 
+def load_path_note(rebuilt, summary, rtol: float = 1e-4):
+    """A note when the final design's Δ loaded from rest (``rebuilt``) differs from the
+    optimisation's (``summary``, its equilibrium reached by warm starts along the design
+    history) by more than ``rtol``: the design has more than one equilibrium at that load,
+    so Δ depends on the load path; None when they agree (or one is missing)."""
+    if rebuilt is None or summary is None:
+        return None
+    scale = max(abs(float(summary)), abs(float(rebuilt)), 1e-300)
+    if abs(float(rebuilt) - float(summary)) <= rtol * scale:
+        return None
+    return (f"the final design's output displacement depends on the load path: {rebuilt:.4g} m "
+            f"loaded from rest, {float(summary):.4g} m in summary.json (the optimisation's "
+            f"equilibrium, reached by warm starts along the design history): the design has "
+            f"more than one equilibrium at this load, and Δ below is read on the path from rest")
+
+
 def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
                      connect: bool = True) -> dict:
     """The threshold ``pacto analyse`` uses, and why.
@@ -346,6 +362,11 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     p_final = _copy_gf(block.gfp)  # the final Darcy field at P_in = load (the wetting rule)
     _say(quiet, f"  rebuilt: Δ = {_fmt(delta_run, '.6g')} m at {run.load:g} Pa (summary.json: "
                 f"{run.summary.get('output_displacement')})")
+    path_note = load_path_note(delta_run, run.summary.get("output_displacement"))
+    if path_note:
+        import sys
+
+        print(f"pacto: warning: {path_note}", file=sys.stderr)
 
     # expected Δ: the optimisation's own model on the density design
     expected = expected_sweep(problem, run.x, pressures, run.load)
@@ -476,7 +497,9 @@ def _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, ord
                 "load_unit": run.case.load_unit, "iterations": run.k, "design": run.design,
                 "stopped": run.summary.get("stopped"),
                 "output_displacement_summary": run.summary.get("output_displacement"),
-                "output_displacement_rebuilt": delta_run, "mesh_h": problem.h},
+                "output_displacement_rebuilt": delta_run, "mesh_h": problem.h,
+                "load_path_note": load_path_note(delta_run,
+                                                 run.summary.get("output_displacement"))},
         "settings": {"threshold": choice["used"],
                      "threshold_choice": {k: v for k, v in choice.items()}, "maxh": maxh,
                      "order": order, "kinds": list(kinds), "E": p.E1, "nu": p.nu,
@@ -541,6 +564,9 @@ def _report_md(d) -> str:
              f"iterations (stopped: {run['stopped']}).  Rebuilt output displacement "
              f"Δ = {_fmt(run['output_displacement_rebuilt'], '.6g')} m "
              f"(summary.json: {_fmt(run['output_displacement_summary'], '.6g')} m).")
+    if run.get("load_path_note"):
+        L.append("")
+        L.append(f"**Warning**: {run['load_path_note']}.")
     L.append("")
     L.append("| run design ρ̄ | run Darcy pressure |")
     L.append("|---|---|")

@@ -130,3 +130,17 @@ def test_check_threshold_rejects_with_the_option_named(value):
         check_threshold(value, allow_volume=True)
     with pytest.raises(InputError, match="--threshold"):
         check_threshold("volume")  # export: a number only
+
+
+@pytest.mark.parametrize("rebuilt, summary, warned", [
+    (5.1e-4, 5.1e-4 * (1 + 1e-6), False), (3.2e-5, 5.1e-4, True), (None, 5.1e-4, False),
+    (1e-3, None, False), (-2e-5, 2e-5, True)])
+def test_load_path_note(rebuilt, summary, warned):
+    """A Δ of the final design loaded from rest that is not the optimisation's (measured on a
+    PneuNet design at 1e6 Pa: 3.2e-5 and 7.3e-5 m from rest, 5.1e-4 m in summary.json)."""
+    from pacto_ng.post.cli_commands import load_path_note
+
+    note = load_path_note(rebuilt, summary)
+    assert (note is not None) == warned
+    if warned:
+        assert "depends on the load path" in note and f"{rebuilt:.4g}" in note
