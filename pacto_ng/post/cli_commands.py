@@ -253,6 +253,10 @@ def _say(quiet, msg):
         print(msg, flush=True)
 
 
+#: a part Netgen cannot mesh is retried at thresholds this much lower, this many times
+MESH_RETRY_STEP, MESH_RETRIES = 0.005, 4
+
+
 def load_path_note(rebuilt, summary, rtol: float = 1e-4):
     """A note when the final design's Δ loaded from rest (``rebuilt``) differs from the
     optimisation's (``summary``, its equilibrium reached by warm starts along the design
@@ -362,11 +366,10 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     p_final = _copy_gf(block.gfp)  # the final Darcy field at P_in = load (the wetting rule)
     _say(quiet, f"  rebuilt: Δ = {_fmt(delta_run, '.6g')} m at {run.load:g} Pa (summary.json: "
                 f"{run.summary.get('output_displacement')})")
-    path_note = load_path_note(delta_run, run.summary.get("output_displacement"))
-    if path_note:
-        import sys
-
-        print(f"pacto: warning: {path_note}", file=sys.stderr)
+    # (warned once the analysis is done: a failing analysis ends with its one-line error)
+    # (only for a run reported at its full load: otherwise summary.json's Δ is at another load)
+    path_note = (load_path_note(delta_run, run.summary.get("output_displacement"))
+                 if run.summary.get("load_factor_reached", 1.0) == 1.0 else None)
 
     # expected Δ: the optimisation's own model on the density design
     expected = expected_sweep(problem, run.x, pressures, run.load)
@@ -383,35 +386,55 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     # the output port's shift below; a design with no solid on the clamp is an error there)
     _say(quiet, "  " + choice["note"])
 
-    # the Darcy field of the thresholded design (same block, same P_in = load)
-    th = threshold(problem.mesh, rho, threshold_value)
-    rho_thr = thresholded_elements(th)
-    with compute():
-        block.forward(rho_thr)
-    p_thr = _copy_gf(block.gfp)
     newton = NewtonSettings(rtol=p.newton_rtol, max_iter=p.newton_max_iter,
                             initial_increment=p.newton_increment)
     out_dir = run.path / "analysis"
     ok_exp = [r for r in expected if r["converged"]]
     exp_pair = ([r["pressure"] for r in ok_exp], [r["delta"] for r in ok_exp]) if ok_exp else None
-    _say(quiet, f"  threshold {threshold_value:g}, remesh (maxh {maxh:g}), "
-                f"Neo-Hookean sweeps {', '.join(kinds)} at {len(pressures)} pressures ...")
-    try:
-        res = post_analyse(problem.mesh, rho, out_dir, pressures=pressures, E=p.E1, nu=p.nu,
-                           thickness=p.thickness, output=output, clamp=supports.clamp,
-                           supports=supports, threshold_value=threshold_value, maxh=maxh,
-                           pressure=p_final, p_in=run.load,
-                           wet_boundaries=setup.pressure.inlet, kinds=tuple(kinds),
-                           darcy_pressure=p_thr, darcy_p_in=run.load, expected=exp_pair,
-                           order=order, newton=newton)
-    except ValueError as err:
-        # no solid on the clamp, nothing solid, no wetted boundary: the design cannot be analysed
-        msg = str(err)
-        if "'pressure' boundary" in msg:
-            msg = (f"no boundary of the thresholded part is wetted (threshold "
-                   f"{threshold_value:g}): the part kept on the clamp does not border the "
-                   f"pressurised region of the run's Darcy field")
-        raise InputError(f"analyse: {msg}") from None
+    # Netgen fails on some traced parts (a face left empty); the part a little below the
+    # threshold has the same pieces (and still contains the output point: containment only
+    # grows as the threshold falls), so a failed mesh is retried at up to MESH_RETRIES
+    # thresholds MESH_RETRY_STEP apart
+    candidates = [threshold_value - k * MESH_RETRY_STEP for k in range(MESH_RETRIES + 1)]
+    candidates = [t for t in candidates if t > 0.0]
+    for attempt, thr in enumerate(candidates):
+        # the Darcy field of the thresholded design (same block, same P_in = load)
+        th = threshold(problem.mesh, rho, thr)
+        rho_thr = thresholded_elements(th)
+        with compute():
+            block.forward(rho_thr)
+        p_thr = _copy_gf(block.gfp)
+        _say(quiet, f"  threshold {thr:g}, remesh (maxh {maxh:g}), "
+                    f"Neo-Hookean sweeps {', '.join(kinds)} at {len(pressures)} pressures ...")
+        try:
+            res = post_analyse(problem.mesh, rho, out_dir, pressures=pressures, E=p.E1, nu=p.nu,
+                               thickness=p.thickness, output=output, clamp=supports.clamp,
+                               supports=supports, threshold_value=thr, maxh=maxh,
+                               pressure=p_final, p_in=run.load,
+                               wet_boundaries=setup.pressure.inlet, kinds=tuple(kinds),
+                               darcy_pressure=p_thr, darcy_p_in=run.load, expected=exp_pair,
+                               order=order, newton=newton)
+            break
+        except ValueError as err:
+            # no solid on the clamp, nothing solid, no wetted boundary: the design cannot be
+            # analysed; a Netgen failure: the next candidate
+            msg = str(err)
+            if msg.startswith("Netgen could not mesh") and attempt + 1 < len(candidates):
+                _say(quiet, f"  {msg.split(';')[0]} at threshold {thr:g}: retried at "
+                            f"{candidates[attempt + 1]:g}")
+                continue
+            if "'pressure' boundary" in msg:
+                msg = (f"no boundary of the thresholded part is wetted (threshold "
+                       f"{thr:g}): the part kept on the clamp does not border the "
+                       f"pressurised region of the run's Darcy field")
+            raise InputError(f"analyse: {msg}") from None
+    if thr != threshold_value:
+        choice["mesh_retries"] = attempt
+        choice["note"] += (f"; Netgen could not mesh the part at {threshold_value:.4g}, "
+                           f"meshed at {thr:.4g}")
+        choice["used"] = thr
+        choice["part_area"] = th.area
+        threshold_value = thr
     rm = res.remeshed
 
     # fields: add the Darcy pressure (thresholded design, at the shown pressure) to the VTUs
@@ -425,12 +448,14 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
 
     data = _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, order,
                           choice, maxh, output, supports, p_shown, rho_thr,
-                          time.perf_counter() - t0)
+                          time.perf_counter() - t0, path_note)
     (out_dir / "analysis.json").write_text(json.dumps(data, indent=1))
     shift = data["remesh"]["output_port_shift"]
-    if shift is not None and shift > 2.0 * problem.h:
-        import sys
+    import sys
 
+    if path_note:
+        print(f"pacto: warning: {path_note}", file=sys.stderr)
+    if shift is not None and shift > 2.0 * problem.h:
         print(f"pacto: warning: the thresholded part does not reach the output point: its nearest "
               f"vertex is {shift:.3g} m away (Δ is read there; see report.md)", file=sys.stderr)
     from .export import plot_sweeps
@@ -468,7 +493,7 @@ def _num(v):
 
 
 def _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, order, choice, maxh,
-                   output, supports, p_shown, rho_thr, wall) -> dict:
+                   output, supports, p_shown, rho_thr, wall, path_note=None) -> dict:
     rm, th = res.remeshed, res.thresholded
     p = run.params
     kept = th.polygon_area - rm.dropped_area
@@ -498,8 +523,7 @@ def _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, ord
                 "stopped": run.summary.get("stopped"),
                 "output_displacement_summary": run.summary.get("output_displacement"),
                 "output_displacement_rebuilt": delta_run, "mesh_h": problem.h,
-                "load_path_note": load_path_note(delta_run,
-                                                 run.summary.get("output_displacement"))},
+                "load_path_note": path_note},
         "settings": {"threshold": choice["used"],
                      "threshold_choice": {k: v for k, v in choice.items()}, "maxh": maxh,
                      "order": order, "kinds": list(kinds), "E": p.E1, "nu": p.nu,

@@ -99,21 +99,42 @@ def test_pneunet_1e6_pa_from_the_linear_design(pneunet_1e6):
     assert summ["output_displacement"] > 0
 
 
-@pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason=(
-    "the thresholded part's joint to the output is grey, and whether it survives thresholding "
-    "depends on round-off-level differences of the optimisation path (code changes equal to "
-    "round-off, the thread count): of five runs of this pipeline on 2026-12-01/02, two reached "
-    "the output (port shift < 1 mm) and three missed it by 18, 18 and 54 mm"))
-def test_pneunet_1e6_part_reaches_the_output(pneunet_1e6):
-    """The part, thresholded at 0.5, reaches the output corner and moves it down under a
-    Neo-Hookean analysis with the Darcy load and the fixed pressure."""
+@pytest.fixture(scope="module")
+def pneunet_1e6_part(pneunet_1e6):
+    """``pacto analyse`` of that design at 1e6 Pa (threshold 0.5 asked; the connectivity check
+    lowers it until the part on the clamp contains the output corner)."""
     from pacto_ng.post.cli_commands import analyse_run
 
     assert analyse_run(pneunet_1e6, pressures=[1e6], threshold_value=0.5,
                        kinds=("darcy", "fixed"), quiet=True) == 0
-    res = json.loads((pneunet_1e6 / "analysis" / "analysis.json").read_text())
+    return json.loads((pneunet_1e6 / "analysis" / "analysis.json").read_text())
+
+
+@pytest.mark.slow
+def test_pneunet_1e6_part_reaches_the_output(pneunet_1e6_part):
+    """The part reaches the output corner and its Neo-Hookean analyses converge at 1e6 Pa.
+    Before the connectivity check of ``pacto analyse`` the 0.5 part missed the output in three
+    of five runs of this pipeline (by 18, 18 and 54 mm: its joint to the output is grey); with
+    it the threshold came down to 0.459, 0.472 and 0.459 in three runs that differ by
+    round-off (one thread; machine code; two threads with machine code; the third part was
+    meshed at 0.454 after Netgen failed at 0.459) and the port moved 0 m in each
+    (2026-12-02)."""
+    res = pneunet_1e6_part
+    ch = res["settings"]["threshold_choice"]
+    assert ch["reaches_output"] and not ch["missed"] and 0.1 <= ch["used"] <= 0.5
     assert res["remesh"]["output_port_shift"] < 1e-3  # the part reaches the output
     row = res["pressures"][0]
-    assert row["darcy"]["converged"] and row["darcy"]["delta"] > 0  # 0.34 mm measured
-    assert row["fixed"]["converged"] and row["fixed"]["delta"] > 0  # 0.47 mm measured
+    assert row["darcy"]["converged"] and row["fixed"]["converged"]
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=False, reason=(
+    "the design's own output displacement at 1e6 Pa depends on the load path: one design of "
+    "this pipeline gave 5.1e-4 m in the optimisation (warm starts along the design history), "
+    "7.3e-5 m loaded from rest in one step and 3.2e-5 m by load stepping, all converged to a "
+    "residual of 1e-12 (2026-12-02): it has several equilibria, and its part's Δ is as small "
+    "and of either sign; in three runs darcy -6.2e-5, +5.4e-5, +1.3e-4 m and fixed +3.0e-5, "
+    "+2.3e-5, +9.8e-5 m (the third design's Δ from rest equals the optimisation's)"))
+def test_pneunet_1e6_part_moves_the_output_down(pneunet_1e6_part):
+    row = pneunet_1e6_part["pressures"][0]
+    assert row["darcy"]["delta"] > 0 and row["fixed"]["delta"] > 0

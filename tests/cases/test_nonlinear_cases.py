@@ -155,8 +155,9 @@ def test_design_vtu_holds_the_wang_strains(tmp_path):
     import numpy as np
 
     out = tmp_path / "w"
+    # order 1: the check reads one displacement gradient per triangle from design.vtu
     assert main(["run", "cantilever", "--model", "wang", "--load", "3e5", "--maxh", "0.05",
-                 "--iterations", "1", "--out", str(out), "--quiet"]) == 0
+                 "--order", "1", "--iterations", "1", "--out", str(out), "--quiet"]) == 0
     m = meshio.read(out / "design.vtu")
     G, tri = _element_gradients(m)
     eps = 0.5 * (G + np.swapaxes(G, 1, 2))

@@ -246,3 +246,83 @@ def test_prestressed_energy_keeps_the_residual_load_norm():
     mech = Mechanics(mesh, order=1, energy=energy, fields=("rho_bar", dar.field()),
                      supports=SUP, body=darcy_body("p"), thickness=1e-3)
     assert mech._load_form is None
+
+
+# -- the numpy modulus of the element-matrix route ------------------------------------------
+def _case_energy(penal=3.0, fields=("rho_bar",), wrong=False):
+    from ngsolve import Parameter
+
+    from pacto_ng.case import make_energy
+    from pacto_ng.params import Parameters
+
+    params = Parameters(model="linear", E0=3e3, E1=3e9, E2=6e9, nu=0.4, plane="stress")
+    energy, _, _ = make_energy(params, Parameter(penal), fields)
+    if wrong:  # a numpy twin that is not the energy's modulus (p = 2.9): must be refused
+        from pacto_ng.interpolation import simp_np
+
+        def bad(values):
+            E, d = simp_np(values[fields[0]], 3e3, 3e9, 2.9)
+            return E, {fields[0]: d}
+        energy.modulus_np = bad
+    return energy
+
+
+@pytest.mark.parametrize("kind,order", [("trig", 1), ("quads", 2)])
+def test_numpy_modulus_gives_the_variation_tangent_and_sensitivities(kind, order):
+    """The case's energy carries ``modulus_np``: it is checked against the CF when the block is
+    built and then gives g and ∂g/∂ρ per design; from the second design on (element matrices)
+    K, R and λᵀ∂R/∂ρ equal the Variation / Diff ones."""
+    mech, rng = _block(kind, order, energy=_case_energy())
+    lin = mech._lin
+    assert lin._modulus is not None
+    mech.assemble_tangent(mech.gfu.vec, 1.0)  # the first design: assembled by NGSolve
+    mech.set_fields(rng.uniform(0.05, 1.0, mech.mesh.ne))  # the second design
+    _compare(mech, rng, elementwise=True, quadratic=True)
+    assert lin.scatter is not None  # the element-matrix route, with the numpy modulus
+    f_rho = mech.fields[0]
+    mech.lam.vec.FV().NumPy()[:] = np.where(mech.free, rng.standard_normal(len(mech.free)), 0.0)
+    lin.prepare_fields()
+    lf_fast = mech._sens["rho_bar"]
+    lf_fast.Assemble()
+    gen = _diff_form(mech.volume_density(mech.gfu).Diff(mech.gfu, mech.lam), f_rho, mech.DX)
+    assert _rel(lf_fast.vec.FV().NumPy(), gen.vec.FV().NumPy()) <= 1e-12
+
+
+def test_numpy_modulus_follows_the_penalty_parameter():
+    """The penalty is an NGSolve Parameter changed by the continuation: the numpy modulus reads
+    it at every design, so K after a change of p equals the Variation tangent at the new p."""
+    from ngsolve import Parameter
+
+    from pacto_ng.case import make_energy
+    from pacto_ng.params import Parameters
+
+    penal = Parameter(1.0)
+    energy, _, _ = make_energy(Parameters(model="linear", E0=3e3, E1=3e9, nu=0.4,
+                                          plane="stress"), penal)
+    mech, rng = _block("trig", 1, energy=energy)
+    assert mech._lin._modulus is not None
+    mech.assemble_tangent(mech.gfu.vec, 1.0)
+    mech.set_fields(rng.uniform(0.05, 1.0, mech.mesh.ne))
+    mech.assemble_tangent(mech.gfu.vec, 1.0)
+    assert mech._lin.scatter is not None
+    penal.Set(3.0)
+    mech.set_fields(rng.uniform(0.05, 1.0, mech.mesh.ne))
+    _compare(mech, rng, elementwise=True, quadratic=True)
+
+
+def test_two_material_numpy_modulus_and_a_wrong_one():
+    mesh_fields = ("rho_bar1", "rho_bar2")
+    mesh = small_pa_mesh("trig")
+    mech = Mechanics(mesh, order=1, energy=_case_energy(fields=mesh_fields), fields=mesh_fields,
+                     supports=SUP, loads=(PointLoad("output", (0.0, -1.0)),), thickness=1e-3,
+                     linear=True)
+    assert mech._lin._modulus is not None
+    rng = np.random.default_rng(5)
+    for _ in range(2):
+        mech.set_fields(rng.uniform(0.05, 1.0, mesh.ne), rng.uniform(0.05, 1.0, mesh.ne))
+        mech.assemble_tangent(mech.gfu.vec, 1.0)
+    assert mech._lin.scatter is not None
+    mech.set_fields(rng.uniform(0.05, 1.0, mesh.ne), rng.uniform(0.05, 1.0, mesh.ne))
+    _compare(mech, rng, elementwise=True, quadratic=True)
+    bad, _ = _block("trig", 1, energy=_case_energy(wrong=True))
+    assert bad._lin._separable and bad._lin._modulus is None  # refused: the CF is used
