@@ -193,7 +193,7 @@ def mesh_for(case: Case, params: Parameters):
 
 def make_energy(params: Parameters, penal, fields=("rho_bar",)):
     """Strain-energy density ``(G, coeffs) -> CF`` and the J-guard for the chosen model."""
-    from .interpolation import simp2_cf, simp_cf
+    from .interpolation import simp2_cf, simp2_np, simp_cf, simp_np
     from .physics.materials import get_material, jacobian
 
     def modulus(c):
@@ -214,7 +214,23 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
                                 beta=params.wang_beta, eta=params.wang_eta, gamma_fn=gamma_fn)
         return model, model.guard, False
     mat = get_material(params.model)
-    energy = lambda G, c: mat.energy(G, modulus(c), params.nu, params.plane)
+
+    def energy(G, c):
+        return mat.energy(G, modulus(c), params.nu, params.plane)
+
+    def modulus_np(values):
+        """The modulus and its derivatives on the element values of the fields (numpy): the
+        linear path's per-design coefficient (checked against the energy when the mechanics
+        block is built, see physics.mechanics._LinearSystem)."""
+        p = penal.Get()
+        if len(fields) == 2:
+            E, d1, d2 = simp2_np(values[fields[0]], values[fields[1]], params.E0, params.E1,
+                                 params.E2, p)
+            return E, {fields[0]: d1, fields[1]: d2}
+        E, d = simp_np(values[fields[0]], params.E0, params.E1, p)
+        return E, {fields[0]: d}
+
+    energy.modulus_np = modulus_np
     guard = (lambda G, c: jacobian(G)) if mat.needs_positive_J else None
     return energy, guard, mat.linear
 

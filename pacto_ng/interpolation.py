@@ -31,6 +31,28 @@ def heaviside_deriv_np(rho, eta: float, beta: float):
     return beta * (1.0 - np.tanh(beta * (rho - eta)) ** 2) / den
 
 
+def power_np(rho, penal: float):
+    """``(ρ^p, d ρ^p/dρ)`` on arrays, 0 below 1e-30 as :func:`power_cf`."""
+    rho = np.asarray(rho, dtype=float)
+    on = rho > 1e-30
+    r = np.where(on, rho, 1.0)
+    return np.where(on, r ** penal, 0.0), np.where(on, penal * r ** (penal - 1.0), 0.0)
+
+
+def simp_np(rho, E0: float, E1: float, penal: float):
+    """``(E, dE/dρ)`` of :func:`simp_cf` on arrays."""
+    a, da = power_np(rho, penal)
+    return E0 + a * (E1 - E0), da * (E1 - E0)
+
+
+def simp2_np(rho1, rho2, E0: float, E1: float, E2: float, penal: float):
+    """``(E, dE/dρ1, dE/dρ2)`` of :func:`simp2_cf` on arrays."""
+    a, da = power_np(rho1, penal)
+    b, db = power_np(rho2, penal)
+    inner = (1.0 - b) * E1 + b * E2
+    return (1.0 - a) * E0 + a * inner, da * (inner - E0), a * db * (E2 - E1)
+
+
 def tanh_cf(z):
     """Overflow-safe tanh of a CoefficientFunction that differentiates correctly with ``Diff``."""
     from ngsolve import IfPos, exp

@@ -335,6 +335,7 @@ class _LinearSystem:
         # energy at a fixed G
         self.scatter = None
         self._separable = None
+        self._modulus = None
         if self.quadratic:
             self._check_separable(mech)
 
@@ -354,18 +355,23 @@ class _LinearSystem:
         gcf = CF((phi,) + tuple(phi.Diff(mech.coeffs[n], mech.one) for n in names)).Compile()
         rng = np.random.default_rng(1357)
         saved = _save_fields(mech)
+        modulus_np = getattr(mech._energy, "modulus_np", None)
         try:
             states = []
             for _ in range(2):
                 _random_fields(mech, rng)
                 states.append((np.asarray(self.C(self._centroids)).reshape(ne, -1),
-                               np.asarray(gcf(self._centroids)).reshape(ne, -1)[:, 0]))
-            (c1, phi1), (c2, phi2) = states
+                               np.asarray(gcf(self._centroids)).reshape(ne, -1),
+                               {n: v.copy() for n, v in self._field_values(names).items()}))
+            (c1, v1, f1), (c2, v2, f2) = states
+            phi1 = v1[:, 0]
             if not (np.all(np.isfinite(c1)) and np.all(phi1 > 0)):
                 return
-            g = phi2 / phi1
+            g = v2[:, 0] / phi1
             if not np.max(np.abs(c2 - g[:, None] * c1)) <= tol * float(np.max(np.abs(c2))):
                 return
+            self._modulus = self._check_modulus(modulus_np, names, f1, f2, g,
+                                                v2[:, 1:] / phi1[:, None], tol)
         except Exception:
             return
         finally:
@@ -373,6 +379,33 @@ class _LinearSystem:
         self._separable = True
         self._gcf, self._C1, self._phi1, self._names = gcf, c1, phi1, names
         self._g = self._dg = None
+
+    def _field_values(self, names):
+        return {n: self.mech.coeffs[n].vec.FV().NumPy() for n in names}
+
+    @staticmethod
+    def _check_modulus(modulus_np, names, f1, f2, g, dg, tol):
+        """``(modulus_np, E at state 1)`` if the energy's numpy modulus (``energy.modulus_np``:
+        element values of the fields -> ``(E, {field: ∂E/∂field})``) gives ``g = E / E(state
+        1)`` and ``∂g/∂field`` of the CF at state 2 to ``tol``; else None (the CF is used).
+        Evaluating it costs a few numpy operations per design instead of a CF at every element
+        centre (21 ms of 115 per analysis at 120 x 80, measured)."""
+        if modulus_np is None:
+            return None
+        try:
+            E1, _ = modulus_np(f1)
+            E2, dE2 = modulus_np(f2)
+            gn = np.asarray(E2) / np.asarray(E1)
+            if not np.max(np.abs(gn - g)) <= tol * float(np.max(np.abs(g))):
+                return None
+            for j, n in enumerate(names):
+                dn = np.asarray(dE2.get(n, np.zeros_like(gn))) / E1
+                if not np.max(np.abs(dn - dg[:, j])) <= tol * max(float(np.max(np.abs(dg[:, j]))),
+                                                                  1e-300):
+                    return None
+        except Exception:
+            return None
+        return modulus_np, np.asarray(E1, dtype=float).copy()
 
     def _build_scatter(self):
         """Build the element matrices (once; on failure the assembly stays symbolic)."""
@@ -432,9 +465,16 @@ class _LinearSystem:
         if self._separable and self.version >= 1:
             self._build_scatter()  # a second design: from now on worth the element matrices
         if self.scatter is not None:
-            vals = np.asarray(self._gcf(self._centroids)).reshape(len(self._phi1), -1)
-            self._g = vals[:, 0] / self._phi1
-            self._dg = vals[:, 1:] / self._phi1[:, None]
+            if self._modulus is not None:
+                modulus_np, E1 = self._modulus
+                E, dE = modulus_np(self._field_values(self._names))
+                self._g = E / E1
+                self._dg = np.column_stack([dE.get(n, np.zeros_like(E)) for n in self._names]
+                                           ) / E1[:, None]
+            else:
+                vals = np.asarray(self._gcf(self._centroids)).reshape(len(self._phi1), -1)
+                self._g = vals[:, 0] / self._phi1
+                self._dg = vals[:, 1:] / self._phi1[:, None]
             self.gfC.vec.FV().NumPy()[:] = (self._g[:, None] * self._C1).ravel()
             self.scatter.assemble([self._g])
         else:
