@@ -34,10 +34,9 @@ def short_optimisation(case_name: str, nelx: int, nely: int, iterations: int):
 
 
 def measure(nelx: int, nely: int, iterations: int = 8, repeat: int = 3):
-    from ngsolve import SetNumThreads, TaskManager
+    from pacto_ng.threads import compute
 
-    SetNumThreads(2)
-    with TaskManager():
+    with compute(threads=2):
         problem, state = short_optimisation("mbb", nelx, nely, iterations)
         per_it = statistics.median(h["time"] for h in state.history[1:])
         # one factorisation + solve of the same matrix

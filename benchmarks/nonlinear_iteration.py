@@ -20,7 +20,7 @@ import time
 
 def measure(model: str, maxh: float, order: int, load: float = 144e3, iterations: int = 5,
             threads: int = 2, realcompile: bool = False) -> dict:
-    from ngsolve import SetNumThreads, TaskManager
+    from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
@@ -28,14 +28,13 @@ def measure(model: str, maxh: float, order: int, load: float = 144e3, iterations
 
     if iterations < 4:
         raise ValueError("need >= 4 iterations (medians over >= 3 iterations after the first)")
-    SetNumThreads(threads)
     case = get_case("cantilever")
     params = case.defaults.with_overrides({"model": model, "maxh": str(maxh), "nelx": "0",
                                            "nely": "0", "order": str(order),
                                            "load": str(load), "iterations": str(iterations),
                                            "realcompile": str(int(realcompile))})
     t0 = time.perf_counter()
-    with TaskManager():
+    with compute(threads=threads):
         problem = build_problem(case, params)
         setup = time.perf_counter() - t0
         state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)

@@ -222,15 +222,14 @@ def _designs(x):
 
 
 def compare(nelx, nely, repeat=3):
-    from ngsolve import SetNumThreads, TaskManager
+    from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
 
-    SetNumThreads(2)
     case = get_case("pa-inverter")
     params = case.defaults.with_overrides(ours_params(nelx, nely))
     peer = ScipyPAInverter(nelx, nely)
-    with TaskManager():
+    with compute(threads=2):
         problem = build_problem(case, params)
         cen = problem.field.centroids()[problem.field.design_index]
         x = test_design(cen, nelx, nely)
@@ -243,12 +242,9 @@ def compare(nelx, nely, repeat=3):
         xs = _designs(x)
         t_ours = _median_time(problem.evaluate, xs, repeat)
         ndof = problem.mech.fes.ndof + problem.pressure_block.fes.ndof
-    # one NGSolve thread as well: on a machine shared with other jobs, NGSolve's task manager
-    # (whose workers spin while waiting) can lose more than the second core gains
-    SetNumThreads(1)
-    with TaskManager():
+    # one NGSolve thread as well (the scipy peer's splu runs on one)
+    with compute(threads=1):
         t_ours1 = _median_time(problem.evaluate, xs, repeat)
-    SetNumThreads(2)
     t_peer = _median_time(peer.evaluate, xs, repeat)
     return dict(mesh=f"{nelx} x {nely}", dofs=ndof, f_ours=f_ours, f_peer=f_peer,
                 rel_f=abs(f_ours - f_peer) / abs(f_peer),
@@ -278,14 +274,13 @@ def coarse_design(cen, L=0.2, H=0.1, nx=30, ny=15):
 
 
 def order_point(nelx, nely, order, repeat=3, k_out=0.1):
-    from ngsolve import SetNumThreads, TaskManager
+    from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
 
-    SetNumThreads(1)  # as the scipy peer (one thread); 2 threads are slower at 2e4-3e4 dofs here
     case = get_case("pa-inverter")
     params = case.defaults.with_overrides(_physical_params(nelx, nely, order, k_out))
-    with TaskManager():
+    with compute(threads=1):  # as the scipy peer: one thread
         problem = build_problem(case, params)
         cen = problem.field.centroids()[problem.field.design_index]
         x = coarse_design(cen)

@@ -53,17 +53,16 @@ def _inclusive(stats, frag, name):
 
 def profile(case_name="pa-inverter", model="neohookean", load=1e6, iterations=4, maxh=0.004,
             order=1, threads=2):
-    from ngsolve import SetNumThreads, TaskManager
+    from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
     from pacto_ng.run import initial_design, schedule_of
 
-    SetNumThreads(threads)
     case = get_case(case_name)
     params = case.defaults.with_overrides({"model": model, "load": str(load), "maxh": str(maxh),
                                            "order": str(order), "iterations": str(iterations)})
-    with TaskManager():
+    with compute(threads=threads):
         problem = build_problem(case, params)
         state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
         prof = cProfile.Profile()
@@ -186,15 +185,14 @@ def _ab(before, after, repeat):
 def _evaluated(overrides_list, threads):
     """``(label, problem)`` per ``(label, overrides)``: the pa-inverter with those overrides,
     built and evaluated once at its initial design, inside NGSolve's TaskManager."""
-    from ngsolve import SetNumThreads, TaskManager
+    from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.run import initial_design
 
-    SetNumThreads(threads)
     case = get_case("pa-inverter")
     for label, over in overrides_list:
-        with TaskManager():
+        with compute(threads=threads):
             problem = build_problem(case, case.defaults.with_overrides(over))
             problem.evaluate(initial_design(problem))
             yield label, problem

@@ -22,7 +22,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from pacto_ng.threads import thread_count
 
 LOADS = (1e5, 1e6, 3e6, 1e7, 3e7, 1e8)
 BASE = {"maxh": "0.004", "order": "1", "filter": "none", "beta": "0", "beta_max": "0",
@@ -66,19 +65,18 @@ def classify(reason: str) -> str:
 
 
 def sweep(overrides, design, loads=LOADS):
-    from ngsolve import SetNumThreads, TaskManager
+    from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.physics.mechanics import NewtonFailure
     from benchmarks.trade import sample
 
-    SetNumThreads(thread_count())
     case = get_case("pa-inverter")
     params = case.defaults.with_overrides({**BASE, **overrides, "load": str(loads[0])})
     images, W, H = design
     image = images[0]
     done, failure, newton, t_total = None, "", [], 0.0
-    with TaskManager():
+    with compute():
         problem = build_problem(case, params)
         problem.mech.settings = replace(problem.mech.settings, max_iter=MAX_ITER,
                                         max_total_iter=MAX_TOTAL_ITER)

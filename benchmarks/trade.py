@@ -31,7 +31,6 @@ import time
 import numpy as np
 
 from benchmarks import perturbed
-from pacto_ng.threads import thread_count
 
 DESIGN_ITERATIONS = 20
 
@@ -65,7 +64,7 @@ def _cache_dir():
 def fixed_design(case_name, grid, iterations=DESIGN_ITERATIONS):
     """(images (k, nely, nelx), width, height): the physical densities (k = 1, or 2 for two
     materials) after a short optimisation on a structured mesh (cached)."""
-    from ngsolve import SetNumThreads, TaskManager
+    from pacto_ng.threads import compute
 
     from benchmarks.mbb_iteration import short_optimisation
 
@@ -74,8 +73,7 @@ def fixed_design(case_name, grid, iterations=DESIGN_ITERATIONS):
     if os.path.exists(path):
         d = np.load(path)
         return d["image"], float(d["W"]), float(d["H"])
-    SetNumThreads(thread_count())
-    with TaskManager():
+    with compute():
         problem, _ = short_optimisation(case_name, nelx, nely, iterations)
         names = ["rho_bar"] if "rho_bar" in problem.values else ["rho_bar1", "rho_bar2"]
         image = np.stack([np.asarray(problem.values[n]).reshape(nely, nelx) for n in names])
@@ -107,11 +105,10 @@ def sample_smooth(image, W, H, cen):
 
 
 def run_point(case_name, model, maxh, order, design, repeat=3, extra=None):
-    from ngsolve import SetNumThreads, TaskManager
+    from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
 
-    SetNumThreads(thread_count())
     case = get_case(case_name)
     over = {"model": model, "maxh": str(maxh), "order": str(order), "filter": "none",
             "beta": "0", "beta_max": "0", "penal_start": "0", **(extra or {})}
@@ -119,7 +116,7 @@ def run_point(case_name, model, maxh, order, design, repeat=3, extra=None):
         over["load"] = str(NL_LOAD)
     params = case.defaults.with_overrides(over)
     images, W, H = design
-    with TaskManager():
+    with compute():
         t0 = time.perf_counter()
         problem = build_problem(case, params)
         problem.mech.settings = replace(problem.mech.settings, max_total_iter=150)

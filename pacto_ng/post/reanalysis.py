@@ -308,11 +308,11 @@ class Reanalysis:
         After a failure the remaining pressures are recorded as not converged without being
         attempted (``stop_on_failure``), since a larger pressure starts from further away.
         """
-        from ngsolve import TaskManager
+        from ..threads import compute
 
         out = Sweep(self.kind, [], self)
         failed = False
-        with TaskManager():  # threads as set by SetNumThreads before the call
+        with compute():
             for P in pressures:
                 if failed and stop_on_failure:
                     out.points.append(SweepPoint(float(P), np.nan, np.nan, np.nan, 0, False, 0.0))
