@@ -139,8 +139,7 @@ def run_peer(quick):
              "compared.  Each order is picked at the coarsest mesh from which it stays within "
              "the tolerance on every finer mesh of the study (the sequences oscillate at first); "
              "the scipy peer is timed on the mesh of the Q1 pick (unit elements, the same "
-             "matrix sizes).  Times with one NGSolve thread (the peer runs on one; with two, "
-             "ours is slower at 2-3e4 dofs on this machine, see the 120 x 80 row above).", "",
+             "matrix sizes).  Times with one NGSolve thread, as the peer's splu.", "",
              P.order_markdown(ref0, orows0, picks0, tol, fine_q1_lines=False)]
     text += [t for t in (P.decrement_line(ref0, orows0, k) for k in (1, 2, 3)) if t]
     text += ["", P.equal_accuracy_markdown(eq), "", _regen("peer")]
