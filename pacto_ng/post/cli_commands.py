@@ -366,8 +366,8 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     p_final = _copy_gf(block.gfp)  # the final Darcy field at P_in = load (the wetting rule)
     _say(quiet, f"  rebuilt: Δ = {_fmt(delta_run, '.6g')} m at {run.load:g} Pa (summary.json: "
                 f"{run.summary.get('output_displacement')})")
-    # (warned once the analysis is done: a failing analysis ends with its one-line error)
-    # (only for a run reported at its full load: otherwise summary.json's Δ is at another load)
+    # for a run reported at its full load only (else summary.json's Δ is at another load);
+    # warned once the analysis is done (a failing analysis ends with its one-line error)
     path_note = (load_path_note(delta_run, run.summary.get("output_displacement"))
                  if run.summary.get("load_factor_reached", 1.0) == 1.0 else None)
 

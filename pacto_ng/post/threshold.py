@@ -144,6 +144,15 @@ def mesh_to_pyvista(mesh):
     return pv.UnstructuredGrid(flat, types, np.c_[pts, np.zeros(len(pts))])
 
 
+def _grid_and_densities(mesh, rho):
+    """The mesh as a pyvista grid and ``rho`` as a flat float array, one value per element."""
+    grid = mesh_to_pyvista(mesh)
+    rho = np.asarray(rho, dtype=float).ravel()
+    if rho.shape[0] != grid.n_cells:
+        raise ValueError(f"rho has {rho.shape[0]} values but the mesh has {grid.n_cells} elements")
+    return grid, rho
+
+
 def _cell_areas(grid) -> np.ndarray:
     return np.asarray(grid.compute_cell_sizes(length=False, area=True, volume=False)
                       .cell_data["Area"], dtype=float)
@@ -163,10 +172,7 @@ def nodal_density(mesh, rho) -> np.ndarray:
     ndarray, shape (mesh.nv,)
         ``ρ_i = Σ_e A_e ρ_e / Σ_e A_e`` over the elements ``e`` sharing vertex ``i``.
     """
-    grid = mesh_to_pyvista(mesh)
-    rho = np.asarray(rho, dtype=float).ravel()
-    if rho.shape[0] != grid.n_cells:
-        raise ValueError(f"rho has {rho.shape[0]} values but the mesh has {grid.n_cells} elements")
+    grid, rho = _grid_and_densities(mesh, rho)
     return _nodal(grid, rho, _cell_areas(grid))
 
 
@@ -320,10 +326,7 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
     if not (0.0 < float(threshold) < 1.0):
         raise ValueError(f"threshold must lie in (0, 1), got {threshold!r}")
     threshold = float(threshold)
-    grid = mesh_to_pyvista(mesh)
-    rho = np.asarray(rho, dtype=float).ravel()
-    if rho.shape[0] != grid.n_cells:
-        raise ValueError(f"rho has {rho.shape[0]} values but the mesh has {grid.n_cells} elements")
+    grid, rho = _grid_and_densities(mesh, rho)
     area = _cell_areas(grid)
     h = _element_size(grid, area)
     nodal = _nodal(grid, rho, area)
@@ -398,10 +401,7 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
 # choosing the threshold
 def design_volume(mesh, rho) -> float:
     """``Σ_e A_e ρ̄_e``: the material volume (area) of the density design."""
-    grid = mesh_to_pyvista(mesh)
-    rho = np.asarray(rho, dtype=float).ravel()
-    if rho.shape[0] != grid.n_cells:
-        raise ValueError(f"rho has {rho.shape[0]} values but the mesh has {grid.n_cells} elements")
+    grid, rho = _grid_and_densities(mesh, rho)
     return float(np.dot(_cell_areas(grid), rho))
 
 
@@ -418,10 +418,7 @@ def volume_threshold(mesh, rho, *, tol: float = 1e-4) -> float:
     ValueError
         If the design has no material.
     """
-    grid = mesh_to_pyvista(mesh)
-    rho = np.asarray(rho, dtype=float).ravel()
-    if rho.shape[0] != grid.n_cells:
-        raise ValueError(f"rho has {rho.shape[0]} values but the mesh has {grid.n_cells} elements")
+    grid, rho = _grid_and_densities(mesh, rho)
     area = _cell_areas(grid)
     target = float(np.dot(area, rho))
     if not target > 0.0:
