@@ -54,8 +54,11 @@ def test_cantilever_smoke_two_iterations(model, tmp_path):
 @pytest.mark.parametrize("model", ["neohookean", "wang"])
 def test_cantilever_144kN_converges_with_filter_and_projection(model, tmp_path):
     out = tmp_path / model
+    # converged at iteration 135 (Neo-Hookean, order 1) and 201 (Wang, order 2) on 2026-12-02;
+    # the cap of 120 these runs had before did not reach the convergence test (also with the
+    # code of 2026-12-01: the same objective to 1e-10)
     rc = main(["run", "cantilever", "--model", model, "--load", "144e3", "--maxh", "0.04",
-               "--iterations", "120", "--set", "beta_every=6", "--out", str(out), "--quiet"])
+               "--iterations", "250", "--set", "beta_every=6", "--out", str(out), "--quiet"])
     assert rc == 0
     s = summary(out)
     assert s["parameters"]["filter"] == "helmholtz" and s["parameters"]["beta"] > 0
