@@ -256,13 +256,18 @@ def compare(nelx, nely, repeat=3):
 
 
 # ------------------------------------------------------------------------------------------
-def _physical_params(nelx, nely, order, k_out=0.1):
+#: the spread output of the order study: the right edge's first H/15 (one cell of the design
+#: grid, a grid line of every mesh of the study)
+SPREAD_OUTPUT = 0.1 / 15
+
+
+def _physical_params(nelx, nely, order, k_out=0.1, output_width=0.0):
     """The physical pa-inverter domain (0.2 x 0.1 m, plane stress, E1 = 1) on a structured mesh,
     no filter, no projection (the design is exactly the same function on every mesh)."""
     return {"nelx": str(nelx), "nely": str(nely), "plane": "stress", "E1": "1", "E0": "1e-6",
             "nu": "0.3", "thickness": "1", "load": "1", "delta_s": "0.01", "filter": "none",
             "beta": "0", "beta_max": "0", "penal": "3", "penal_start": "0", "k_out": str(k_out),
-            "order": str(order)}
+            "order": str(order), "output_width": repr(float(output_width))}
 
 
 def coarse_design(cen, L=0.2, H=0.1, nx=30, ny=15):
@@ -273,13 +278,14 @@ def coarse_design(cen, L=0.2, H=0.1, nx=30, ny=15):
     return test_design(c, L, H)
 
 
-def order_point(nelx, nely, order, repeat=3, k_out=0.1):
+def order_point(nelx, nely, order, repeat=3, k_out=0.1, output_width=0.0):
     from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
 
     case = get_case("pa-inverter")
-    params = case.defaults.with_overrides(_physical_params(nelx, nely, order, k_out))
+    params = case.defaults.with_overrides(_physical_params(nelx, nely, order, k_out,
+                                                           output_width))
     with compute(threads=1):  # as the scipy peer: one thread
         problem = build_problem(case, params)
         cen = problem.field.centroids()[problem.field.design_index]
@@ -291,9 +297,9 @@ def order_point(nelx, nely, order, repeat=3, k_out=0.1):
 
 
 def order_study(levels=(30, 60, 120, 240), fine=480, orders=(1, 2, 3), tol=1e-2, repeat=3,
-                max_dofs=400_000, k_out=0.1):
+                max_dofs=400_000, k_out=0.1, output_width=0.0):
     """Objective of a fixed design per (mesh, order) against the finest Q1 mesh."""
-    ref = order_point(fine, fine // 2, 1, repeat=1, k_out=k_out)
+    ref = order_point(fine, fine // 2, 1, repeat=1, k_out=k_out, output_width=output_width)
     rows = []
     for k in orders:
         for n in levels:
@@ -302,7 +308,7 @@ def order_study(levels=(30, 60, 120, 240), fine=480, orders=(1, 2, 3), tol=1e-2,
             est = 3 * (k * n + 1) * (k * n // 2 + 1)
             if est > max_dofs:
                 continue
-            r = order_point(n, n // 2, k, repeat, k_out=k_out)
+            r = order_point(n, n // 2, k, repeat, k_out=k_out, output_width=output_width)
             r["err"] = abs(r["f"] - ref["f"]) / abs(ref["f"])
             rows.append(r)
     picks = {}

@@ -28,7 +28,7 @@ import dataclasses
 import sys
 
 from pacto_ng.case import Case, Pressure, Setup, domain_size
-from pacto_ng.params import Parameters
+from pacto_ng.params import InputError, Parameters
 from pacto_ng.physics.loads import Port, Spring
 from pacto_ng.physics.mechanics import Supports
 from pacto_ng.geometries import pa_mechanism as geo
@@ -75,15 +75,22 @@ def objective_ref(p: Parameters, width: float, height: float, ratio: float) -> f
 
 def _layout(p: Parameters):
     L, H = domain_size(p, 0.2, 0.1)
-    return geo.layout(L, H)
+    if p.output_width >= H:
+        raise InputError(f"output_width: {p.output_width:g} is not shorter than the right edge "
+                         f"({H:g})")
+    return geo.layout(L, H, output_edge=p.output_width)
 
 
 def _setup(p: Parameters) -> Setup:
+    # a spread output (output_width > 0): the spring k_out/2 mean((d·u)²) and Δ = mean(-u_x)
+    # over the edge, whose reaction is a traction instead of a point force
+    out = "output_edge" if p.output_width > 0 else "output"
+    zero = ("zero_pressure", "fixed") + (("output_edge",) if p.output_width > 0 else ())
     return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",)),
-                 springs=(Spring("output", p.k_out, (1.0, 0.0)),),
-                 port=Port("output", (-1.0, 0.0)), solid=("block",),
+                 springs=(Spring(out, p.k_out, (1.0, 0.0)),),
+                 port=Port(out, (-1.0, 0.0)), solid=("block",),
                  objective="mechanism",
-                 pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
+                 pressure=Pressure(inlet=("inlet",), zero=zero),
                  se_max=se_default(p, 0.2, 0.1),
                  objective_ref=objective_ref(p, 0.2, 0.1, 3.0))
 

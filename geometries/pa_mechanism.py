@@ -13,13 +13,19 @@ from pacto_ng.mesh import Layout, Region, Segment
 
 
 def layout(width: float = 0.2, height: float = 0.1, clamp: float | None = None,
-           block: tuple[float, float] | None = None, gripper: bool = False) -> Layout:
+           block: tuple[float, float] | None = None, gripper: bool = False,
+           output_edge: float = 0.0) -> Layout:
+    """``output_edge`` > 0 (inverter): the right edge's first ``output_edge`` from the output
+    corner is a boundary of its own, "output_edge" (a spread output spring and port)."""
     L, H = width, height
     clamp = L / 20 if clamp is None else clamp
     bw, bh = block if block is not None else (L / 20, H / 20)
+    if output_edge and (gripper or not 0.0 < output_edge < H):
+        raise ValueError("output_edge: the inverter's only, shorter than the right edge")
+    edge = (Segment("output_edge", (L, 0.0), (L, output_edge)),) if output_edge else ()
     segments = (Segment("inlet", (0.0, H), (0.0, 0.0)),
                 Segment("fixed", (0.0, H), (clamp, H)),
-                Segment("zero_pressure", (clamp, H), (L, H)),
+                Segment("zero_pressure", (clamp, H), (L, H))) + edge + (
                 Segment("zero_pressure", (L, 0.0), (L, H)),
                 Segment("symmetry", (0.0, 0.0), (L, 0.0)))
     regions = [Region("block", "solid", 0.0, H - bh, bw, H)]

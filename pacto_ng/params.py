@@ -49,6 +49,7 @@ class Parameters:
     # -- loads and ports
     load: float = _p(1.0, "N", "load magnitude (force in N, or inlet pressure in Pa)")
     load_width: float = _p(0.0, "m", "width of a spread force load: the cantilever's tip patch, the inverter's input (0: 4 and 2 element sizes, the cases' definitions)")
+    output_width: float = _p(0.0, "m", "pa-inverter: the output spring and port spread over this length of the right edge from the output corner (0: the corner point, the case's definition)")
     load_ramp: int = _p(0, "", "iterations over which the load rises to full (0: none)")
     load_adapt: float = _p(0.0, "", "on a Newton failure go on at the load reached, raising it by this factor per iteration (0: stop)")
     k_in: float = _p(0.0, "N/m", "input spring stiffness")
@@ -135,6 +136,8 @@ class Parameters:
             raise InputError(f"r: must lie in (0, 1) (got {self.r})")
         if self.load_width < 0:
             raise InputError(f"load_width: must be >= 0 (got {self.load_width})")
+        if self.output_width < 0:
+            raise InputError(f"output_width: must be >= 0 (got {self.output_width})")
         if not self.delta_s > 0:
             raise InputError(f"delta_s: must be positive (got {self.delta_s})")
         if not 0.0 < self.Ks < self.Kv:

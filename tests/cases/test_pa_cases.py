@@ -112,6 +112,8 @@ def test_smoke_structured_and_unit_elements(tmp_path):
     ("mm-gripper", ["--set", "volfrac2=0.1"]),
     ("pa-gripper", ["--set", "objective=output_se"]),
     ("pa-inverter", ["--nelx", "16", "--nely", "8"]),
+    # the output spring and port spread over the right edge's first 0.02 m (output_width)
+    ("pa-inverter", ["--nelx", "30", "--nely", "15", "--set", "output_width=0.02"]),
 ])
 def test_check_gradients(case, extra, capsys):
     assert main(["check-gradients", case, "--set", "load_sensitivity=1", *extra]) == 0
@@ -153,3 +155,31 @@ def test_check_gradients_nonlinear(case, model, load_type, capsys):
     out = capsys.readouterr().out
     assert code == 0, out[-2000:]
     assert "pass" in out and f"{case}/{model}: d(objective)/dx" in out
+
+
+def test_output_width_spreads_the_spring_and_port_over_an_edge():
+    """output_width > 0: the boundary "output_edge" (the right edge's first output_width) takes
+    the spring and the port (Δ = the edge's mean of -u_x) and gets zero pressure; a width not
+    shorter than the edge is a one-line error naming output_width."""
+    from ngsolve import BND, Integrate
+
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.params import InputError
+    from pacto_ng.threads import compute
+
+    case = get_case("pa-inverter")
+    params = case.defaults.with_overrides({"nelx": "30", "nely": "15", "output_width": "0.02"})
+    setup = case.setup(params)
+    assert setup.port.region == "output_edge" and setup.springs[0].region == "output_edge"
+    assert "output_edge" in setup.pressure.zero
+    with compute():
+        problem = build_problem(case, params)
+        mesh = problem.mech.mesh
+        assert Integrate(1.0, mesh, BND, definedon=mesh.Boundaries("output_edge")) \
+            == pytest.approx(0.02, rel=1e-12)
+        problem.evaluate(np.full(problem.field.n, 0.4))
+        u = problem.mech.gfu
+        mean_ux = Integrate(u[0], mesh, BND, definedon=mesh.Boundaries("output_edge")) / 0.02
+        assert float(problem.values["delta"]) == pytest.approx(-mean_ux, rel=1e-10)
+    with pytest.raises(InputError, match="^output_width"):
+        build_problem(case, case.defaults.with_overrides({"output_width": "0.1"}))
