@@ -274,8 +274,8 @@ def load_path_note(rebuilt, summary, rtol: float = 1e-4):
 
 
 def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
-                     connect: bool = True) -> dict:
-    """The threshold ``pacto analyse`` uses, and why.
+                     connect: bool = True):
+    """The threshold ``pacto analyse`` uses, and why: ``(record, Thresholded at it)``.
 
     ``requested`` is a number in (0, 1) or ``"volume"`` (the volume-preserving threshold).
     With ``connect``, when the part kept on the clamp at that threshold does not contain the
@@ -315,7 +315,7 @@ def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
                            f"{what} lowered to {used:.4g}: above it the part on the clamp "
                            f"does not contain the output point (a grey joint)")
     rec["part_area"] = th.area
-    return rec
+    return rec, th
 
 
 def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
@@ -379,8 +379,8 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
 
     supports = setup.supports
     output = _output_of(setup)
-    choice = choose_threshold(problem.mesh, rho, threshold_value, output.region,
-                              supports.clamp, connect=connect)
+    choice, th = choose_threshold(problem.mesh, rho, threshold_value, output.region,
+                                  supports.clamp, connect=connect)
     threshold_value = choice["used"]
     # (a part that still misses the output is reported once the part is built: the warning on
     # the output port's shift below; a design with no solid on the clamp is an error there)
@@ -399,7 +399,8 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     candidates = [t for t in candidates if t > 0.0]
     for attempt, thr in enumerate(candidates):
         # the Darcy field of the thresholded design (same block, same P_in = load)
-        th = threshold(problem.mesh, rho, thr)
+        if attempt:
+            th = threshold(problem.mesh, rho, thr)
         rho_thr = thresholded_elements(th)
         with compute():
             block.forward(rho_thr)
@@ -409,7 +410,8 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
         try:
             res = post_analyse(problem.mesh, rho, out_dir, pressures=pressures, E=p.E1, nu=p.nu,
                                thickness=p.thickness, output=output, clamp=supports.clamp,
-                               supports=supports, threshold_value=thr, maxh=maxh,
+                               supports=supports, threshold_value=thr, thresholded=th,
+                               maxh=maxh,
                                pressure=p_final, p_in=run.load,
                                wet_boundaries=setup.pressure.inlet, kinds=tuple(kinds),
                                darcy_pressure=p_thr, darcy_p_in=run.load, expected=exp_pair,

@@ -46,7 +46,8 @@ class PostResult:
 
 def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thickness: float,
                  output: Output, clamp=("fixed",), supports: Supports | None = None,
-                 threshold_value: float = 0.5, maxh: float | None = None, pressure=None,
+                 threshold_value: float = 0.5, thresholded=None,
+                 maxh: float | None = None, pressure=None,
                  p_in: float | None = None, wet_fraction: float = 0.5,
                  wet_boundaries=("inlet",), kinds=("fixed", "follower"), darcy_pressure=None,
                  darcy_p_in: float | None = None, expected=None, order: int = 2,
@@ -73,6 +74,9 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         Default ``Supports(clamp=clamp)``; add e.g. ``fix_y=("symmetry",)``.
     threshold_value : float
         Density threshold in (0, 1).
+    thresholded : Thresholded, optional
+        :func:`~.threshold.threshold` of ``mesh, rho`` at ``threshold_value``, if the caller has
+        it already (else computed here).
     maxh : float, optional
         Element size of the new mesh, default the optimisation mesh's.
     pressure, p_in, wet_fraction, wet_boundaries
@@ -88,7 +92,9 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    th = threshold(mesh, rho, threshold_value)
+    th = thresholded
+    if th is None or th.threshold != threshold_value:
+        th = threshold(mesh, rho, threshold_value)
     rm = remesh(th, th.h if maxh is None else maxh, clamp=clamp, pressure=pressure, p_in=p_in,
                 wet_fraction=wet_fraction, wet_boundaries=wet_boundaries)
     supports = Supports(clamp=tuple(clamp)) if supports is None else supports

@@ -221,6 +221,15 @@ def outer_boundary(mesh):
     return seg, [named.get(k, "free") for k in edges]
 
 
+def _segment_distance(p, a, b):
+    """Distance of the points ``p`` from the segments ``a -> b`` (broadcast over the leading
+    axes; the last axis holds the coordinates)."""
+    d = b - a
+    lam = np.clip(np.einsum("...k,...k->...", p - a, d) / np.einsum("...k,...k->...", d, d),
+                  0.0, 1.0)
+    return np.linalg.norm(a + lam[..., None] * d - p, axis=-1)
+
+
 class _BoundaryLocator:
     """Which outer-boundary edge of the source mesh (if any) a point lies on."""
 
@@ -238,11 +247,7 @@ class _BoundaryLocator:
         k = min(4, len(self.seg))
         _, idx = self.tree.query(pts, k=k)
         idx = idx.reshape(len(pts), k)
-        a = self.seg[idx, 0]
-        d = self.seg[idx, 1] - a
-        lam = np.einsum("ijk,ijk->ij", pts[:, None, :] - a, d) / np.einsum("ijk,ijk->ij", d, d)
-        lam = np.clip(lam, 0.0, 1.0)
-        dist = np.linalg.norm(a + lam[..., None] * d - pts[:, None, :], axis=2)
+        dist = _segment_distance(pts[:, None, :], self.seg[idx, 0], self.seg[idx, 1])
         best = np.argmin(dist, axis=1)
         out = []
         for i, j in enumerate(best):
@@ -446,9 +451,7 @@ def volume_threshold(mesh, rho, *, tol: float = 1e-4) -> float:
 def _near(loop: Loop, point, tol: float) -> bool:
     """Whether ``point`` is within ``tol`` of an edge of ``loop``."""
     a = loop.points
-    d = np.roll(a, -1, axis=0) - a
-    lam = np.clip(np.einsum("ij,ij->i", point - a, d) / np.einsum("ij,ij->i", d, d), 0.0, 1.0)
-    return bool(np.min(np.linalg.norm(a + lam[:, None] * d - point, axis=1)) <= tol)
+    return bool(np.min(_segment_distance(point, a, np.roll(a, -1, axis=0))) <= tol)
 
 
 def _inside(loop: Loop, point) -> bool:

@@ -96,16 +96,17 @@ def test_choose_threshold_lowers_to_the_output_and_records_why(chamber_quads):
 
     assert OUTPUT == POINT
     rho = _grey_bar(chamber_quads)
-    ch = choose_threshold(chamber_quads, rho, 0.5, "output", ("fixed",))
+    ch, th = choose_threshold(chamber_quads, rho, 0.5, "output", ("fixed",))
+    assert th.threshold == ch["used"]
     assert ch["lowered"] and ch["reaches_output"] and not ch["missed"]
     assert ch["start"] == 0.5 and 0.295 <= ch["used"] <= 0.3
     assert "lowered to" in ch["note"]
     assert ch["design_volume"] == pytest.approx(0.03 * 0.05 + 0.3 * 0.03 * 0.012, rel=1e-9)
     assert ch["part_area"] == pytest.approx(threshold(chamber_quads, rho, ch["used"]).area)
-    kept = choose_threshold(chamber_quads, rho, 0.5, "output", ("fixed",), connect=False)
+    kept, _ = choose_threshold(chamber_quads, rho, 0.5, "output", ("fixed",), connect=False)
     assert kept["used"] == 0.5 and not kept["lowered"] and kept["reaches_output"] is False
-    vol = choose_threshold(chamber_quads, chamber_density(chamber_quads), "volume", "output",
-                           ("fixed",))
+    vol, _ = choose_threshold(chamber_quads, chamber_density(chamber_quads), "volume", "output",
+                              ("fixed",))
     # the volume-preserving cut lies just above 0.5 (see above), and the output point on the
     # wall's outer face has the nodal density 1/2: the threshold comes down to it
     assert vol["requested"] == "volume" and 0.5 < vol["start"] < 0.55
