@@ -17,7 +17,7 @@ def test_benchmarks_all_quick(tmp_path):
                        timeout=900, env={**os.environ, "PACTO_THREADS": "1"})
     assert r.returncode == 0, r.stderr[-2000:]
     text = out.read_text()
-    for name in ("peer", "trade", "stability", "profile"):
+    for name in ("peer", "trade", "stability", "profile", "mbb"):
         block = re.search(rf"<!-- BEGIN benchmarks-{name} -->(.*?)<!-- END benchmarks-{name} -->",
                           text, re.S)
         assert block is not None, name
