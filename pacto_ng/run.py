@@ -257,6 +257,10 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "model_choice": getattr(problem, "model_choice", None),
         "darcy_solve": problem.pressure_block is not None,
         "symmetric_half_domain": any(n == "symmetry" for n in problem.mesh.GetBoundaries()),
+        # the mechanics adjoints of this process: solved, and skipped because the adjoint was
+        # the primal (compliance of design-independent loads on a linear model)
+        "adjoint_solves": {"solved": problem.mech.adjoint_solves,
+                           "skipped_self_adjoint": problem.mech.adjoint_solves_skipped},
     }
     out.update(pressure_and_material_summary(problem))
     return out

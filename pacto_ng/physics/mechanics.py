@@ -753,7 +753,8 @@ class Mechanics:
         # with only design-independent loads the load vector is fixed: its norm is computed once
         self._fixed_loads = body is None and conservative
         self._unit_load_norm = None
-        self.adjoint_solves_skipped = 0
+        self.adjoint_solves_skipped = 0  # adjoints that were the primal (compliance)
+        self.adjoint_solves = 0  # adjoints solved with the factorised tangent
         self._ramp_first = None  # first increment of the last successful ramp from zero
         # a design-dependent load on a stress-free energy (∂φ/∂G = 0 at G = 0): R(0) = -s f,
         # so the load norm is that of f = (point/edge loads) + (body load) -- no Apply of the
@@ -966,7 +967,8 @@ class Mechanics:
 
         Self-adjoint shortcut: for a linear problem with design-independent loads, when
         ``dJ/du = c f`` (compliance) the adjoint is ``λ = (c / s) u`` with no solve at all
-        (``K u = s f``).  ``adjoint_solves_skipped`` counts the shortcuts.
+        (``K u = s f``).  ``adjoint_solves_skipped`` counts the shortcuts, ``adjoint_solves``
+        the solves.
         """
         lam = self.gfu.vec.CreateVector()
         f = getattr(self, "_f_unit", None)
@@ -983,6 +985,7 @@ class Mechanics:
                 return lam
         self._ensure_tangent()
         lam.data = (self._inv if self.symmetric else self._inv.T) * dJdu
+        self.adjoint_solves += 1
         return lam
 
     def backward(self, dJdu):
