@@ -96,7 +96,7 @@ RUNS = {
     # dropped the load factor to 0.001
     "pn_w_1e6_r100_b16": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set", "load_ramp=100",
                                            "--set", "beta_max=16"] + NL),
-    # a stiffer void, E0 = 1e-3 E1 (the stability map: Neo-Hookean then carries 3e7 Pa)
+    # a stiffer void, E0 = 1e-3 E1 (the stability map: Neo-Hookean then carries 3e7-1e8 Pa)
     "pn_nh_1e6_e3": ("pneunet", PN + ["--model", "neohookean", "--load", "1e6", "--set", "load_ramp=100",
                                       "--set", "E0=1e5"] + NL),
     "pn_w_1e6_e3": ("pneunet", PN + ["--model", "wang", "--load", "1e6", "--set", "load_ramp=100",
