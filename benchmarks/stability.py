@@ -18,9 +18,10 @@ Each row is swept three times: on the design and on two copies of it whose densi
 multiplied by 1 + 1e-12 ξ (ξ standard normal, seeded), a perturbation at the level of
 round-off.  Near the edge of the Newton budget the outcome depends on it (measured: the same
 row completed 3e7 Pa on one copy and 1e8 Pa on another), so the table gives the largest load
-that every copy completed and the largest that any copy completed; where they differ, the
-limit lies in that range and which side a run falls on is decided by round-off.  The failure
-column is that of the copy that stopped first; the Newton counts are the unperturbed design's.
+that all three designs completed and the largest that any of them completed; where they
+differ, the limit lies in that range and which side a run falls on is decided by round-off.
+The failure column is that of the design that stopped first; the Newton counts are the
+unperturbed design's.
 """
 from __future__ import annotations
 
@@ -149,9 +150,9 @@ def markdown(rows):
         return "none" if v is None else f"{v:.0e}"
 
     n = rows[0]["runs"] if rows else 1
-    out = [f"| parameter | value | largest load completed by all {n} copies [Pa] | by any copy "
-           "[Pa] | what failed at the next load (the copy that stopped first) | Newton "
-           "iterations per completed load (the design) | time [s] (median) |",
+    out = [f"| parameter | value | largest load completed by all {n} designs [Pa] | by any "
+           "[Pa] | what failed at the next load (the design that stopped first) | Newton "
+           "iterations per completed load (the unperturbed design) | time [s] (median) |",
            "|---|---|---|---|---|---|---|"]
     for r in rows:
         out.append(f"| {r['parameter']} | {r['value']} | {fmt(r['done'])} | "
