@@ -611,8 +611,10 @@ def main(argv=None):
                 "", "Regenerate: `python -m benchmarks.extreme --runs DIR --doc "
                 "docs/benchmarks.md` (runs what is missing in DIR, then rewrites this block; "
                 "`--cross` adds every PA design analysed at every pressure).",
-                "", f"*Tables written {machine()}; the runs' wall times were measured while "
-                "other runs shared the 2 cores (2-4 processes at a time).*"]
+                "", f"*Tables written {machine()}; the runs' wall times are of one run each, "
+                "measured while other runs shared the 2 cores (2-4 processes at a time): "
+                "indicative only (the timing comparisons, as medians and ratios, are the peer, "
+                "trade, profile and MBB sections).*"]
         replace_block(args.doc, "benchmarks-extreme", "\n".join(body))
     return 0
 
