@@ -51,7 +51,7 @@ class Parameters:
     load_width: float = _p(0.0, "m", "width of a spread force load: the cantilever's tip patch, the inverter's input (0: 4 and 2 element sizes, the cases' definitions)")
     output_width: float = _p(0.0, "m", "pa-inverter: the output spring and port spread over this length of the right edge from the output corner (0: the corner point, the case's definition)")
     load_ramp: int = _p(0, "", "iterations over which the load rises to full (0: none)")
-    load_adapt: float = _p(0.0, "", "on a Newton failure go on at the load reached, raising it by this factor per iteration (0: stop)")
+    load_adapt: float = _p(1.2, "", "on a Newton failure go on at the load reached, raising it by this factor per iteration (0: stop at the failure)")
     k_in: float = _p(0.0, "N/m", "input spring stiffness")
     k_out: float = _p(0.0, "N/m", "output spring stiffness")
     # -- Darcy pressure (SPEC §2)

@@ -185,3 +185,24 @@ def test_adaptive_load_continuation_goes_on_past_a_newton_failure(iterations, co
     assert "adaptive load continuation" in summ["message"]
     expected = 1.0 if code == 0 else loads[-1]
     assert summ["load_factor_reached"] == pytest.approx(expected)
+
+
+def test_adaptive_load_continuation_is_the_default(tmp_path, capsys):
+    """The same 1e9 Pa run without ``load_adapt``: adaptive continuation is on by default
+    (1.2), so the run finishes its iterations at the load factors Newton reached; with
+    ``load_adapt=0`` it stops at iteration 0 with exit code 1 and the one-line message."""
+    args = ["run", "pa-inverter", "--maxh", "0.02", "--model", "neohookean", "--iterations",
+            "2", "--set", "load=1e9", "--set", "newton_max_iter=8",
+            "--set", "newton_min_increment=0.0625", "--quiet"]
+    out = tmp_path / "default"
+    proc = run_cli(*args, "--out", str(out), capsys=capsys)
+    summ = check_run(proc, out, 2)
+    assert summ["parameters"]["load_adapt"] == 1.2
+    assert summ["stopped"] == "iterations" and "adaptive load continuation" in summ["message"]
+    with open(out / "history.csv") as fh:
+        assert [0.0 < float(r["load"]) < 1.0 for r in csv.DictReader(fh)] == [True, True]
+    off = tmp_path / "off"
+    proc = run_cli(*args, "--set", "load_adapt=0", "--out", str(off), capsys=capsys)
+    assert proc.returncode == 1
+    summ = check_run(proc, off, 2)
+    assert summ["stopped"] == "newton" and summ["iterations"] == 0
