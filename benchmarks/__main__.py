@@ -193,7 +193,7 @@ def run_stability(quick):
 def run_profile(quick):
     from benchmarks import profile_nonlinear as PR
 
-    r = PR.profile(iterations=2)
+    r = PR.profile()
     ab = PR.strain_energy_ab(
         [("pa-inverter neohookean, default mesh", {"model": "neohookean"})] if quick else
         [("pa-inverter neohookean, default mesh", {"model": "neohookean"}),

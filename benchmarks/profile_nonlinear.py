@@ -1,7 +1,7 @@
 """Where the time of a nonlinear pressure-actuated optimisation iteration goes.
 
     python -m benchmarks.profile_nonlinear [--case pa-inverter] [--model neohookean]
-        [--load 1e6] [--iterations 4] [--maxh 0.004] [--order 1]
+        [--load 1e6] [--iterations 2] [--maxh 0.004] [--order 1]
 
 Runs a short optimisation of the case (its defaults, the chosen model) under cProfile and
 charges the time of NGSolve's built-in calls to what calls them: the Darcy solve (assembly,
@@ -13,9 +13,8 @@ element matrices of the design-linear blocks, one assembly per colour and term) 
 the next hundred iterations cost.  The table reports per-iteration means over the profiled
 iterations, 2 and 3 counted from 0 (the Neo-Hookean pa-inverter at 1e6 Pa from the default
 start has its first Newton failure at iteration 4, where adaptive load continuation takes over
-in a run).  mmapy is imported before
-the profile starts (its import took 0.15 s, once per process: in a 3-iteration mean it made
-the MMA update look like a third of an iteration).  cProfile's own overhead falls on the
+in a run).  mmapy is imported before the profile starts (its import took 0.15 s, once per
+process: in a 3-iteration mean it made the MMA update look like a third of an iteration).  cProfile's own overhead falls on the
 Python-heavy parts, MMA most (mmapy's subproblem makes ~25 000 Python calls per update): one
 update at 2900 variables took 13-16 ms outside the profiler (7 updates, 2026-12-02).
 """
@@ -65,7 +64,7 @@ def _inclusive(stats, frag, name):
     return tot
 
 
-def profile(case_name="pa-inverter", model="neohookean", load=1e6, iterations=4, maxh=0.004,
+def profile(case_name="pa-inverter", model="neohookean", load=1e6, iterations=2, maxh=0.004,
             order=1, threads=2, warmup=WARMUP):
     from pacto_ng.threads import compute
 
@@ -134,7 +133,8 @@ def main(argv=None):
     ap.add_argument("--case", default="pa-inverter")
     ap.add_argument("--model", default="neohookean")
     ap.add_argument("--load", type=float, default=1e6)
-    ap.add_argument("--iterations", type=int, default=4)
+    ap.add_argument("--iterations", type=int, default=2,
+                    help="iterations profiled, after the warm-up")
     ap.add_argument("--maxh", type=float, default=0.004)
     ap.add_argument("--order", type=int, default=1)
     args = ap.parse_args(argv)
