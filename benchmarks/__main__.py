@@ -110,11 +110,19 @@ def run_peer(quick):
                 "integral of the energy density.  Where the time goes: the section after this "
                 "block (a profile, measured separately).")
     tol = 1e-2
-    if quick:
-        ref, orows, picks = P.order_study(levels=(30,), fine=60, repeat=1, tol=tol)
-    else:
-        ref, orows, picks = P.order_study(levels=(30, 60, 120, 240), fine=480, repeat=3,
-                                          tol=tol, max_dofs=260_000)
+
+    def study(**kw):
+        """The order study (its quick or full set-up) and, unless ``kw`` is the point spring's
+        (no limit to compare against), the equal-accuracy comparison."""
+        if quick:
+            ref, rows, picks = P.order_study(levels=(30,), fine=60, repeat=1, tol=tol, **kw)
+        else:
+            ref, rows, picks = P.order_study(levels=(30, 60, 120, 240), fine=480, repeat=3,
+                                             tol=tol, max_dofs=260_000, **kw)
+        eq = P.equal_accuracy(ref, rows, repeat=1 if quick else 3) if kw else None
+        return ref, rows, picks, eq
+
+    ref, orows, picks, _ = study()
     text += ["", "### Same accuracy with higher order",
              "", "The physical pa-inverter (0.2 x 0.1 m, plane stress, E1 = 1, P_in = 1, "
              "Δs = 0.01 m, no filter, no projection) with a fixed piecewise-constant design on "
@@ -127,13 +135,7 @@ def run_peer(quick):
              P.order_markdown(ref, orows, picks, tol)]
     text += [t for t in (P.decrement_line(ref, orows, k) for k in (1, 2, 3)) if t]
     # the same without the spring: -Δ/SE of the free output corner converges
-    if quick:
-        ref0, orows0, picks0 = P.order_study(levels=(30,), fine=60, repeat=1, tol=tol, k_out=0.0)
-        eq = P.equal_accuracy(ref0, orows0, repeat=1)
-    else:
-        ref0, orows0, picks0 = P.order_study(levels=(30, 60, 120, 240), fine=480, repeat=3,
-                                             tol=tol, max_dofs=260_000, k_out=0.0)
-        eq = P.equal_accuracy(ref0, orows0, repeat=3)
+    ref0, orows0, picks0, eq = study(k_out=0.0)
     text += ["", "**Without the output spring** (k_out = 0; the same design, load and "
              "supports): the objective converges, so the time to a given accuracy can be "
              "compared.  Each order is picked at the coarsest mesh from which it stays within "
@@ -146,14 +148,7 @@ def run_peer(quick):
     # the spring and the port spread over a short edge: the reaction is a traction, and the
     # objective with a spring converges
     w = P.SPREAD_OUTPUT
-    if quick:
-        refw, orowsw, picksw = P.order_study(levels=(30,), fine=60, repeat=1, tol=tol,
-                                             output_width=w)
-        eqw = P.equal_accuracy(refw, orowsw, repeat=1)
-    else:
-        refw, orowsw, picksw = P.order_study(levels=(30, 60, 120, 240), fine=480, repeat=3,
-                                             tol=tol, max_dofs=260_000, output_width=w)
-        eqw = P.equal_accuracy(refw, orowsw, repeat=3)
+    refw, orowsw, picksw, eqw = study(output_width=w)
     text += ["", f"**With the output spring spread over an edge** (k_out = 0.1 as above, on the "
              f"right edge's first {w:.5g} m from the output corner, `--set output_width`: the "
              f"spring k_out/2 mean((d·u)²) and Δ the edge's mean of -u_x; the same design, "

@@ -393,19 +393,25 @@ class _LinearSystem:
         if modulus_np is None:
             return None
         try:
-            E1, _ = modulus_np(f1)
-            E2, dE2 = modulus_np(f2)
-            gn = np.asarray(E2) / np.asarray(E1)
+            E1 = np.asarray(modulus_np(f1)[0], dtype=float).copy()
+            gn, dgn = _LinearSystem._relative_modulus(modulus_np, f2, E1, names)
             if not np.max(np.abs(gn - g)) <= tol * float(np.max(np.abs(g))):
                 return None
-            for j, n in enumerate(names):
-                dn = np.asarray(dE2.get(n, np.zeros_like(gn))) / E1
-                if not np.max(np.abs(dn - dg[:, j])) <= tol * max(float(np.max(np.abs(dg[:, j]))),
-                                                                  1e-300):
+            for j in range(len(names)):
+                if not np.max(np.abs(dgn[:, j] - dg[:, j])) <= tol * max(
+                        float(np.max(np.abs(dg[:, j]))), 1e-300):
                     return None
         except Exception:
             return None
-        return modulus_np, np.asarray(E1, dtype=float).copy()
+        return modulus_np, E1
+
+    @staticmethod
+    def _relative_modulus(modulus_np, values, E1, names):
+        """``(g, ∂g/∂field as columns in the order of names)`` with ``g = E / E1``."""
+        E, dE = modulus_np(values)
+        E = np.asarray(E, dtype=float)
+        dg = np.column_stack([np.asarray(dE.get(n, np.zeros_like(E))) for n in names])
+        return E / E1, dg / E1[:, None]
 
     def _build_scatter(self):
         """Build the element matrices (once; on failure the assembly stays symbolic)."""
@@ -467,10 +473,8 @@ class _LinearSystem:
         if self.scatter is not None:
             if self._modulus is not None:
                 modulus_np, E1 = self._modulus
-                E, dE = modulus_np(self._field_values(self._names))
-                self._g = E / E1
-                self._dg = np.column_stack([dE.get(n, np.zeros_like(E)) for n in self._names]
-                                           ) / E1[:, None]
+                self._g, self._dg = self._relative_modulus(
+                    modulus_np, self._field_values(self._names), E1, self._names)
             else:
                 vals = np.asarray(self._gcf(self._centroids)).reshape(len(self._phi1), -1)
                 self._g = vals[:, 0] / self._phi1

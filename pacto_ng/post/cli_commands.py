@@ -527,7 +527,7 @@ def _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, ord
                 "output_displacement_rebuilt": delta_run, "mesh_h": problem.h,
                 "load_path_note": path_note},
         "settings": {"threshold": choice["used"],
-                     "threshold_choice": {k: v for k, v in choice.items()}, "maxh": maxh,
+                     "threshold_choice": dict(choice), "maxh": maxh,
                      "order": order, "kinds": list(kinds), "E": p.E1, "nu": p.nu,
                      "thickness": p.thickness, "material": "Neo-Hookean, plane strain",
                      "supports": {"clamp": list(supports.clamp), "fix_x": list(supports.fix_x),

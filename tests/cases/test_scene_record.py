@@ -4,6 +4,7 @@ the linear model: the adjoint is the primal)."""
 import json
 
 import numpy as np
+import pytest
 
 from pacto_ng.cli import main
 
@@ -14,31 +15,29 @@ def _summary(tmp_path, name, *args):
     return json.loads((out / "summary.json").read_text())
 
 
-def test_mbb_no_darcy_half_domain_no_adjoint_solve(tmp_path):
-    s = _summary(tmp_path, "mbb", "--nelx", "30", "--nely", "10",
-                 "--iterations", "4")
-    assert s["darcy_solve"] is False
-    assert s["symmetric_half_domain"] is True
-    # one compliance gradient per iteration, none of them solved
-    assert s["adjoint_solves"]["solved"] == 0
-    assert s["adjoint_solves"]["skipped_self_adjoint"] >= s["iterations"] == 4
+#: (case, run options, iterations, darcy_solve, symmetric_half_domain, adjoints solved)
+#: -- mbb and cantilever: compliance, every adjoint the primal (none solved, one skipped per
+#: iteration at least); pa-inverter: -Δ/SE, whose adjoint is not the primal (none skipped)
+RECORDS = [
+    ("mbb", ["--nelx", "30", "--nely", "10"], 4, False, True, False),
+    ("pa-inverter", ["--model", "linear", "--maxh", "0.01"], 2, True, True, True),
+    ("cantilever", ["--model", "linear", "--maxh", "0.05"], 1, False, False, False),
+]
 
 
-def test_pa_inverter_darcy_half_domain_adjoints_solved(tmp_path):
-    s = _summary(tmp_path, "pa-inverter", "--model", "linear", "--maxh", "0.01",
-                 "--iterations", "2")
-    assert s["darcy_solve"] is True
-    assert s["symmetric_half_domain"] is True
-    # -Δ/SE: its adjoint is not the primal
-    assert s["adjoint_solves"]["skipped_self_adjoint"] == 0
-    assert s["adjoint_solves"]["solved"] >= s["iterations"] == 2
-
-
-def test_cantilever_is_not_halved(tmp_path):
-    s = _summary(tmp_path, "cantilever", "--model", "linear", "--maxh", "0.05",
-                 "--iterations", "1")
-    assert s["symmetric_half_domain"] is False and s["darcy_solve"] is False
-    assert s["adjoint_solves"]["solved"] == 0 and s["adjoint_solves"]["skipped_self_adjoint"] >= 1
+@pytest.mark.parametrize("name, args, iterations, darcy, half, solved", RECORDS,
+                         ids=[r[0] for r in RECORDS])
+def test_summary_records_what_was_modelled(tmp_path, name, args, iterations, darcy, half,
+                                           solved):
+    s = _summary(tmp_path, name, *args, "--iterations", str(iterations))
+    assert s["darcy_solve"] is darcy
+    assert s["symmetric_half_domain"] is half
+    done, skipped = s["adjoint_solves"]["solved"], s["adjoint_solves"]["skipped_self_adjoint"]
+    assert s["iterations"] == iterations
+    if solved:
+        assert skipped == 0 and done >= iterations
+    else:
+        assert done == 0 and skipped >= iterations
 
 
 def test_self_adjoint_shortcut_gives_the_solved_gradient():
