@@ -375,9 +375,9 @@ def strain_stress_measures(problem: Problem) -> dict:
     G, c = Grad(mech.gfu), mech.coeffs
     model = problem.params.model
     if model == "wang":
-        wm = mech._energy  # the WangModel (make_energy passes the model as the energy)
+        wm = mech.energy  # the WangModel (make_energy passes the model as the energy)
         return {"E_W1": wm.strain_w1(G, c), "E_W2": wm.strain_w2(G, c), "S": wm.stress(G, c)}
-    phi = lambda A: mech._energy(A, c)  # noqa: E731
+    phi = lambda A: mech.energy(A, c)  # noqa: E731
     if model == "linear":
         return {"strain": 0.5 * (G + G.trans), "stress": first_piola_kirchhoff(phi, G)}
     return {"E_GL": green_lagrange(G), "S": second_piola_kirchhoff(phi, G)}

@@ -797,6 +797,11 @@ class Mechanics:
             _restore_fields(self, saved)
 
     # -- the energy ------------------------------------------------------------------------
+    @property
+    def energy(self) -> Callable:
+        """The strain-energy density ``(G, coeffs) -> CF`` this block was built with."""
+        return self._energy
+
     def hot(self, cf):
         """``cf`` compiled for a form that Newton assembles in every iteration."""
         if self.realcompile:

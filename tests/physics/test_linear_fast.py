@@ -209,7 +209,7 @@ def test_new_design_reassembles():
 @pytest.mark.parametrize("model", ["neohookean", "wang"])
 @pytest.mark.parametrize("plane", ["strain", "stress"])
 def test_load_norm_of_a_stress_free_energy_equals_the_residual_at_zero(model, plane):
-    from pacto_ng.case import make_energy
+    from pacto_ng.physics.energy import make_energy
     from pacto_ng.params import Parameters
     from ngsolve import Parameter
 
@@ -252,7 +252,7 @@ def test_prestressed_energy_keeps_the_residual_load_norm():
 def _case_energy(penal=3.0, fields=("rho_bar",), wrong=False):
     from ngsolve import Parameter
 
-    from pacto_ng.case import make_energy
+    from pacto_ng.physics.energy import make_energy
     from pacto_ng.params import Parameters
 
     params = Parameters(model="linear", E0=3e3, E1=3e9, E2=6e9, nu=0.4, plane="stress")
@@ -293,7 +293,7 @@ def test_numpy_modulus_follows_the_penalty_parameter():
     it at every design, so K after a change of p equals the Variation tangent at the new p."""
     from ngsolve import Parameter
 
-    from pacto_ng.case import make_energy
+    from pacto_ng.physics.energy import make_energy
     from pacto_ng.params import Parameters
 
     penal = Parameter(1.0)
