@@ -19,7 +19,7 @@ from pacto_ng.physics.mechanics import Supports
 from pacto_ng.geometries import c_beam as geo
 
 
-def _layout(p: Parameters):
+def _geometry(p: Parameters):
     return geo.layout(10.0, 1.0)
 
 
@@ -35,7 +35,7 @@ CASE = Case(
     source="Yoon et al. (2005); Wang, Lazarov, Sigmund & Jensen (2014); thesis §5.2.1, App. C",
     defaults=Parameters(model="neohookean", nelx=10, nely=10, maxh=1.0, plane="strain",
                         thickness=1.0, E1=1.0, E0=1e-9, nu=0.3, load=20.0),
-    layout=_layout,
+    geometry=_geometry,
     setup=_setup,
     load_unit="(load factor on f1, f2)",
     analysis_only=True,

@@ -20,7 +20,7 @@ def _h(p: Parameters) -> float:
     return 0.25 / p.nely if p.nelx > 0 else p.maxh
 
 
-def _layout(p: Parameters):
+def _geometry(p: Parameters):
     half = 0.5 * p.load_width if p.load_width > 0 else 2.0 * _h(p)
     return geo.layout(1.0, 0.25, load_halfwidth=half)
 
@@ -37,7 +37,7 @@ CASE = Case(
     defaults=Parameters(model="linear", maxh=0.01, plane="strain", thickness=0.1, E1=3e9, E0=3e3,
                         nu=0.4, volfrac=0.5, filter="helmholtz", penal=3.0, beta=1.0,
                         beta_max=16.0, beta_every=20, load=144e3, iterations=150, tol=0.01),
-    layout=_layout,
+    geometry=_geometry,
     setup=_setup,
     load_unit="N",
     # order 2 for linear and Wang: 0.23 % and 0.06 % from the finest objective (order 1: 1.0 %

@@ -21,7 +21,7 @@ def _h(p: Parameters) -> float:
     return 75e-6 / p.nely if p.nelx > 0 else p.maxh
 
 
-def _layout(p: Parameters):
+def _geometry(p: Parameters):
     height = p.load_width if p.load_width > 0 else 2.0 * _h(p)
     return geo.layout(150e-6, 75e-6, clamp=7.5e-6, input_height=height)
 
@@ -41,7 +41,7 @@ CASE = Case(
                         E0=3e3, nu=0.3, volfrac=0.2, filter="helmholtz", penal=3.0, beta=1.0,
                         beta_max=16.0, beta_every=25, load=0.1, k_in=4000.0, k_out=40.0,
                         iterations=200, tol=0.01),
-    layout=_layout,
+    geometry=_geometry,
     setup=_setup,
     load_unit="N",
 )

@@ -16,7 +16,7 @@ from pacto_ng.physics.mechanics import Supports
 from pacto_ng.geometries import mbb as geo
 
 
-def _layout(p: Parameters):
+def _geometry(p: Parameters):
     if p.nelx > 0:  # unit elements
         return geo.layout(float(p.nelx), float(p.nely))
     return geo.layout(60.0, 20.0)
@@ -34,7 +34,7 @@ CASE = Case(
     defaults=Parameters(model="linear", nelx=60, nely=20, maxh=1.0, plane="stress", thickness=1.0,
                         E1=1.0, E0=1e-9, nu=0.3, volfrac=0.5, filter="cone", filter_radius=1.5,
                         penal=3.0, beta=0.0, load=1.0, iterations=300, tol=0.01, move=0.2),
-    layout=_layout,
+    geometry=_geometry,
     setup=_setup,
     load_unit="N",
 )

@@ -38,7 +38,7 @@ CASE = Case(
     source="Thesis §6.4 (eq. 6.1); Pinskier, Kumar et al. (2023); Sigmund & Torquato (1997)",
     defaults=dataclasses.replace(PA_DEFAULTS, maxh=0.002, E1=3e8, E2=3e9, E0=3e2, load=5e5,
                                  volfrac2=0.1),
-    layout=pa_gripper._layout,
+    geometry=pa_gripper._geometry,
     setup=_setup,
     load_unit="Pa",
 )

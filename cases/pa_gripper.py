@@ -32,7 +32,7 @@ from pacto_ng.geometries import pa_mechanism as geo
 from pacto_ng.cases.pa_inverter import PA_DEFAULTS, objective_ref, se_default
 
 
-def _layout(p: Parameters):
+def _geometry(p: Parameters):
     L, H = domain_size(p, 0.2, 0.1)
     return geo.layout(L, H, gripper=True)
 
@@ -52,7 +52,7 @@ CASE = Case(
     summary="pressure-actuated gripper (Darcy pressure), minimise -Δ/SE, the jaw closes",
     source="Thesis §6.2 (Table 6.1); Kumar, Frouws & Langelaar (2020), Struct Multidisc Optim 61",
     defaults=dataclasses.replace(PA_DEFAULTS, maxh=0.002),
-    layout=_layout,
+    geometry=_geometry,
     setup=_setup,
     load_unit="Pa",
 )

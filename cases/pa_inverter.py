@@ -73,7 +73,7 @@ def objective_ref(p: Parameters, width: float, height: float, ratio: float) -> f
     return 0.0
 
 
-def _layout(p: Parameters):
+def _geometry(p: Parameters):
     L, H = domain_size(p, 0.2, 0.1)
     if p.output_width >= H:
         raise InputError(f"output_width: {p.output_width:g} is not shorter than the right edge "
@@ -103,7 +103,7 @@ CASE = Case(
     # the thesis mesh; a smaller filter (0.008 m) avoids them there but leaks through thin walls
     # on 120 x 60 quads (measured, docs/benchmarks.md)
     defaults=dataclasses.replace(PA_DEFAULTS, penal_start=2.0),
-    layout=_layout,
+    geometry=_geometry,
     setup=_setup,
     load_unit="Pa",
     # Wang at order 2: 0.17 % from the finest objective at 1.5x order 1's time per analysis

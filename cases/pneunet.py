@@ -29,7 +29,7 @@ from pacto_ng.geometries import pneunet as geo
 from pacto_ng.cases.pa_inverter import objective_ref, se_default
 
 
-def _layout(p: Parameters):
+def _geometry(p: Parameters):
     L, H = domain_size(p, 0.1, 0.05)
     return geo.layout(L, H, chamber=(0.2 * L, 0.2 * H, 0.8 * L, 0.4 * H))
 
@@ -53,7 +53,7 @@ CASE = Case(
                         penal_start=1.0, penal_step=0.04, beta=1.0, beta_max=32.0,
                         beta_every=15, eta_k=0.2, eta_h=0.3, load=1e5, k_out=1e4,
                         iterations=160, move=0.05, tol=0.01),
-    layout=_layout,
+    geometry=_geometry,
     setup=_setup,
     load_unit="Pa",
 )

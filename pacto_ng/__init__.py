@@ -29,3 +29,23 @@ def _source_subpackages():
 
 
 _source_subpackages()
+
+# -- the public API: what a case file, a script or a notebook uses ------------------------------
+from .params import InputError, Parameters  # noqa: E402
+from .physics.loads import Outputs, PointLoad, Port, Spring  # noqa: E402
+from .physics.mechanics import Supports  # noqa: E402
+from .mesh import Layout, Region, Segment  # noqa: E402
+from .case import Case, Pressure, Setup, get_case, load_case_file  # noqa: E402
+from .geometry import load_cad, load_mesh, mesh_geometry  # noqa: E402
+from .api import Result, load_result, run  # noqa: E402
+
+__all__ = [
+    # a case
+    "Case", "Setup", "Parameters", "Supports", "Pressure", "Port", "Outputs", "Spring",
+    "PointLoad",
+    # geometry
+    "Layout", "Segment", "Region", "load_cad", "load_mesh", "mesh_geometry",
+    # running
+    "run", "Result", "load_result", "get_case", "load_case_file", "InputError",
+    "__version__",
+]

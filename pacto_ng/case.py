@@ -1,24 +1,32 @@
 """Cases as typed data, and the problem (block chain) built from a case and its parameters.
 
 A :class:`Case` is frozen data: a name, a one-line summary, its source, default
-:class:`~pacto_ng.params.Parameters`, a geometry (``layout(params) -> Layout``) and a set-up
+:class:`~pacto_ng.params.Parameters`, a geometry (``geometry(params)``: a netgen.occ shape, a
+:class:`~pacto_ng.mesh.Layout`, a CAD or mesh file; see :mod:`pacto_ng.geometry`) and a set-up
 (``setup(params) -> Setup``: supports, loads, springs, ports, passive regions, objective).  The
-case scripts in ``cases/`` define one each.  :func:`build_problem` turns a case and parameters
-into a :class:`Problem`: the mesh, the design field, the chain of blocks and the names of the
+built-in cases in ``cases/`` define one each; a user's own case is a Python file that defines
+``CASE`` (:func:`load_case_file`).  :func:`build_problem` turns a case and parameters into a
+:class:`Problem`: the mesh, the design field, the chain of blocks and the names of the
 objective and the constraints.
 """
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import importlib
+import importlib.util
+import os
+import sys
+import traceback
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
 from .core import Chain
 from .params import InputError, Parameters
-from .physics.loads import PointLoad, Port, Spring
+from .physics.loads import Outputs, PointLoad, Port, Spring
 from .physics.mechanics import Supports
 
 CASE_MODULES = {
@@ -50,7 +58,8 @@ class Setup:
     supports: Supports
     loads: tuple[PointLoad, ...] = ()
     springs: tuple[Spring, ...] = ()
-    port: Port | None = None  # the output displacement Δ = d·u
+    #: the output displacement Δ = d·u: a Port, or several (Δ = Σ weight d·u)
+    port: Port | tuple[Port, ...] | None = None
     solid: tuple[str, ...] = ()  # passive solid materials
     void: tuple[str, ...] = ()  # passive void materials
     objective: str = "compliance"
@@ -66,8 +75,33 @@ class Setup:
     def __post_init__(self):
         if self.objective not in OBJECTIVES:
             raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{self.objective}')")
-        if self.objective in ("output", "mechanism", "output_se") and self.port is None:
+        if self.objective in ("output", "mechanism", "output_se") and not self.ports:
             raise InputError(f"objective '{self.objective}' needs an output port")
+        for name in ("loads", "springs", "solid", "void"):
+            if not isinstance(getattr(self, name), tuple):
+                raise InputError(f"setup: {name} must be a tuple (got "
+                                 f"{type(getattr(self, name)).__name__})")
+        if not isinstance(self.supports, Supports):
+            raise InputError(f"setup: supports must be a Supports (got "
+                             f"{type(self.supports).__name__})")
+
+    @property
+    def ports(self) -> tuple[Port, ...]:
+        """The output ports (none, one or several)."""
+        if self.port is None:
+            return ()
+        return self.port if isinstance(self.port, tuple) else (self.port,)
+
+    @property
+    def output(self):
+        """What the output displacement reads: the port, or :class:`Outputs` of several."""
+        ports = self.ports
+        return ports[0] if len(ports) == 1 else Outputs(ports)
+
+    @property
+    def all_springs(self) -> tuple[Spring, ...]:
+        """The springs, and those the ports carry."""
+        return self.springs + tuple(sp for port in self.ports for sp in port.springs())
 
 
 @dataclass(frozen=True)
@@ -76,7 +110,7 @@ class Case:
     summary: str
     source: str
     defaults: Parameters
-    layout: Callable  # params -> Layout
+    geometry: Callable  # params -> netgen.occ shape | Layout | file path | ngsolve.Mesh
     setup: Callable  # params -> Setup
     load_unit: str = "N"
     analysis_only: bool = False
@@ -84,6 +118,41 @@ class Case:
     #: displacement order per model where it is not 1 (``order`` = 0, the default, resolves
     #: through this): the knee of the case's trade curve (docs/benchmarks.md)
     model_orders: dict = field(default_factory=dict)
+    #: the case file a user's case was loaded from (empty for the built-in cases)
+    file: str = ""
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name.strip():
+            raise InputError("case: name must be a non-empty string")
+        if not isinstance(self.defaults, Parameters):
+            raise InputError(f"case '{self.name}': defaults must be Parameters (got "
+                             f"{type(self.defaults).__name__})")
+        for attr in ("geometry", "setup"):
+            if not callable(getattr(self, attr)):
+                raise InputError(f"case '{self.name}': {attr} must be a function of the "
+                                 "parameters")
+
+    def make_geometry(self, params: Parameters):
+        """The case's geometry for ``params`` (an error in a user's case file: one line)."""
+        return self._user_call(self.geometry, params)
+
+    def make_setup(self, params: Parameters) -> "Setup":
+        """The case's set-up for ``params`` (an error in a user's case file: one line)."""
+        setup = self._user_call(self.setup, params)
+        if not isinstance(setup, Setup):
+            raise InputError(f"case '{self.name}': setup(params) returned a "
+                             f"{type(setup).__name__}, not a Setup")
+        return setup
+
+    def _user_call(self, fn, params):
+        if not self.file:
+            return fn(params)
+        try:
+            return fn(params)
+        except InputError:
+            raise
+        except Exception as err:  # noqa: BLE001 - any error of a user's code, shown as file:line
+            raise user_code_error(err, self.file) from None
 
     def order_for(self, model: str) -> int:
         """The case's displacement order for ``model``: its defaults' order if they fix one,
@@ -97,14 +166,88 @@ class Case:
         return dataclasses.replace(params, order=self.order_for(params.model))
 
 
+def is_case_file(name: str) -> bool:
+    """Whether ``name`` names a case file (a path ending in ``.py``) rather than a built-in."""
+    return str(name).endswith(".py")
+
+
 def get_case(name: str) -> Case:
+    """A built-in case by name, or a user's case from a file ``path/to/case.py``."""
+    if is_case_file(name):
+        return load_case_file(name)
     mod = CASE_MODULES.get(name)
     if mod is None:
-        raise InputError(f"unknown case '{name}' (known: {', '.join(CASE_MODULES)})")
+        raise InputError(f"unknown case '{name}' (built-in: {', '.join(CASE_MODULES)}; or give "
+                         "the path of a case file, e.g. my_case.py)")
     try:
         return importlib.import_module(mod).CASE
     except ModuleNotFoundError as err:
         raise InputError(f"case '{name}' is not available in this installation ({err})") from None
+
+
+def user_code_error(err: BaseException, file: str) -> InputError:
+    """A one-line error for an exception raised by a user's case file: ``FILE:LINE: Kind:
+    message`` at the deepest line of that file in the traceback."""
+    path = os.path.realpath(file)
+    if isinstance(err, SyntaxError) and err.filename and os.path.realpath(err.filename) == path:
+        return InputError(f"{file}:{err.lineno}: SyntaxError: {err.msg}")
+    line = None
+    for frame in traceback.extract_tb(err.__traceback__):
+        if os.path.realpath(frame.filename) == path:
+            line = frame.lineno
+    where = f"{file}:{line}" if line is not None else file
+    msg = str(err).splitlines()[0] if str(err) else ""
+    return InputError(f"{where}: {type(err).__name__}: {msg}".rstrip(": "))
+
+
+def load_case_file(path: str | os.PathLike) -> Case:
+    """The ``CASE`` of a user's case file (a Python file built with the public API).
+
+    The file is imported as a module of its own (its folder first on ``sys.path``, so that it
+    may import files beside it); the returned case records the file's absolute path, which a
+    run folder keeps so that ``pacto resume``, ``analyse``, ``export`` ... find it again."""
+    fp = Path(path)
+    if not fp.is_file():
+        raise InputError(f"case file '{path}' does not exist")
+    full = str(fp.resolve())
+    key = "pacto_case_" + hashlib.sha1(full.encode()).hexdigest()[:12]
+    spec = importlib.util.spec_from_file_location(key, full)
+    module = importlib.util.module_from_spec(spec)
+    folder = str(fp.resolve().parent)
+    sys.path.insert(0, folder)
+    sys.modules[key] = module
+    try:
+        spec.loader.exec_module(module)
+    except InputError as err:
+        sys.modules.pop(key, None)
+        raise InputError(f"{path}: {err}") from None
+    except SystemExit:
+        sys.modules.pop(key, None)
+        raise InputError(f"{path}: the case file called sys.exit() when imported (guard its "
+                         "script part with if __name__ == '__main__':)") from None
+    except Exception as err:  # noqa: BLE001 - any error of a user's code, shown as file:line
+        sys.modules.pop(key, None)
+        raise user_code_error(err, str(path)) from None
+    finally:
+        if sys.path and sys.path[0] == folder:
+            sys.path.pop(0)
+    case = getattr(module, "CASE", None)
+    if case is None:
+        raise InputError(f"{path}: defines no CASE (a pacto_ng.Case; see 'pacto new')")
+    if not isinstance(case, Case):
+        raise InputError(f"{path}: CASE is a {type(case).__name__}, not a pacto_ng.Case")
+    return dataclasses.replace(case, file=full)
+
+
+def case_of_run(info: dict, command: str) -> Case:
+    """The case a run folder's params.json names: its case file if it has one, else the
+    built-in case of that name."""
+    file = info.get("case_file") or ""
+    if file:
+        if not Path(file).is_file():
+            raise InputError(f"{command}: the run's case file '{file}' no longer exists")
+        return load_case_file(file)
+    return get_case(info["case"])
 
 
 def available_cases() -> list[Case]:
@@ -138,6 +281,8 @@ class Problem:
     pressure_block: object = None
     n_design_fields: int = 1
     model_choice: dict | None = None  # what --model auto decided, and why
+    #: the netgen.occ shape the mesh was made from (None: a mesh file or structured quads)
+    shape: object = None
 
     # -- schedules ----------------------------------------------------------------------------
     def apply_schedule(self, penal: float, beta: float, load: float) -> None:
@@ -176,19 +321,12 @@ def domain_size(params: Parameters, width: float, height: float) -> tuple[float,
 
 
 def mesh_for(case: Case, params: Parameters):
-    """The case's mesh: structured quads if nelx > 0, else Netgen triangles of size maxh."""
-    from .mesh import netgen_mesh, structured_mesh
+    """The case's meshed domain (:class:`~pacto_ng.geometry.Meshed`): Netgen triangles of size
+    maxh, or structured quads if nelx > 0 (rectangular layouts only)."""
+    from .geometry import mesh_geometry
 
-    layout = case.layout(params)
-    if params.nelx > 0:
-        mesh = structured_mesh(layout, params.nelx, params.nely)
-        h = min(layout.width / params.nelx, layout.height / params.nely)
-    else:
-        if params.maxh > 0.5 * min(layout.width, layout.height):
-            raise InputError(f"maxh: {params.maxh} is too coarse for a {layout.width} x {layout.height} domain")
-        mesh = netgen_mesh(layout, params.maxh)
-        h = params.maxh
-    return mesh, h, layout
+    return mesh_geometry(case.make_geometry(params), maxh=params.maxh, nelx=params.nelx,
+                         nely=params.nely)
 
 
 def build_problem(case: Case, params: Parameters) -> Problem:
@@ -207,8 +345,15 @@ def build_problem(case: Case, params: Parameters) -> Problem:
     if params.model == "auto":
         raise InputError("model: 'auto' is chosen by 'pacto run' (pacto_ng.auto.choose_model), "
                          "not by build_problem")
-    mesh, h, layout = mesh_for(case, params)
-    setup = case.setup(params)
+    meshed = mesh_for(case, params)
+    mesh, h = meshed.mesh, meshed.h
+    setup = case.make_setup(params)
+    from .geometry import check_inlet_touches_design, check_setup_names, check_vectors
+
+    check_setup_names(mesh, setup)
+    check_vectors(mesh, setup)
+    if setup.pressure is not None:
+        check_inlet_touches_design(mesh, setup.pressure.inlet, setup.void)
     try:
         field_ = DesignField(mesh, solid=setup.solid, void=setup.void)
     except ValueError as err:
@@ -277,7 +422,7 @@ def build_problem(case: Case, params: Parameters) -> Problem:
                             min_increment=params.newton_min_increment)
     try:
         mech = Mechanics(mesh, order=params.order, energy=energy, fields=mech_fields,
-                         supports=setup.supports, loads=loads, springs=setup.springs, body=body,
+                         supports=setup.supports, loads=loads, springs=setup.all_springs, body=body,
                          thickness=params.thickness, guard=guard, linear=linear, newton=newton,
                          residual_density=follower, realcompile=params.realcompile)
     except ValueError as err:
@@ -300,9 +445,9 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         blocks.append(R.StrainEnergy(mech))
         objective = "se"
     else:
-        if setup.port is None:
+        if not setup.ports:
             raise InputError(f"objective '{obj}' needs an output port")
-        blocks.append(R.output_displacement(mech, setup.port))
+        blocks.append(R.output_displacement(mech, setup.output))
         reports.append("delta")
         if obj == "output":
             blocks.append(R.Scale(-1.0, ("delta",), "objective"))
@@ -329,7 +474,7 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         constraints.append("se_limit")
     chain = Chain(blocks, inputs=("x",))
     return Problem(case, params, mesh, field_, chain, objective, constraints, mech, projections,
-                   penal, setup, h, reports, pressure_block, nf)
+                   penal, setup, h, reports, pressure_block, nf, shape=meshed.shape)
 
 
 class _Bound:

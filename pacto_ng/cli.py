@@ -1,6 +1,7 @@
 """The ``pacto`` command.
 
     pacto cases
+    pacto new NAME
     pacto run CASE [--model M] [--load V] [--iterations N] [--maxh H | --nelx NX --nely NY]
                    [--order K] [--optimizer mma|gcmma] [--set NAME=VALUE ...] [--out DIR]
                    [--quiet] [--show-parameters]
@@ -32,7 +33,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _case_options(p: argparse.ArgumentParser):
-    p.add_argument("case", help="case name (see 'pacto cases')")
+    p.add_argument("case", help="a built-in case's name (see 'pacto cases') or the path of a "
+                   "case file (my_case.py; 'pacto new' writes one)")
     p.add_argument("--model", help="linear | gnl | neohookean | wang")
     p.add_argument("--load", type=float, help="load magnitude (N, or Pa for pressure cases)")
     p.add_argument("--iterations", type=int, help="maximum optimisation iterations")
@@ -51,7 +53,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(prog="pacto", description="Topology optimisation of pressure-actuated soft "
                  "robots and compliant mechanisms (NGSolve).")
     sub = ap.add_subparsers(dest="command", parser_class=_Parser)
-    sub.add_parser("cases", help="list the cases")
+    sub.add_parser("cases", help="list the built-in cases")
+    n = sub.add_parser("new", help="write a commented case file that runs as written")
+    n.add_argument("name", help="the new case's file (NAME.py; NAME alone adds .py)")
     r = sub.add_parser("run", help="optimise a case")
     _case_options(r)
     r.add_argument("--show-parameters", action="store_true", help="print every parameter and exit")
@@ -71,7 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="raise the run's iteration cap (e.g. a run that stopped at the cap)")
     s.add_argument("--quiet", action="store_true")
     w = sub.add_parser("sweep", help="run a case over a grid of loads and models (Dask)")
-    w.add_argument("case", help="case name (see 'pacto cases')")
+    w.add_argument("case", help="a built-in case's name or a case file's path")
     w.add_argument("--loads", required=True, help="comma-separated loads, e.g. 1e5,1e6,1e7")
     w.add_argument("--models", help="comma-separated models (default: the case's model)")
     w.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
@@ -167,8 +171,8 @@ def _show_parameters(case, params: Parameters):
         print(f"  {name:18s} {val!s:>12s} {unit:12s} {help_}")
 
 
-def _default_out(args, params):
-    return args.out or f"output/{args.case}-{params.model}"
+def _default_out(args, case, params):
+    return args.out or f"output/{case.name}-{params.model}"
 
 
 def main(argv=None) -> int:
@@ -199,6 +203,12 @@ def _main(argv) -> int:
             kind = "analysis" if c.analysis_only else "optimisation"
             print(f"{c.name:12s} {c.summary}  [{kind}; load in {c.load_unit}]")
         return 0
+    if args.command == "new":
+        from .template import write_template
+
+        path = write_template(args.name)
+        print(f"wrote {path}: run it with 'pacto run {path}'")
+        return 0
     if args.command in ("analyse", "export", "compare"):
         return _post_command(args)
     if args.command == "resume":
@@ -214,21 +224,21 @@ def _main(argv) -> int:
         if case.analysis_only:
             from .analysis_case import run_analysis_case
 
-            return run_analysis_case(case, params, _default_out(args, params), quiet=args.quiet)
+            return run_analysis_case(case, params, _default_out(args, case, params), quiet=args.quiet)
         from .run import run_case
 
-        return run_case(case, params, _default_out(args, params), quiet=args.quiet)
+        return run_case(case, params, _default_out(args, case, params), quiet=args.quiet)
     if args.command == "sweep":
         from . import sweep
 
         loads = sweep.parse_loads(args.loads)
         models = sweep.parse_models(args.models, params.model)
-        return sweep.run_sweep(case, params, models, loads, args.out or f"output/sweep-{args.case}",
+        return sweep.run_sweep(case, params, models, loads, args.out or f"output/sweep-{case.name}",
                                scheduler=args.scheduler, workers=args.workers, quiet=args.quiet)
     if args.command == "evaluate":
         from .run import evaluate_design
 
-        return evaluate_design(case, params, args.density, _default_out(args, params),
+        return evaluate_design(case, params, args.density, _default_out(args, case, params),
                                filtered=args.filtered, quiet=args.quiet)
     if args.command == "check-gradients":
         from .gradcheck import check_case

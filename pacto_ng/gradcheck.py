@@ -19,13 +19,15 @@ def coarse_params(case, params, explicit_mesh: bool):
     """A coarse mesh for the check unless the user gave one; tight Newton tolerance."""
     changes = {"newton_rtol": min(params.newton_rtol, 1e-12)}
     if not explicit_mesh:
-        lay = case.layout(params)
+        from .geometry import extent
+
+        size = extent(case.make_geometry(params))
         if params.nelx > 0:
             nx = min(params.nelx, 24)
             ny = max(2, round(nx * params.nely / params.nelx))
             changes.update(nelx=nx, nely=ny)
-        else:
-            changes["maxh"] = max(params.maxh, min(lay.width, lay.height) / 8)
+        elif size is not None:
+            changes["maxh"] = max(params.maxh, size / 8)
     return dataclasses.replace(params, **changes)
 
 

@@ -123,10 +123,11 @@ class Layout:
 
 
 # ---------------------------------------------------------------------------------------
-def netgen_mesh(layout: Layout, maxh: float, *, quad_dominated: bool = False):
-    """Netgen triangle mesh of ``layout`` with element size ``maxh`` (returns ngsolve.Mesh)."""
+def layout_shape(layout: Layout):
+    """The netgen.occ shape of ``layout``: faces named ``design`` and by the passive rectangles,
+    edges by the segments (``free`` elsewhere on the outer boundary) and the rectangles'
+    ``boundary``, vertices by the points."""
     from netgen import occ
-    import ngsolve
 
     pts = layout.perimeter_points()
     wp = occ.WorkPlane().MoveTo(*pts[0])
@@ -156,7 +157,15 @@ def netgen_mesh(layout: Layout, maxh: float, *, quad_dominated: bool = False):
     for name, (px, py) in layout.points:
         v = shape.vertices.Nearest((px, py, 0))
         v.name = name
-    geo = occ.OCCGeometry(shape, dim=2)
+    return shape
+
+
+def netgen_mesh(layout: Layout, maxh: float, *, quad_dominated: bool = False):
+    """Netgen triangle mesh of ``layout`` with element size ``maxh`` (returns ngsolve.Mesh)."""
+    from netgen import occ
+    import ngsolve
+
+    geo = occ.OCCGeometry(layout_shape(layout), dim=2)
     ngm = geo.GenerateMesh(maxh=maxh, quad_dominated=quad_dominated)
     return ngsolve.Mesh(ngm)
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .case import Case, Problem, build_problem, get_case
+from .case import Case, Problem, build_problem, case_of_run
 from .optimize.driver import LoopState, optimize
 from .optimize.schedules import Schedule
 from .params import InputError, Parameters
@@ -158,7 +158,8 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         if not quiet:
             print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
     params = case.resolve(params)  # order 0: the case's order for the (chosen) model
-    (path / "params.json").write_text(json.dumps({"case": case.name, "params": params.to_dict(),
+    (path / "params.json").write_text(json.dumps({"case": case.name, "case_file": case.file,
+                                                  "params": params.to_dict(),
                                                   "model_choice": model_choice}, indent=1))
     problem = build_problem(case, params)
     problem.model_choice = model_choice
@@ -464,7 +465,7 @@ def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int |
         info = json.loads((path / "params.json").read_text())
     except (OSError, ValueError):
         raise InputError(f"resume: '{path}' holds no run (params.json missing or unreadable)") from None
-    case = get_case(info["case"])
+    case = case_of_run(info, "resume")
     params = Parameters(**info["params"])
     if iterations is not None:
         if iterations < params.iterations:

@@ -328,7 +328,7 @@ def run_one(case_name: str, params: dict, folder: str, resume: bool) -> dict:
     Parameters
     ----------
     case_name : str
-        Case to run (looked up on the worker).
+        Case to run (looked up on the worker): a built-in case's name or a case file's path.
     params : dict
         ``Parameters.to_dict()`` of the run.
     folder : str
@@ -452,7 +452,7 @@ def run_sweep(case, base: Parameters, models, loads, out: str | os.PathLike, *,
                 print(f"{header} on {where} — output in {root}", flush=True)
             futures = {}
             for r in todo:
-                fut = client.submit(run_one, case.name, params[r.folder].to_dict(),
+                fut = client.submit(run_one, case.file or case.name, params[r.folder].to_dict(),
                                     str(root / r.folder), status[r.folder] == "resume",
                                     pure=False, key=f"pacto-{r.folder}-{time.time_ns()}")
                 futures[fut] = r

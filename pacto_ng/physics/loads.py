@@ -39,7 +39,7 @@ class PointLoad:
     """Total force ``force`` (N) at a named point or spread uniformly over a named boundary."""
 
     region: str
-    force: tuple[float, float]
+    force: tuple[float, ...]
 
     def work(self, mesh, u, scale=1.0):
         """``scale · F·u`` as an integral (``scale`` may be a Parameter)."""
@@ -58,7 +58,7 @@ class Spring:
 
     region: str
     stiffness: float
-    direction: tuple[float, float] = (1.0, 0.0)
+    direction: tuple[float, ...] = (1.0, 0.0)
 
     def energy(self, mesh, u):
         from ngsolve import CF
@@ -74,14 +74,43 @@ class Spring:
 
 @dataclass(frozen=True)
 class Port:
-    """Where a response reads the displacement: ``d · u`` at a named point (or the mean over a
-    named boundary)."""
+    """Where a response reads the displacement: ``weight · d·u`` at a named point (or the mean
+    over a named boundary).  ``spring`` > 0 adds an output spring ``spring/2 (d̂·u)²`` there
+    (d̂ the unit direction), the work piece a mechanism pushes against.  Several ports (e.g.
+    the two jaws of a gripper) add up to one output ``Δ = Σ weight · d·u``."""
 
     region: str
-    direction: tuple[float, float]
+    direction: tuple[float, ...]
+    spring: float = 0.0
+    weight: float = 1.0
+
+    def __post_init__(self):
+        if not self.spring >= 0:
+            raise ValueError(f"port '{self.region}': spring must be >= 0 (got {self.spring})")
+        if not np.isfinite(self.weight) or self.weight == 0:
+            raise ValueError(f"port '{self.region}': weight must be finite and non-zero "
+                             f"(got {self.weight})")
 
     def functional(self, mesh, u):
         from ngsolve import CF
 
         meas, w = _measure(mesh, self.region)
-        return w * (CF(tuple(self.direction)) * u) * meas
+        return (self.weight * w) * (CF(tuple(self.direction)) * u) * meas
+
+    def springs(self) -> tuple[Spring, ...]:
+        """The port's output spring (none for ``spring`` = 0)."""
+        return (Spring(self.region, self.spring, self.direction),) if self.spring > 0 else ()
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """Several output ports read as one output ``Δ = Σ weight_i d_i·u_i``."""
+
+    ports: tuple[Port, ...]
+
+    def functional(self, mesh, u):
+        total = None
+        for port in self.ports:
+            term = port.functional(mesh, u)
+            total = term if total is None else total + term
+        return total

@@ -124,18 +124,24 @@ class Run:
 def load_run(folder, command: str) -> Run:
     """Read ``params.json``, ``summary.json`` and ``checkpoint.npz``; InputError if anything
     that a finished run holds is missing."""
-    from ..case import get_case
+    from ..case import case_of_run
 
     path = Path(folder)
     if not path.is_dir():
         raise InputError(f"{command}: '{folder}' is not a folder")
     try:
         info = json.loads((path / "params.json").read_text())
-        case = get_case(info["case"])
-        params = Parameters(**info["params"])
-    except (OSError, ValueError, KeyError, TypeError):
+        if not isinstance(info, dict) or "case" not in info:
+            raise ValueError("no case named")
+    except (OSError, ValueError):
         raise InputError(f"{command}: '{folder}' holds no run (params.json missing or "
                          f"unreadable)") from None
+    case = case_of_run(info, command)  # an error in a user's case file is shown as itself
+    try:
+        params = Parameters(**info["params"])
+    except (KeyError, TypeError) as err:
+        raise InputError(f"{command}: '{path / 'params.json'}' has no valid parameters "
+                         f"({err})") from None
     if case.analysis_only:
         raise InputError(f"{command}: '{folder}' is an analysis case ({case.name}), not an "
                          f"optimised design")

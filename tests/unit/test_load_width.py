@@ -17,12 +17,12 @@ def test_load_width_fixes_the_loaded_segment(case, segment, default_width):
     c = get_case(case)
     for maxh in (c.defaults.maxh, 0.5 * c.defaults.maxh):
         p = c.defaults.with_overrides({"maxh": str(maxh)})
-        s = _segment(c.layout(p), segment)
+        s = _segment(c.geometry(p), segment)
         length = abs(s.end[1] - s.start[1])
         assert length == pytest.approx(default_width(p), rel=1e-12)
         fixed = 3.0 * c.defaults.maxh
         p = c.defaults.with_overrides({"maxh": str(maxh), "load_width": str(fixed)})
-        s = _segment(c.layout(p), segment)
+        s = _segment(c.geometry(p), segment)
         assert abs(s.end[1] - s.start[1]) == pytest.approx(fixed, rel=1e-12)
 
 

@@ -1,0 +1,147 @@
+"""Run a case from Python (scripts, notebooks) and get the result as an object.
+
+>>> import pacto_ng as pn
+>>> result = pn.run("mbb", iterations=5, nelx=30, nely=10)      # doctest: +SKIP
+>>> result.summary["objective"], result.rho_bar.shape            # doctest: +SKIP
+
+:func:`run` takes a built-in case's name, a case file's path or a :class:`~pacto_ng.case.Case`
+built in the script itself, and any parameter as a keyword (the names of ``pacto run
+--show-parameters``).  It writes the same output folder as ``pacto run`` and returns a
+:class:`Result`: the design, the fields, the history and the summary.
+"""
+from __future__ import annotations
+
+import csv
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .case import Case, Problem, get_case
+from .params import InputError, Parameters
+
+
+@dataclass
+class Result:
+    """A finished run.
+
+    Attributes
+    ----------
+    folder : Path
+        The run's output folder (summary.json, history.csv, design.vtu, pictures, checkpoint).
+    exit_code : int
+        0 finished (converged or at the iteration cap), 1 stopped by a Newton failure (the last
+        good design is reported).
+    summary : dict
+        summary.json: objective, volume fraction, output displacement, load reached, ...
+    history : list of dict
+        history.csv, one row per iteration.
+    x : numpy.ndarray
+        The reported design variables (one per design element; two fields stacked for
+        two-material cases).
+    problem : Problem
+        The case's problem with the reported design analysed: ``problem.mesh``,
+        ``problem.values`` (``rho_bar``, ``p``, ``u``, responses), ``problem.mech.gfu`` (the
+        displacement), ``problem.pressure_block.gfp`` (the pressure, pressure cases).
+    """
+
+    folder: Path
+    exit_code: int
+    summary: dict
+    history: list
+    x: np.ndarray
+    problem: Problem
+
+    @property
+    def rho_bar(self) -> np.ndarray:
+        """Physical element densities ρ̄ of the reported design (NGSolve's element order)."""
+        vals = self.problem.values
+        return np.asarray(vals["rho_bar"] if "rho_bar" in vals else vals["rho_bar1"])
+
+    @property
+    def objective(self) -> float:
+        return float(self.summary["objective"])
+
+    @property
+    def mesh(self):
+        """The ``ngsolve.Mesh`` of the run."""
+        return self.problem.mesh
+
+    @property
+    def displacement(self):
+        """The displacement ``GridFunction`` of the reported design at the reported load."""
+        return self.problem.mech.gfu
+
+    @property
+    def pressure(self):
+        """The Darcy pressure ``GridFunction`` (``None`` for cases without a pressure load)."""
+        blk = self.problem.pressure_block
+        return None if blk is None else blk.gfp
+
+
+def case_parameters(case: Case, settings: dict) -> Parameters:
+    """The case's defaults with ``settings`` (parameter name -> value) applied, as
+    ``--set NAME=VALUE`` would.  Giving ``maxh`` alone switches a quad case to triangles."""
+    known = set(Parameters.names())
+    for name in settings:
+        if name not in known:
+            raise InputError(f"{name}: unknown parameter (see 'pacto run CASE --show-parameters')")
+    changes = {k: str(v) for k, v in settings.items()}
+    if "maxh" in settings and "nelx" not in settings:
+        changes.update(nelx="0", nely="0")
+    return case.defaults.with_overrides(changes)
+
+
+def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
+        quiet: bool = True, **settings) -> Result:
+    """Optimise a case and return its :class:`Result`.
+
+    Parameters
+    ----------
+    case : Case, str or path
+        A :class:`~pacto_ng.case.Case`, a built-in case's name (``pacto cases``) or the path of
+        a case file that defines ``CASE``.
+    out : str or path, optional
+        Output folder (default: a new temporary folder).
+    quiet : bool
+        No line per iteration (default True).
+    **settings
+        Any parameter by name, e.g. ``model="neohookean"``, ``load=1e5``, ``iterations=50``,
+        ``maxh=0.002``.
+
+    Raises
+    ------
+    InputError
+        Bad input (an unknown parameter, a value out of range, a name the geometry lacks, an
+        error in a case file), with a one-line message.
+    """
+    from .run import run_case
+
+    if not isinstance(case, Case):
+        case = get_case(os.fspath(case))
+    params = case_parameters(case, settings)
+    folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=f"pacto-{case.name}-"))
+    code = run_case(case, params, folder, quiet=quiet)
+    return load_result(folder, case=case, exit_code=code)
+
+
+def load_result(folder: str | os.PathLike, *, case: Case | None = None,
+                exit_code: int | None = None) -> Result:
+    """The :class:`Result` of a finished run folder (its final design analysed again)."""
+    from .post.cli_commands import load_run, rebuild
+    from .threads import compute
+
+    folder = Path(folder)
+    run_ = load_run(folder, "load_result")
+    if case is not None and case.name != run_.case.name:
+        raise InputError(f"load_result: '{folder}' is a run of '{run_.case.name}', not of "
+                         f"'{case.name}'")
+    with compute():
+        problem = rebuild(run_)
+    with open(folder / "history.csv", newline="") as fh:
+        history = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+    code = exit_code if exit_code is not None else (1 if run_.summary.get("stopped") == "newton"
+                                                     else 0)
+    return Result(folder, code, run_.summary, history, run_.x, problem)

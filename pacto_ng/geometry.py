@@ -1,0 +1,271 @@
+"""A case's domain: any 2D netgen.occ geometry, a CAD file, a mesh file, or a rectangle.
+
+A case's ``geometry(params)`` returns one of
+
+* a **netgen.occ shape** (a ``Face``, or ``Glue([...])`` of several faces) whose faces and edges
+  carry netgen.occ's own names (``face.name``, ``edge.name``, ``vertex.name``, and ``.maxh``
+  for local refinement).  Faces name the design domain (``design``) and the passive regions;
+  edges name the boundaries (inlet, zero pressure, supports, symmetry, loads, ports); a named
+  vertex is a point port or a point load.  Unnamed edges are called ``default``;
+* a :class:`~pacto_ng.mesh.Layout` (the rectangle helper: named segments, passive rectangles,
+  ports), which can also be meshed as structured quads (``nelx``, ``nely``);
+* a **CAD file** (``.step``, ``.stp``, ``.brep``, ``.iges``, ``.igs``) or a shape read from one by
+  :func:`load_cad` (then named in the case's script);
+* a **mesh file** (Gmsh ``.msh`` with physical groups as names, or Netgen ``.vol``), or an
+  ``ngsolve.Mesh``: used as it is (``maxh`` does not apply).
+
+:func:`mesh_geometry` turns any of these into a :class:`Meshed` domain; the case's set-up then
+refers to the names, and :func:`check_setup_names` says which name is missing and which exist.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .mesh import Layout, layout_shape, netgen_mesh, structured_mesh
+from .params import InputError
+
+CAD_SUFFIXES = (".step", ".stp", ".brep", ".iges", ".igs")
+MESH_SUFFIXES = (".msh", ".vol", ".vol.gz")
+
+
+@dataclass
+class Meshed:
+    """A meshed domain: the ``ngsolve.Mesh``, its element size ``h``, and the netgen.occ
+    ``shape`` it was meshed from (``None`` for a mesh file or structured quads)."""
+
+    mesh: object
+    h: float
+    shape: object = None
+
+    @property
+    def dim(self) -> int:
+        return self.mesh.dim
+
+
+def load_cad(path: str | os.PathLike):
+    """The netgen.occ shape of a STEP, BREP or IGES file (names stored in the file are kept;
+    name the rest in the case's script, e.g. ``shape.edges.Min(occ.X).name = "fixed"``)."""
+    from netgen import occ
+
+    fp = Path(path)
+    if fp.suffix.lower() not in CAD_SUFFIXES:
+        raise InputError(f"geometry: '{path}' is not a CAD file ({', '.join(CAD_SUFFIXES)})")
+    if not fp.is_file():
+        raise InputError(f"geometry: CAD file '{path}' does not exist")
+    try:
+        shape = occ.OCCGeometry(str(fp)).shape
+    except RuntimeError as err:
+        raise InputError(f"geometry: cannot read CAD file '{path}' ({err})") from None
+    if len(shape.faces) == 0:
+        raise InputError(f"geometry: CAD file '{path}' holds no face")
+    return shape
+
+
+def load_mesh(path: str | os.PathLike):
+    """An ``ngsolve.Mesh`` from a Gmsh ``.msh`` file (physical groups become the region and
+    boundary names) or a Netgen ``.vol`` file."""
+    import ngsolve
+
+    fp = Path(path)
+    if not fp.is_file():
+        raise InputError(f"geometry: mesh file '{path}' does not exist")
+    name = fp.name.lower()
+    try:
+        if name.endswith(".msh"):
+            from netgen.read_gmsh import ReadGmsh
+
+            ngm = ReadGmsh(str(fp))
+        elif name.endswith((".vol", ".vol.gz")):
+            from netgen.meshing import Mesh as NGMesh
+
+            ngm = NGMesh(dim=2)
+            ngm.Load(str(fp))
+        else:
+            raise InputError(f"geometry: '{path}' is not a mesh file ({', '.join(MESH_SUFFIXES)})")
+    except (RuntimeError, ValueError, IndexError, KeyError) as err:
+        raise InputError(f"geometry: cannot read mesh file '{path}' ({type(err).__name__}: "
+                         f"{err})") from None
+    mesh = ngsolve.Mesh(ngm)
+    if mesh.ne == 0:
+        raise InputError(f"geometry: mesh file '{path}' holds no element")
+    return mesh
+
+
+def _is_occ_shape(obj) -> bool:
+    from netgen import occ
+
+    return isinstance(obj, occ.TopoDS_Shape)
+
+
+def _extent(shape) -> float:
+    lo, hi = shape.bounding_box
+    return float(min(hi[0] - lo[0], hi[1] - lo[1]))
+
+
+def extent(geometry) -> float | None:
+    """The smaller side of the geometry's bounding box (None for a mesh or a mesh file)."""
+    if isinstance(geometry, Layout):
+        return min(geometry.width, geometry.height)
+    if isinstance(geometry, (str, os.PathLike)) and str(geometry).lower().endswith(CAD_SUFFIXES):
+        geometry = load_cad(geometry)
+    if _is_occ_shape(geometry):
+        return _extent(geometry)
+    return None
+
+
+def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0) -> Meshed:
+    """Mesh a case's geometry (see the module docstring for what it may be).
+
+    Netgen triangles of size ``maxh``; with ``nelx, nely > 0`` structured quads, for a
+    :class:`~pacto_ng.mesh.Layout` only."""
+    import ngsolve
+
+    if isinstance(geometry, (str, os.PathLike)):
+        low = str(geometry).lower()
+        if low.endswith(CAD_SUFFIXES):
+            geometry = load_cad(geometry)
+        elif low.endswith(MESH_SUFFIXES):
+            geometry = load_mesh(geometry)
+        else:
+            raise InputError(f"geometry: '{geometry}' is neither a CAD file "
+                             f"({', '.join(CAD_SUFFIXES)}) nor a mesh file "
+                             f"({', '.join(MESH_SUFFIXES)})")
+    if nelx > 0 and not isinstance(geometry, Layout):
+        raise InputError("nelx, nely: structured quads need a rectangular domain (a Layout); "
+                         "this case's geometry is not one (give --maxh instead)")
+    if isinstance(geometry, ngsolve.Mesh):
+        return Meshed(_checked_mesh(geometry), _mean_size(geometry), None)
+    if isinstance(geometry, Layout):
+        if nelx > 0:
+            mesh = structured_mesh(geometry, nelx, nely)
+            return Meshed(mesh, min(geometry.width / nelx, geometry.height / nely), None)
+        _check_maxh(maxh, min(geometry.width, geometry.height))
+        return Meshed(netgen_mesh(geometry, maxh), maxh, layout_shape(geometry))
+    if _is_occ_shape(geometry):
+        if len(geometry.solids) > 0:
+            raise InputError("geometry: a 3D solid; this version optimises 2D domains (faces) "
+                             "only")
+        if len(geometry.faces) == 0:
+            raise InputError("geometry: the shape has no face to mesh")
+        _check_maxh(maxh, _extent(geometry))
+        from netgen import occ
+
+        try:
+            ngm = occ.OCCGeometry(geometry, dim=2).GenerateMesh(maxh=maxh)
+        except RuntimeError as err:
+            raise InputError(f"geometry: Netgen could not mesh the shape at maxh = {maxh:g} "
+                             f"({err})") from None
+        return Meshed(_checked_mesh(ngsolve.Mesh(ngm)), maxh, geometry)
+    raise InputError(f"geometry: got a {type(geometry).__name__}; a case's geometry must be a "
+                     "netgen.occ shape, a Layout, a CAD or mesh file path, or an ngsolve.Mesh")
+
+
+def _check_maxh(maxh: float, extent: float) -> None:
+    if maxh > 0.5 * extent:
+        raise InputError(f"maxh: {maxh:g} is too coarse for a domain {extent:g} across")
+
+
+def _checked_mesh(mesh):
+    if mesh.dim != 2:
+        raise InputError(f"geometry: a {mesh.dim}D mesh; this version optimises 2D domains only")
+    if mesh.ne == 0:
+        raise InputError("geometry: the mesh has no element")
+    return mesh
+
+
+def _mean_size(mesh) -> float:
+    from ngsolve import Integrate
+
+    return float(np.sqrt(2.0 * Integrate(1.0, mesh) / mesh.ne))
+
+
+# ------------------------------------------------------------------------------------------
+def _names(values) -> str:
+    shown = sorted({v for v in values if v})
+    return ", ".join(shown) if shown else "none"
+
+
+def check_setup_names(mesh, setup, *, extra_boundaries=()) -> None:
+    """Every name a case's set-up refers to exists in the mesh, with the right kind; else an
+    InputError naming the role, the name and the names that exist."""
+    regions = set(mesh.GetMaterials())
+    boundaries = set(mesh.GetBoundaries())
+    points = set(mesh.GetBBoundaries()) - {""}
+
+    def need(kind, role, name):
+        have = {"region": regions, "boundary": boundaries,
+                "boundary or point": boundaries | points}[kind]
+        if name not in have:
+            listing = (f"regions: {_names(regions)}" if kind == "region" else
+                       f"boundaries: {_names(boundaries)}; points: {_names(points)}")
+            raise InputError(f"setup: {role} '{name}' is not a {kind} of the geometry ({listing})")
+
+    if "design" not in regions:
+        raise InputError(f"geometry: no face is named 'design' (regions: {_names(regions)}); "
+                         "name the design domain, e.g. face.name = 'design'")
+    for name in setup.solid:
+        need("region", "passive solid", name)
+    for name in setup.void:
+        need("region", "passive void", name)
+    both = set(setup.solid) & set(setup.void)
+    if both:
+        raise InputError(f"setup: region '{sorted(both)[0]}' is both passive solid and passive "
+                         "void")
+    if "design" in set(setup.solid) | set(setup.void):
+        raise InputError("setup: 'design' is the design domain; it cannot be passive")
+    sup = setup.supports
+    for role, names in (("clamp", sup.clamp), ("fix_x support", sup.fix_x),
+                        ("fix_y support", sup.fix_y)):
+        for name in names:
+            need("boundary or point", role, name)
+    for ld in setup.loads:
+        need("boundary or point", "load", ld.region)
+    for sp in setup.springs:
+        need("boundary or point", "spring", sp.region)
+    for port in setup.ports:
+        need("boundary or point", "output port", port.region)
+    if setup.pressure is not None:
+        for name in setup.pressure.inlet:
+            need("boundary", "pressure inlet", name)
+        for name in setup.pressure.zero:
+            if name not in extra_boundaries:
+                need("boundary", "zero-pressure boundary", name)
+
+
+def check_vectors(mesh, setup) -> None:
+    """Directions and forces carry one component per space dimension, and are not zero."""
+    d = mesh.dim
+    for role, items, attr in (("output port", setup.ports, "direction"),
+                              ("spring", setup.springs, "direction"),
+                              ("load", setup.loads, "force")):
+        for it in items:
+            vec = np.asarray(getattr(it, attr), dtype=float)
+            if vec.shape != (d,):
+                raise InputError(f"setup: {role} '{it.region}': {attr} {tuple(vec)} has "
+                                 f"{vec.size} components, the mesh is {d}D")
+            if attr == "direction" and not np.linalg.norm(vec) > 0:
+                raise InputError(f"setup: {role} '{it.region}': direction is zero")
+
+
+def check_inlet_touches_design(mesh, inlet: tuple[str, ...], passive_void: tuple[str, ...]):
+    """A pressure inlet must border the design domain (or a passive void region, a chamber,
+    that does): an inlet only on passive solid or outside it pressurises nothing."""
+    wet = {"design", *passive_void}
+    for name in inlet:
+        reg = mesh.Boundaries(name)
+        touching = set()
+        # the materials of the volume elements sharing a vertex with the inlet
+        verts = set()
+        for el in reg.Elements():
+            verts.update(v.nr for v in el.vertices)
+        for el in mesh.Elements():
+            if any(v.nr in verts for v in el.vertices):
+                touching.add(el.mat)
+        if not touching & wet:
+            raise InputError(f"setup: pressure inlet '{name}' touches no design domain (it "
+                             f"borders {_names(touching)}); put it on an edge of the 'design' "
+                             "face or of a chamber inside it")
