@@ -8,6 +8,18 @@ to points at least ``min_spacing`` apart and becomes one ``occ.SplineApproximati
 with no break point is split into four runs).  Faces are built from the wires, holes are cut
 out, and Netgen meshes the result with triangles of size ``maxh``; the material is ``solid``.
 
+**On the domain's own geometry** (``domain``: the netgen.occ shape the source mesh was made
+from; :func:`build_domain_geometry`): the loops' runs along the source's boundary are moved a
+margin off the domain (outward from the solid; a run's ends are first projected onto the
+domain's exact edges), the cuts inside stay splines, and the face is intersected with the
+domain (``*``, OCC's Common) without its void faces.  Wherever the solid reaches the domain's
+boundary — a curved outline, a hole, a void chamber's wall — the part's boundary is then that
+edge itself with its name, not the source mesh's polyline; a hole of the domain inside the
+solid stays a hole with its own edge.  Measured: a half ring along the arc of a half disc (maxh
+0.05 R) has its arc on the circle to round-off and its area +0.03 % of the thresholded area
+(tests/post/test_domain_remesh.py).  The margin is 0.25 h, or three times the largest distance
+between the source mesh's boundary chords and the domain's edges if that is more.
+
 Names carried over from the source mesh:
 
 * boundary segments on the source's outer boundary keep that boundary's name (``fixed``,
@@ -60,6 +72,10 @@ class Remeshed:
         Length of the ``pressure`` boundary.
     p_in : float or None
         The inlet pressure the wetting rule used.
+    geometry : str
+        ``"traced"`` (the part's whole boundary traced from the thresholded polygons) or
+        ``"domain"`` (on the domain's own edges where the solid reaches them); ``"traced
+        (...)"`` says why a given domain was not used.
     """
 
     mesh: object
@@ -69,6 +85,7 @@ class Remeshed:
     ports: dict = field(default_factory=dict)
     wetted_length: float = 0.0
     p_in: float | None = None
+    geometry: str = "traced"
 
 
 def _unmeshed_edges(ngm) -> int:
@@ -211,6 +228,207 @@ def build_geometry(components, h, *, min_spacing=None, spline_tol=None, locator=
 
 
 # ---------------------------------------------------------------------------------------
+# the part on the domain's own geometry
+def _segments_cross(P, closed=True) -> bool:
+    """Whether the polygon ``P`` (n, 2) crosses itself (proper crossings of non-adjacent
+    edges)."""
+    Q = np.roll(P, -1, axis=0) if closed else P[1:]
+    A = P if closed else P[:-1]
+    m = len(A)
+    if m < 4:
+        return False
+    d = Q - A
+
+    def orient(a, b, c):
+        return (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - \
+            (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
+
+    i, j = np.triu_indices(m, k=2)
+    if closed:
+        keep = ~((i == 0) & (j == m - 1))
+        i, j = i[keep], j[keep]
+    o1 = orient(A[i], Q[i], A[j])
+    o2 = orient(A[i], Q[i], Q[j])
+    o3 = orient(A[j], Q[j], A[i])
+    o4 = orient(A[j], Q[j], Q[i])
+    scale = np.linalg.norm(d, axis=1).max() ** 2
+    eps = 1e-14 * scale
+    return bool(np.any((o1 * o2 < -eps) & (o3 * o4 < -eps)))
+
+
+def _runs(on):
+    """Maximal runs of equal ``on`` along a closed loop of edges: ``(start, stop, on)`` with the
+    run's vertices ``start..stop`` (indices mod n); the first run starts where ``on`` changes."""
+    n = len(on)
+    start = next(i for i in range(n) if on[i] != on[i - 1])
+    out, i = [], start
+    while i < start + n:
+        j = i
+        while j < start + n and on[j % n] == on[i % n]:
+            j += 1
+        out.append((i, j, bool(on[i % n])))
+        i = j
+    return out
+
+
+def _vertex_normals(P, sign):
+    """Unit normals at the vertices of the open polyline ``P`` (k, 2): ``sign`` times the
+    right-hand normal of the adjacent edges, averaged at interior vertices."""
+    d = np.diff(P, axis=0)
+    d = d / np.linalg.norm(d, axis=1)[:, None]
+    ne = sign * np.c_[d[:, 1], -d[:, 0]]
+    nv = np.vstack([ne[:1], ne[:-1] + ne[1:], ne[-1:]])
+    norm = np.linalg.norm(nv, axis=1)
+    bad = norm < 1e-6  # a hairpin: the edge normal before it
+    nv[bad] = np.vstack([ne[:1], ne])[bad]
+    return nv / np.linalg.norm(nv, axis=1)[:, None]
+
+
+def _extended_loop(loop: Loop, h, curves, margin):
+    """The point sequence of a loop whose runs along the domain boundary are moved a distance
+    ``margin`` off the domain (outward from the solid): each run's ends are projected onto
+    the exact boundary, left along the normal, and the run's vertices are offset.
+
+    Returns ``(pieces, polygon)``: pieces ``("cut", points)`` (a run inside the domain, its ends
+    on the exact boundary) and ``("out", points)`` (a path outside the domain), and the whole
+    closed polygon for the crossing check; ``None`` for a hole that runs entirely along the
+    domain boundary (the domain's own hole: the intersection with the domain restores it).
+    """
+    p, lab = _clean(loop.points, loop.labels, 1e-3 * h)
+    on = np.array([lb is not None for lb in lab])
+    # the loops are counter-clockwise: outward from the solid is the right-hand normal of an
+    # outer loop (solid on the left) and the left-hand normal of a hole
+    sign = -1.0 if loop.is_hole else 1.0
+    n = len(p)
+    if on.all():
+        if loop.is_hole:
+            return None
+        closed = np.vstack([p, p[:1]])
+        nv = _vertex_normals(np.vstack([p[-1:], closed]), sign)[1:-1]
+        out = p + margin * nv
+        return [("out", np.vstack([out, out[:1]]))], out
+    if not on.any():
+        return [("inside", None)], p
+    pieces, poly = [], []
+    for i0, i1, is_on in _runs(on):
+        idx = [k % n for k in range(i0, i1 + 1)]
+        run = p[idx]
+        if not is_on:
+            run = run.copy()
+            run[0] = curves.project(run[0])[0]
+            run[-1] = curves.project(run[-1])[0]
+            pieces.append(("cut", run))
+            poly.append(run[:-1])
+            continue
+        nv = _vertex_normals(run, sign)
+        a, b = curves.project(run[0])[0], curves.project(run[-1])[0]
+        path = np.vstack([a, a + margin * nv[0], run[1:-1] + margin * nv[1:-1],
+                          b + margin * nv[-1], b])
+        pieces.append(("out", path))
+        poly.append(path[:-1])
+    return pieces, np.vstack(poly)
+
+
+def _wire_of(pieces, spacing, tol):
+    from netgen import occ
+
+    edges = []
+    for kind, pts in pieces:
+        if kind == "cut":
+            edges.append(_spline(pts, spacing, tol))
+            continue
+        for a, b in zip(pts[:-1], pts[1:]):
+            if np.linalg.norm(b - a) > 0.0:
+                edges.append(occ.Segment(occ.Pnt(float(a[0]), float(a[1]), 0.0),
+                                         occ.Pnt(float(b[0]), float(b[1]), 0.0)))
+    return occ.Wire(edges)
+
+
+def _spline(run, spacing, tol):
+    from netgen import occ
+
+    thin = _thin(run, spacing)
+    P = [occ.Pnt(float(x), float(y), 0.0) for x, y in thin]
+    if len(P) == 2:
+        return occ.Segment(P[0], P[1])
+    return occ.SplineApproximation(P, deg_min=1, deg_max=3, tol=tol)
+
+
+def build_domain_geometry(components, h, domain, *, curves=None, margin=None,
+                          min_spacing=None, spline_tol=None):
+    """The part on the domain's own geometry: the traced solid, extended off the domain where
+    it lies along the domain's boundary, intersected with the domain.
+
+    Where the solid reaches the domain's boundary (outer, curved, a hole or a void chamber's
+    wall) the part's boundary is therefore the domain's edge itself, with its name; the cuts
+    inside the domain are splines as in :func:`build_geometry` and are named ``free``.
+
+    Parameters
+    ----------
+    components : sequence of Component
+        Thresholded on the mesh of ``domain`` (with the void faces excluded).
+    h : float
+        Element size of the source mesh.
+    domain : netgen.occ shape
+        The material domain (:func:`~pacto_ng.post.domain.material_domain`).
+    curves : BoundaryCurves, optional
+        The sampled boundary of ``domain`` (built here if missing).
+    margin : float, optional
+        How far the boundary runs are moved off the domain, default ``0.25 h`` (at least
+        three times the largest sagitta of the source mesh's boundary chords).  Halved (down
+        to ``0.01 h``) where a moved loop would cross itself.
+    min_spacing, spline_tol : float, optional
+        As :func:`build_geometry`.
+
+    Returns
+    -------
+    netgen.occ shape, material ``solid``; faces of less than ``1e-6 h²`` (slivers where a
+    spline grazes the boundary) are dropped.
+    """
+    from netgen import occ
+
+    from .domain import BoundaryCurves
+
+    spacing = 0.6 * h if min_spacing is None else float(min_spacing)
+    tol = 0.1 * h if spline_tol is None else float(spline_tol)
+    curves = BoundaryCurves(domain, 0.1 * h) if curves is None else curves
+    margin = 0.25 * h if margin is None else float(margin)
+    parts = []
+    for comp in components:
+        face = None
+        for k, loop in enumerate(comp.loops):
+            m = margin
+            while True:
+                ext = _extended_loop(loop, h, curves, m)
+                if ext is None or not _segments_cross(ext[1]) or m < 0.01 * h:
+                    break
+                m *= 0.5
+            if ext is None:
+                continue
+            if ext[0][0][0] == "inside":  # a loop inside the domain: as the traced geometry
+                f = occ.Face(occ.Wire(_loop_edges(loop, spacing, tol, h)))
+            else:
+                f = occ.Face(_wire_of(ext[0], spacing, tol))
+            if k == 0:
+                face = f
+            else:
+                face = face - f
+        face.edges.name = FREE
+        parts.append(face * domain)
+    shape = occ.Glue(parts) if len(parts) > 1 else parts[0]
+    faces = [f for f in shape.faces if f.mass > 1e-6 * h * h]
+    if not faces:
+        raise ValueError("the part and the domain do not overlap")
+    if len(faces) < len(shape.faces):
+        shape = occ.Glue(faces) if len(faces) > 1 else faces[0]
+    shape.faces.name = "solid"
+    for e in shape.edges:
+        if e.name is None:
+            e.name = FREE
+    return shape
+
+
+# ---------------------------------------------------------------------------------------
 def pressure_sampler(pressure, source):
     """A function ``(xy) -> p`` for points ``xy`` (n, 2); zero outside the source mesh.
 
@@ -261,7 +479,7 @@ def _source_points(mesh):
 def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
            p_in: float | None = None, wet_fraction: float = 0.5, wet_boundaries=("inlet",),
            probe: float | None = None, min_spacing: float | None = None,
-           spline_tol: float | None = None) -> Remeshed:
+           spline_tol: float | None = None, domain=None) -> Remeshed:
     """Mesh the thresholded solid with Netgen triangles and carry the names over.
 
     Parameters
@@ -286,6 +504,14 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
         Distance of the probe point from the segment midpoint, default the source element size.
     min_spacing, spline_tol : float, optional
         Geometry parameters of :func:`build_geometry`.
+    domain : netgen.occ shape, optional
+        The geometry the source mesh was made from (a face, or a glued compound of named
+        faces).  Given, the part is built by :func:`build_domain_geometry`: wherever the solid
+        reaches the domain's boundary (a curved outline, a hole, the wall of a void face) the
+        part's boundary is that edge of the domain, with its name; the faces named in
+        ``th.excluded`` (the ``exclude`` of :func:`~.threshold.threshold`: passive void faces)
+        are not part of the domain.  Should that geometry fail (an OCC error, or Netgen cannot
+        mesh it) the traced geometry is used and :attr:`Remeshed.geometry` says why.
 
     Returns
     -------
@@ -320,9 +546,19 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
     seg, names = outer_boundary(src)
     diam = float(np.ptp(seg.reshape(-1, 2), axis=0).max())
     locator = _BoundaryLocator(seg, names, 1e-8 * max(diam, th.h))
-    shape = build_geometry(kept, th.h, min_spacing=min_spacing, spline_tol=spline_tol,
-                           locator=locator)
-    ngm = _generate(shape, maxh, th.threshold)
+    ngm, geometry = None, "traced"
+    if domain is not None:
+        try:
+            ngm = _generate(_domain_shape(th, kept, domain, min_spacing, spline_tol), maxh,
+                            th.threshold)
+            geometry = "domain"
+        except Exception as err:  # OCC's and Netgen's errors: the traced part instead
+            what = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+            geometry = f"traced (the part on the domain's geometry failed: {what})"
+    if ngm is None:
+        shape = build_geometry(kept, th.h, min_spacing=min_spacing, spline_tol=spline_tol,
+                               locator=locator)
+        ngm = _generate(shape, maxh, th.threshold)
 
     # -- the wetting rule, segment by segment ----------------------------------------------
     coords = np.asarray(ngm.Coordinates(), dtype=float)
@@ -346,11 +582,22 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
     flip = np.einsum("ij,ij->i", normal, inner - mid) > 0
     normal[flip] *= -1.0  # outward from the solid
     current = [ngm.GetBCName(s.index - 1) for s in segs]
-    on_outer = np.array([n is not None for n in locator.locate(mid)])
-    wet = np.array([c in wet_boundaries for c in current]) & on_outer
-    if sample is not None and p_in is not None and p_in > 0:
-        pv = sample(mid + probe * normal)
-        wet |= (~on_outer) & (pv >= wet_fraction * p_in)
+    if geometry == "domain":
+        # names are the domain's: wetted by name wherever the part runs along a wetted edge
+        # (an outer inlet, or a chamber's wall); everywhere else by the pressure beyond it (a
+        # probe point outside the source mesh sees none)
+        wet = np.array([c in wet_boundaries for c in current])
+        if sample is not None and p_in is not None and p_in > 0:
+            q = mid + probe * normal
+            inside = np.asarray(src(q[:, 0].copy(), q[:, 1].copy())["nr"]) >= 0
+            pv = np.where(inside, sample(q), 0.0)
+            wet |= pv >= wet_fraction * p_in
+    else:
+        on_outer = np.array([n is not None for n in locator.locate(mid)])
+        wet = np.array([c in wet_boundaries for c in current]) & on_outer
+        if sample is not None and p_in is not None and p_in > 0:
+            pv = sample(mid + probe * normal)
+            wet |= (~on_outer) & (pv >= wet_fraction * p_in)
     if wet.any():
         idx = ngm.AddRegion(PRESSURE, dim=1)
         for s, w in zip(segs, wet):
@@ -366,4 +613,23 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
     mesh = ngsolve.Mesh(ngm)
     area = ngsolve.Integrate(ngsolve.CF(1.0), mesh)
     return Remeshed(mesh, float(area), th.area, float(dropped), ports,
-                    float(length[wet].sum()), p_in)
+                    float(length[wet].sum()), p_in, geometry)
+
+
+def _domain_shape(th: Thresholded, kept, domain, min_spacing, spline_tol):
+    """:func:`build_domain_geometry` of the kept pieces on ``domain`` without the excluded
+    faces; the margin is ``0.25 h``, or three times the largest distance between the source
+    mesh's boundary polyline and the domain's edges if that is more (at most ``2 h``)."""
+    from .domain import BoundaryCurves, material_domain
+
+    faces = {f.name for f in domain.faces}
+    missing = sorted(set(th.excluded) - faces)
+    if missing:
+        raise ValueError(f"the excluded materials {', '.join(missing)} are not faces of the "
+                         f"domain")
+    dom = material_domain(domain, th.excluded)
+    curves = BoundaryCurves(dom, 0.05 * th.h)
+    seg, _ = outer_boundary(th.source, th.excluded)
+    margin = float(np.clip(3.0 * curves.gap(seg), 0.25 * th.h, 2.0 * th.h))
+    return build_domain_geometry(kept, th.h, dom, curves=curves, margin=margin,
+                                 min_spacing=min_spacing, spline_tol=spline_tol)

@@ -11,6 +11,13 @@ counter-clockwise; every edge of a loop carries the name of the source mesh's ou
 lies on (``None`` inside the domain), which :mod:`pacto_ng.post.remesh` turns into straight,
 named segments.
 
+``exclude`` (the names of passive void faces of a domain geometry, used with
+:func:`pacto_ng.post.remesh.remesh`'s ``domain``) leaves those elements out: the nodal density
+is averaged over the other elements only and the solid is sought among them, so the walls of
+the excluded faces are boundary of the clipped mesh like the outer boundary (a solid wall along
+a void chamber runs exactly along the chamber's wall instead of the iso-line half an element
+off it).
+
 Ties: a vertex whose nodal density equals the threshold (within 1e-9, e.g. the corner shared by
 two solid and two void squares of a structured mesh) is counted as solid by raising it by 1e-9;
 a value exactly at the threshold would make VTK emit zero-length edges and broken loops.
@@ -102,6 +109,8 @@ class Thresholded:
         The mesh the densities live on.
     removed_area : float
         Net area of the removed specks (islands count positive, filled pinholes negative).
+    excluded : frozenset of str
+        Materials of the source mesh left out (the ``exclude`` of :func:`threshold`).
     """
 
     components: tuple[Component, ...]
@@ -112,6 +121,7 @@ class Thresholded:
     h: float
     source: object
     removed_area: float = 0.0
+    excluded: frozenset = frozenset()
 
     @property
     def polygon_area(self) -> float:
@@ -193,8 +203,31 @@ def _element_size(grid, area) -> float:
     return float(np.median(side))
 
 
-def outer_boundary(mesh):
+def element_materials(mesh) -> np.ndarray:
+    """The material name of every 2D element (NGSolve element order)."""
+    ngm = mesh.ngmesh
+    return np.array([ngm.GetMaterial(el.index) for el in ngm.Elements2D()], dtype=object)
+
+
+def _included(mesh, exclude) -> np.ndarray | None:
+    """Boolean mask of the elements whose material is not in ``exclude`` (None: all)."""
+    exclude = set((exclude,) if isinstance(exclude, str) else (exclude or ()))
+    if not exclude:
+        return None
+    keep = ~np.isin(element_materials(mesh), list(exclude))
+    if not keep.any():
+        raise ValueError(f"every element of the mesh is in an excluded material "
+                         f"({', '.join(sorted(exclude))})")
+    return keep
+
+
+def outer_boundary(mesh, exclude=()):
     """The outer boundary edges of a 2D NGSolve mesh and their names.
+
+    With ``exclude`` (material names) the elements of those materials are left out: the
+    boundary is that of the remaining elements, and an edge between a kept and an excluded
+    element carries the name of the mesh's boundary element there (an interface name such
+    as ``inlet``) or ``"free"``.
 
     Returns
     -------
@@ -206,8 +239,11 @@ def outer_boundary(mesh):
     from ngsolve import BND
 
     pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
+    keep = _included(mesh, exclude)
     count: dict[tuple[int, int], int] = {}
-    for el in mesh.ngmesh.Elements2D():
+    for k, el in enumerate(mesh.ngmesh.Elements2D()):
+        if keep is not None and not keep[k]:
+            continue
         vs = [v.nr - 1 for v in el.vertices]
         for a, b in zip(vs, vs[1:] + vs[:1]):
             key = (min(a, b), max(a, b))
@@ -304,7 +340,8 @@ def _close_loops(chains):
     return loops
 
 
-def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = None) -> Thresholded:
+def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = None,
+              exclude=()) -> Thresholded:
     """Threshold element densities into closed polygons of the solid.
 
     Parameters
@@ -318,6 +355,8 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
     min_area : float, optional
         Loops enclosing less area are removed (islands dropped, pinholes filled).
         Default ``4 h²`` with ``h`` the median element size.
+    exclude : iterable of str
+        Materials left out (passive void faces, see the module docstring).
 
     Returns
     -------
@@ -334,10 +373,18 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
     grid, rho = _grid_and_densities(mesh, rho)
     area = _cell_areas(grid)
     h = _element_size(grid, area)
+    keep = _included(mesh, exclude)
     nodal = _nodal(grid, rho, area)
+    if keep is not None:
+        # the average over the kept elements only (vertices of excluded elements alone keep
+        # the full average)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            inner = _nodal(grid, rho, np.where(keep, area, 0.0))
+        nodal = np.where(np.isfinite(inner), inner, nodal)
     nodal = np.where(np.abs(nodal - threshold) <= _TIE, threshold + _TIE, nodal)
     grid.point_data["rho"] = nodal
-    solid = grid.clip_scalar(scalars="rho", value=threshold, invert=False)
+    base = grid if keep is None else grid.extract_cells(np.flatnonzero(keep))
+    solid = base.clip_scalar(scalars="rho", value=threshold, invert=False)
     if solid.n_cells == 0:
         raise ValueError(f"no element reaches the threshold {threshold} (max nodal density "
                          f"{nodal.max():.3g})")
@@ -348,7 +395,7 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
     ids = _close_loops(chains)
     pts2 = np.asarray(edges.points)[:, :2]
 
-    seg, names = outer_boundary(mesh)
+    seg, names = outer_boundary(mesh, exclude if keep is not None else ())
     diam = float(np.ptp(pts2, axis=0).max()) if len(pts2) else 1.0
     locator = _BoundaryLocator(seg, names, 1e-8 * max(diam, h))
 
@@ -399,7 +446,10 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
                 holes.append(hl)
         comps.append(Component(lp, tuple(holes)))
     comps.sort(key=lambda c: -c.area)
-    return Thresholded(tuple(comps), solid_area, threshold, nodal, solid, h, mesh, float(removed))
+    excluded = frozenset() if keep is None else frozenset(
+        (exclude,) if isinstance(exclude, str) else exclude)
+    return Thresholded(tuple(comps), solid_area, threshold, nodal, solid, h, mesh, float(removed),
+                       excluded)
 
 
 # ---------------------------------------------------------------------------------------
@@ -480,28 +530,29 @@ def part_contains(th: Thresholded, point, clamp=("fixed",)) -> bool:
 
 
 def connecting_threshold(mesh, rho, start: float, point, clamp=("fixed",), *,
-                         floor: float = 0.1, resolution: float = 0.005):
+                         floor: float = 0.1, resolution: float = 0.005, exclude=()):
     """The largest threshold ``t <= start`` at which the part kept on ``clamp`` contains ``point``.
 
     A lower threshold only adds solid, so whether the point is in the kept part is monotone in
     ``t`` and bisection between ``floor`` and ``start`` finds ``t`` to within ``resolution``
     (the value returned is the lower end of the last bracket: one that contains the point).
+    ``exclude`` is passed to :func:`threshold`.
 
     Returns
     -------
     (t, Thresholded) or (None, Thresholded at ``start``)
         ``None`` if the point is not in the kept part even at ``floor``.
     """
-    th = threshold(mesh, rho, start)
+    th = threshold(mesh, rho, start, exclude=exclude)
     if part_contains(th, point, clamp):
         return start, th
-    low = threshold(mesh, rho, floor) if floor < start else th
+    low = threshold(mesh, rho, floor, exclude=exclude) if floor < start else th
     if not part_contains(low, point, clamp):
         return None, th
     lo, hi = floor, start
     while hi - lo > resolution:
         mid = 0.5 * (lo + hi)
-        cand = threshold(mesh, rho, mid)
+        cand = threshold(mesh, rho, mid, exclude=exclude)
         if part_contains(cand, point, clamp):
             lo, low = mid, cand
         else:

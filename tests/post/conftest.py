@@ -121,3 +121,39 @@ def ring_quarter():
 def ring_quarter_straight():
     """Straight-sided elements: for checks that do not need the exact circle."""
     return ring_quarter_mesh(0.1, curve=1)
+
+
+def name_edges(shape, namer):
+    """Name every edge of ``shape`` by ``namer(x, y)`` of its centre."""
+    for e in shape.edges:
+        c = e.center
+        e.name = namer(c.x, c.y)
+    return shape
+
+
+def half_disc_shape(R=1.0):
+    """The upper half of the disc of radius R: arc ``outer``, the diameter's right half
+    ``symmetry`` and its left half ``fixed``."""
+    from netgen import occ
+
+    shape = occ.WorkPlane().MoveTo(-R, 0).LineTo(0, 0).LineTo(R, 0).Rotate(90).Arc(R, 180) \
+        .Close().Face()
+    return name_edges(shape, lambda x, y: "outer" if abs(y) > 1e-9 else
+                      ("fixed" if x < 0 else "symmetry"))
+
+
+def ring_quarter_shape(a=1.0, b=2.0):
+    """The quarter ring ``a <= r <= b`` of :func:`ring_quarter_mesh` (same names)."""
+    from netgen import occ
+
+    shape = (occ.Circle((0, 0), b).Face() - occ.Circle((0, 0), a).Face()) \
+        * occ.MoveTo(0, 0).Rectangle(b, b).Face()
+    return name_edges(shape, lambda x, y: "left" if abs(x) < 1e-9 else "bottom"
+                      if abs(y) < 1e-9 else ("pressure" if np.hypot(x, y) < 0.5 * (a + b)
+                                             else "outer"))
+
+
+def centroids(mesh):
+    from pacto_ng.post.threshold import mesh_to_pyvista
+
+    return np.asarray(mesh_to_pyvista(mesh).cell_centers().points)[:, :2]
