@@ -199,12 +199,15 @@ def _figure(figsize):
     return fig
 
 
-def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150):
+def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mirror=True):
     """``deformed.png``: the deformed solid coloured by |u| over the undeformed outline.
 
     True scale (no magnification), equal axes; the outline is every boundary edge of the
-    reference mesh.
+    reference mesh.  ``mirror``: a :class:`~pacto_ng.post.domain.Line` to draw the mirror
+    image about too (a part solved on a symmetric half), True for the line of ``mesh``'s own
+    straight ``symmetry`` boundary if it has one, False for the half alone.
     """
+    from .plots import mirror_line
     from matplotlib.collections import LineCollection
     from matplotlib.tri import Triangulation
     from ngsolve import BND
@@ -217,8 +220,18 @@ def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150):
             tris.append(np.r_[b[:, [0, 1, 2]], b[:, [0, 2, 3]]])
     tri = np.vstack(tris)
     mag = np.linalg.norm(uv, axis=1)
-    segs = [[mesh[v].point for v in el.vertices] for el in mesh.Elements(BND)]
+    line = mirror_line(mesh, mirror)
+    # mirrored, the symmetry boundary is inside the whole part: not drawn
+    segs = np.array([[mesh[v].point for v in el.vertices] for el in mesh.Elements(BND)
+                     if line is None or el.mat != "symmetry"]).reshape(-1, 2, 2)
     def_pts = pts + uv
+    if line is not None:  # the mirror image: reflected positions, same |u|
+        n = len(pts)
+        tri = np.vstack([tri, tri[:, ::-1] + n])
+        mag = np.r_[mag, mag]
+        segs = np.concatenate([segs, line.reflect(segs)])
+        pts = np.vstack([pts, line.reflect(pts)])
+        def_pts = np.vstack([def_pts, line.reflect(def_pts)])
     lo = np.minimum(pts.min(axis=0), def_pts.min(axis=0))
     hi = np.maximum(pts.max(axis=0), def_pts.max(axis=0))
     aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)

@@ -1,4 +1,10 @@
-"""Pictures of a run: the physical density (design.png) and the convergence history."""
+"""Pictures of a run: the physical density (design.png) and the convergence history.
+
+A case solved on a symmetric half (a straight boundary named ``symmetry``, any line: it is
+computed from that boundary's vertices, :func:`~pacto_ng.post.domain.symmetry_line`) is drawn
+whole: the half and its mirror image.  ``mirror=False`` draws the half alone; a mesh without a
+straight ``symmetry`` boundary is drawn as it is.
+"""
 from __future__ import annotations
 
 import numpy as np
@@ -9,7 +15,65 @@ def element_polygons(mesh) -> list[np.ndarray]:
     return [pts[[v.nr for v in el.vertices]] for el in mesh.Elements()]
 
 
-def density_png(path, problem, field_name: str | None = None, title: str | None = None):
+def mirror_line(mesh, mirror=True):
+    """The symmetry line to mirror the pictures of ``mesh`` about: None with ``mirror=False``
+    or when the mesh has no straight ``symmetry`` boundary; ``mirror`` may also be a
+    :class:`~pacto_ng.post.domain.Line` (used as it is)."""
+    from .domain import Line, symmetry_line
+
+    if isinstance(mirror, Line):
+        return mirror
+    return symmetry_line(mesh) if mirror else None
+
+
+def picture_polygons(mesh, values, mirror=True):
+    """The element polygons of ``mesh`` and their per-element ``values`` (first axis), with
+    the mirror images about the symmetry line appended (see the module docstring).
+
+    Returns
+    -------
+    polygons : list of ndarray (k, 2)
+    values : ndarray
+        ``values`` repeated for the mirror images.
+    line : Line or None
+        The line mirrored about.
+    """
+    from .domain import mirror as reflect
+
+    line = mirror_line(mesh, mirror)
+    polys = [p[:, :2] for p in element_polygons(mesh)]
+    values = np.asarray(values)
+    if line is None:
+        return polys, values, None
+    return reflect(polys, line), np.concatenate([values, values]), line
+
+
+def picture_triangulation(mesh, values, mirror=True):
+    """The vertex triangulation of ``mesh`` (quads split) and per-vertex ``values``, with the
+    mirror image appended: ``(Triangulation, values, line)``."""
+    from matplotlib.tri import Triangulation
+
+    tri = _triangulation(mesh)
+    values = np.asarray(values)
+    line = mirror_line(mesh, mirror)
+    if line is None:
+        return tri, values, None
+    pts = np.c_[tri.x, tri.y]
+    img = line.reflect(pts)
+    n = len(pts)
+    both = np.vstack([pts, img])
+    tris = np.vstack([tri.triangles, tri.triangles[:, ::-1] + n])
+    return Triangulation(both[:, 0], both[:, 1], tris), np.concatenate([values, values]), line
+
+
+def _size(allpts):
+    w = np.ptp(allpts[:, 0])
+    h = np.ptp(allpts[:, 1])
+    return (8, max(2.0, 8 * h / w))
+
+
+def density_png(path, problem, field_name: str | None = None, title: str | None = None,
+                mirror=True):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -19,11 +83,9 @@ def density_png(path, problem, field_name: str | None = None, title: str | None 
     from ..run import rho_bar_of
 
     rho = rho_bar_of(problem) if field_name is None else np.asarray(problem.values[field_name])
-    polys = element_polygons(problem.mesh)
+    polys, rho, line = picture_polygons(problem.mesh, rho, mirror)
     allpts = np.concatenate(polys)
-    w = np.ptp(allpts[:, 0])
-    h = np.ptp(allpts[:, 1])
-    fig, ax = plt.subplots(figsize=(8, max(2.0, 8 * h / w)))
+    fig, ax = plt.subplots(figsize=_size(allpts))
     pc = PolyCollection(polys, array=rho, cmap="gray_r", edgecolors="face", linewidths=0.1)
     pc.set_clim(0, 1)
     ax.add_collection(pc)
@@ -31,7 +93,8 @@ def density_png(path, problem, field_name: str | None = None, title: str | None 
     ax.set_ylim(allpts[:, 1].min(), allpts[:, 1].max())
     ax.set_aspect("equal")
     ax.set_title(title or f"{problem.case.name} — {problem.params.model}, ρ̄ "
-                 f"(volume {problem.volume_fraction():.3f})")
+                 f"(volume {problem.volume_fraction():.3f})"
+                 + ("" if line is None else ", mirrored about the symmetry line"))
     fig.colorbar(pc, ax=ax, fraction=0.03)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -84,7 +147,7 @@ def nodal_average(mesh, values, areas) -> np.ndarray:
 
 
 def pressure_png(path, problem, title: str | None = None, leakage: float | None = None,
-                 leakage_any: float | None = None):
+                 leakage_any: float | None = None, mirror=True):
     """The Darcy pressure field with the ρ̄ = 0.5 contour of the design drawn on it (as thesis
     Figs 6.9 and 6.18): colours p / P_in at the vertices, black line the contour of the
     area-weighted nodal average of the element densities ρ̄ (the total solid for two
@@ -99,12 +162,12 @@ def pressure_png(path, problem, title: str | None = None, leakage: float | None 
     rho = np.asarray(problem.values[block.inputs[0]])
     p_in = block.p_in  # the load factor scales the body force, not p
     pv = block.gfp.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
-    tri = _triangulation(mesh)
-    x, y = tri.x, tri.y
-    w, h = np.ptp(x), np.ptp(y)
-    fig, ax = plt.subplots(figsize=(8, max(2.0, 8 * h / w)))
-    tpc = ax.tripcolor(tri, pv, shading="gouraud", cmap="coolwarm", vmin=0.0, vmax=1.0)
     rho_n = nodal_average(mesh, rho, problem.field.areas)
+    tri, both, line = picture_triangulation(mesh, np.c_[pv, rho_n], mirror)
+    pv, rho_n = both[:, 0], both[:, 1]
+    x, y = tri.x, tri.y
+    fig, ax = plt.subplots(figsize=_size(np.c_[x, y]))
+    tpc = ax.tripcolor(tri, pv, shading="gouraud", cmap="coolwarm", vmin=0.0, vmax=1.0)
     if rho_n.min() < 0.5 < rho_n.max():
         ax.tricontour(tri, rho_n, levels=[0.5], colors="k", linewidths=1.0)
     ax.set_xlim(x.min(), x.max())
@@ -121,7 +184,7 @@ def pressure_png(path, problem, title: str | None = None, leakage: float | None 
     plt.close(fig)
 
 
-def materials_png(path, problem, title: str | None = None):
+def materials_png(path, problem, title: str | None = None, mirror=True):
     """Two-material design: void white, soft material (ρ̄2 = 0) orange, stiff (ρ̄2 = 1) blue;
     each element's colour is mixed by ρ̄2 and faded to white by ρ̄1."""
     import matplotlib
@@ -135,10 +198,9 @@ def materials_png(path, problem, title: str | None = None):
     r2 = np.clip(np.asarray(problem.values["rho_bar2"]), 0, 1)[:, None]
     soft, stiff = np.array([0.93, 0.55, 0.13]), np.array([0.12, 0.30, 0.70])
     colours = (1 - r1) * 1.0 + r1 * ((1 - r2) * soft + r2 * stiff)
-    polys = element_polygons(problem.mesh)
+    polys, colours, _ = picture_polygons(problem.mesh, colours, mirror)
     allpts = np.concatenate(polys)
-    w, h = np.ptp(allpts[:, 0]), np.ptp(allpts[:, 1])
-    fig, ax = plt.subplots(figsize=(8, max(2.0, 8 * h / w)))
+    fig, ax = plt.subplots(figsize=_size(allpts))
     ax.add_collection(PolyCollection(polys, facecolors=colours, edgecolors="face", linewidths=0.1))
     ax.set_xlim(allpts[:, 0].min(), allpts[:, 0].max())
     ax.set_ylim(allpts[:, 1].min(), allpts[:, 1].max())

@@ -7,7 +7,8 @@ sweeps of :mod:`.reanalysis` and the writers of :mod:`.export`, and writes into 
 ``design.stl``     the thresholded, remeshed solid extruded by the thickness (watertight)
 ``remeshed.vtu``   the remeshed solid with ``u``, ``J``, ``stress``, ``von_mises``
 ``deformed.vtu``   the same in the deformed configuration
-``deformed.png``   deformed solid over the undeformed outline, true scale
+``deformed.png``   deformed solid over the undeformed outline, true scale (the whole part:
+                   mirrored about a straight ``symmetry`` boundary of the source mesh)
 ``analysis.png``   Δ against pressure: expected, and every analysis kind
 ``analysis.csv``   one row per (kind, pressure): Δ, max |u|, min J, iterations, converged
 ``post.json``      threshold, areas, wetted length, ports, parameters and the sweeps
@@ -28,6 +29,7 @@ import numpy as np
 from ..physics.mechanics import Supports
 from ..physics.newton import NewtonSettings
 from .export import plot_deformed, plot_sweeps, write_stl, write_vtu
+from .plots import mirror_line
 from .reanalysis import Output, Reanalysis, pressure_body_force
 from .remesh import remesh
 from .threshold import threshold
@@ -51,7 +53,8 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
                  p_in: float | None = None, wet_fraction: float = 0.5,
                  wet_boundaries=("inlet",), kinds=("fixed", "follower"), darcy_pressure=None,
                  darcy_p_in: float | None = None, expected=None, order: int = 2,
-                 newton: NewtonSettings = NewtonSettings()) -> PostResult:
+                 newton: NewtonSettings = NewtonSettings(), domain=None, exclude=(),
+                 mirror=True) -> PostResult:
     """Threshold, remesh, re-analyse and export a design.
 
     Parameters
@@ -89,14 +92,23 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
     order : int
         Displacement order of the re-analysis.
     newton : NewtonSettings
+    domain : netgen.occ shape, optional
+        The geometry ``mesh`` was made from: the part keeps its edges (see
+        :func:`~.remesh.remesh`).
+    exclude : iterable of str
+        Passive void materials left out of the thresholding (see
+        :func:`~.threshold.threshold`; with ``domain``, the case's void faces).
+    mirror : bool
+        ``deformed.png`` shows the whole part of a case solved on a symmetric half (mirrored
+        about ``mesh``'s straight ``symmetry`` boundary).  The files are of the half.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     th = thresholded
     if th is None or th.threshold != threshold_value:
-        th = threshold(mesh, rho, threshold_value)
+        th = threshold(mesh, rho, threshold_value, exclude=exclude)
     rm = remesh(th, th.h if maxh is None else maxh, clamp=clamp, pressure=pressure, p_in=p_in,
-                wet_fraction=wet_fraction, wet_boundaries=wet_boundaries)
+                wet_fraction=wet_fraction, wet_boundaries=wet_boundaries, domain=domain)
     supports = Supports(clamp=tuple(clamp)) if supports is None else supports
     supports = _present(supports, rm.mesh)
     kw = dict(E=E, nu=nu, thickness=thickness, supports=supports, output=output, order=order,
@@ -123,7 +135,8 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         write_vtu(files["remeshed"], rm.mesh, u, E=E, nu=nu)
         write_vtu(files["deformed"], rm.mesh, u, E=E, nu=nu, deformed=True)
         plot_deformed(files["deformed_png"], rm.mesh, u,
-                      title=f"{shown} pressure {sweeps[shown].pressures[i]:.3g} Pa (true scale)")
+                      title=f"{shown} pressure {sweeps[shown].pressures[i]:.3g} Pa (true scale)",
+                      mirror=mirror_line(mesh, mirror) or False)
     else:
         write_vtu(files["remeshed"], rm.mesh)
         for k in ("deformed", "deformed_png"):
@@ -141,7 +154,7 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         "wetted_length": rm.wetted_length, "p_in": rm.p_in,
         "ports": {k: {"source": list(map(float, a)), "new": list(map(float, b))}
                   for k, (a, b) in rm.ports.items()},
-        "elements": rm.mesh.ne, "order": order, "E": E, "nu": nu, "thickness": thickness,
+        "elements": rm.mesh.ne, "geometry": rm.geometry, "order": order, "E": E, "nu": nu, "thickness": thickness,
         "supports": {"clamp": list(supports.clamp), "fix_x": list(supports.fix_x),
                      "fix_y": list(supports.fix_y)},
         "wet_boundaries": list(wet_boundaries),
