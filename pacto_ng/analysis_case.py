@@ -40,7 +40,7 @@ def deformed_png(path, mesh, gfu, title: str):
 
 
 def run_analysis_case(case, params, out, *, quiet: bool = False) -> int:
-    from .run import prepare_output
+    from .runner import prepare_output
     from .studies import c_beam_limit
 
     if case.name != "c-beam":

@@ -117,7 +117,7 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
         Bad input (an unknown parameter, a value out of range, a name the geometry lacks, an
         error in a case file), with a one-line message.
     """
-    from .run import run_case
+    from .runner import run_case
 
     if not isinstance(case, Case):
         case = get_case(os.fspath(case))

@@ -32,7 +32,7 @@ def green_lagrange_norms(mech) -> np.ndarray:
 def choose_model(case, params, threshold: float = STRAIN_THRESHOLD):
     """Return ``(params with the chosen model, record)`` for ``params.model == 'auto'``."""
     from .case import build_problem
-    from .run import initial_design, schedule_of
+    from .runner import initial_design, schedule_of
 
     lin = dataclasses.replace(params, model="linear")
     problem = build_problem(case, lin)

@@ -38,6 +38,8 @@ CASE_MODULES = {
     "pa-gripper": "pacto_ng.cases.pa_gripper",
     "pneunet": "pacto_ng.cases.pneunet",
     "mm-gripper": "pacto_ng.cases.mm_gripper",
+    "soft-finger": "pacto_ng.cases.soft_finger",
+    "jaw-gripper": "pacto_ng.cases.jaw_gripper",
 }
 
 OBJECTIVES = ("compliance", "energy", "output", "mechanism", "output_se")
@@ -251,12 +253,11 @@ def case_of_run(info: dict, command: str) -> Case:
 
 
 def available_cases() -> list[Case]:
+    """The built-in cases whose modules are installed."""
     out = []
-    for name in CASE_MODULES:
-        try:
+    for name, mod in CASE_MODULES.items():
+        if importlib.util.find_spec(mod) is not None:
             out.append(get_case(name))
-        except InputError:
-            pass
     return out
 
 

@@ -61,7 +61,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--show-parameters", action="store_true", help="print every parameter and exit")
     e = sub.add_parser("evaluate", help="analyse a given design (no optimisation)")
     _case_options(e)
-    e.add_argument("--density", required=True, help="element densities (.npy or .csv)")
+    e.add_argument("--density", required=True, help="element densities ρ̄ (.npy, .csv, .txt: "
+                   "one per element in NGSolve's order; a run's design.vtu), or a run's "
+                   "checkpoint.npz (its design variables, filtered and projected)")
     e.add_argument("--filtered", action="store_true",
                    help="treat the densities as design variables (filter and project them)")
     g = sub.add_parser("check-gradients", help="finite-difference check of the full chain")
@@ -212,7 +214,7 @@ def _main(argv) -> int:
     if args.command in ("analyse", "export", "compare"):
         return _post_command(args)
     if args.command == "resume":
-        from .run import resume_run
+        from .runner import resume_run
 
         return resume_run(args.dir, quiet=args.quiet, iterations=args.iterations)
     case = get_case(args.case)
@@ -225,7 +227,7 @@ def _main(argv) -> int:
             from .analysis_case import run_analysis_case
 
             return run_analysis_case(case, params, _default_out(args, case, params), quiet=args.quiet)
-        from .run import run_case
+        from .runner import run_case
 
         return run_case(case, params, _default_out(args, case, params), quiet=args.quiet)
     if args.command == "sweep":
@@ -236,7 +238,7 @@ def _main(argv) -> int:
         return sweep.run_sweep(case, params, models, loads, args.out or f"output/sweep-{case.name}",
                                scheduler=args.scheduler, workers=args.workers, quiet=args.quiet)
     if args.command == "evaluate":
-        from .run import evaluate_design
+        from .runner import evaluate_design
 
         return evaluate_design(case, params, args.density, _default_out(args, case, params),
                                filtered=args.filtered, quiet=args.quiet)

@@ -1,6 +1,6 @@
 """A case over a grid of loads and models, one run per point, on Dask (``pacto sweep``).
 
-DIR/<model>-<load>/    one ordinary run folder per grid point (see :mod:`pacto_ng.run`), named
+DIR/<model>-<load>/    one ordinary run folder per grid point (see :mod:`pacto_ng.runner`), named
                        e.g. ``linear-1e5`` or ``neohookean-2.5e5``
 DIR/sweep.csv          one row per run: model, load, objective, output displacement, load
                        reached, converged, iterations, wall time, folder (and how it stopped)
@@ -346,7 +346,7 @@ def run_one(case_name: str, params: dict, folder: str, resume: bool) -> dict:
     import os
 
     from .case import get_case
-    from .run import run_case
+    from .runner import run_case
 
     os.environ["PACTO_THREADS"] = "1"  # one NGSolve thread per worker (run_case sets it)
     buf = io.StringIO()
@@ -420,7 +420,7 @@ def run_sweep(case, base: Parameters, models, loads, out: str | os.PathLike, *,
     int
         0 if every run finished, 1 if some stopped on a Newton failure or raised.
     """
-    from .run import prepare_output
+    from .runner import prepare_output
 
     distributed = require_distributed()
     if case.analysis_only:

@@ -167,7 +167,7 @@ def rebuild(run: Run):
     for summary.json).  Returns the problem; ``problem.values`` hold ρ̄, p and Δ."""
     from ..case import build_problem
     from ..physics.mechanics import NewtonFailure
-    from ..run import schedule_of
+    from ..runner import schedule_of
 
     problem = build_problem(run.case, run.params)
     if run.x.size != problem.field.n * problem.n_design_fields:
