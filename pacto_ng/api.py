@@ -3,11 +3,15 @@
 >>> import pacto_ng as pn
 >>> result = pn.run("mbb", iterations=5, nelx=30, nely=10)      # doctest: +SKIP
 >>> result.summary["objective"], result.rho_bar.shape            # doctest: +SKIP
+>>> result = pn.run("my_case.py", out="output/mine")             # doctest: +SKIP
+>>> again = pn.load_result("output/mine")                        # doctest: +SKIP
 
 :func:`run` takes a built-in case's name, a case file's path or a :class:`~pacto_ng.case.Case`
 built in the script itself, and any parameter as a keyword (the names of ``pacto run
 --show-parameters``).  It writes the same output folder as ``pacto run`` and returns a
-:class:`Result`: the design, the fields, the history and the summary.
+:class:`Result`: the design, the fields, the history and the summary.  :func:`load_result`
+reads a finished run folder back (e.g. one written by ``pacto run``).  A walk-through from
+geometry to STL: docs/tutorial.md.
 """
 from __future__ import annotations
 
@@ -62,6 +66,8 @@ class Result:
 
     @property
     def objective(self) -> float:
+        """The final objective of summary.json (the value the optimiser minimised, e.g. the
+        compliance, or -Δ/SE for a mechanism)."""
         return float(self.summary["objective"])
 
     @property
@@ -109,13 +115,24 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
         No line per iteration (default True).
     **settings
         Any parameter by name, e.g. ``model="neohookean"``, ``load=1e5``, ``iterations=50``,
-        ``maxh=0.002``.
+        ``maxh=0.002`` (default: the case's; ``iterations`` is 100 unless the case sets it).
+
+    Returns
+    -------
+    Result
+        The finished run, its final design analysed again (``exit_code`` 1 when a Newton
+        failure stopped it: the last good design).
 
     Raises
     ------
     InputError
         Bad input (an unknown parameter, a value out of range, a name the geometry lacks, an
         error in a case file), with a one-line message.
+
+    Examples
+    --------
+    >>> result = run("my_case.py", out="output/mine", iterations=10)   # doctest: +SKIP
+    >>> result.objective, result.summary["volume_fraction"]             # doctest: +SKIP
     """
     from .runner import run_case
 
@@ -129,7 +146,23 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
 
 def load_result(folder: str | os.PathLike, *, case: Case | None = None,
                 exit_code: int | None = None) -> Result:
-    """The :class:`Result` of a finished run folder (its final design analysed again)."""
+    """The :class:`Result` of a finished run folder (its final design analysed again).
+
+    Parameters
+    ----------
+    folder : str or path
+        A run's output folder (``pacto run ... --out DIR`` or :func:`run`'s ``out``).
+    case : Case, optional
+        The case the run is expected to be of (an InputError if the folder is another case's).
+    exit_code : int, optional
+        The run's exit code (default: 1 if summary.json says a Newton failure stopped it,
+        else 0).
+
+    Raises
+    ------
+    InputError
+        The folder holds no finished run, or its case (file) is not found.
+    """
     from .post.cli_commands import load_run, rebuild
     from .threads import compute
 

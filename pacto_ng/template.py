@@ -75,7 +75,29 @@ CASE = pn.Case(
 
 
 def write_template(name: str) -> Path:
-    """Write the template as ``NAME.py`` (``NAME`` may be a path); never overwrites a file."""
+    """Write the template as ``NAME.py`` (``NAME`` may be a path); never overwrites a file.
+
+    The template is a case file of a soft finger with a round chamber (a netgen.occ geometry
+    with named faces, edges and a vertex; supports, Darcy pressure, an output port with a
+    spring, a passive void chamber; the mechanism objective) that runs as written.
+    docs/tutorial.md builds the same case step by step.
+
+    Parameters
+    ----------
+    name : str
+        The case's name or the file's path (``.py`` is added when missing); the file's stem
+        becomes the case's name (letters, digits, ``-`` and ``_``).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    InputError
+        An unusable name, an existing file, or a folder that does not exist.
+    """
     path = Path(name if name.endswith(".py") else name + ".py")
     stem = path.stem
     if not stem.replace("_", "a").replace("-", "a").isalnum():
