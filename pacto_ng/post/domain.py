@@ -49,7 +49,8 @@ def material_domain(shape, void=()):
     if len(keep) == 1 and len(faces) == 1:
         return shape
     out = occ.Fuse(keep) if len(keep) > 1 else keep[0]
-    return out.UnifySameDomain()
+    # faces only: merging edges would join collinear edges of different names
+    return out.UnifySameDomain(unifyEdges=False, unifyFaces=True)
 
 
 # ---------------------------------------------------------------------------------------

@@ -206,3 +206,30 @@ def test_excluded_faces_must_be_in_the_domain(half_disc):
                       th.source, 0.0, frozenset({"chamber"}))
     with pytest.raises(ValueError, match="chamber are not faces of the domain"):
         _domain_shape(bad, list(th.components), shape, None, None)
+
+
+def test_material_domain_keeps_split_edge_names():
+    """Fusing the design face with a passive solid face (the pa-inverter's block under the
+    clamp) removes their interface but keeps a straight edge's differently named pieces (the
+    clamp and the zero-pressure rest of the top edge), and drops void faces."""
+    from netgen import occ
+
+    from pacto_ng.post.domain import material_domain
+
+    outer = occ.MoveTo(0, 0).Rectangle(2, 1).Face()
+    block = occ.MoveTo(0, 0.9).Rectangle(0.1, 0.1).Face()
+    hole = occ.Circle((1, 0.5), 0.2).Face()
+    design = outer - block - hole
+    design.faces.name, block.faces.name, hole.faces.name = "design", "block", "chamber"
+    shape = occ.Glue([design, block, hole])
+    name_edges(shape, lambda x, y: "fixed" if abs(y - 1) < 1e-9 and x < 0.1 else
+               ("zero_pressure" if abs(y - 1) < 1e-9 else
+                ("inlet" if abs(x - 1) < 0.01 else None)))
+    dom = material_domain(shape, ("chamber",))
+    assert len(dom.faces) == 1
+    assert dom.faces[0].mass == pytest.approx(2 - np.pi * 0.04, rel=1e-9)
+    names = sorted(str(e.name) for e in dom.edges)
+    assert names.count("fixed") == 1 and names.count("zero_pressure") == 1
+    assert "inlet" in names
+    length = {e.name: e.mass for e in dom.edges if e.name in ("fixed", "zero_pressure")}
+    assert length == pytest.approx({"fixed": 0.1, "zero_pressure": 1.9})
