@@ -215,10 +215,23 @@ def expected_sweep(problem, x, pressures, load) -> list[dict]:
     return rows
 
 
+def domain_of(problem, setup):
+    """``(shape, exclude)``: the netgen.occ shape the problem's mesh was made from (None for a
+    mesh file or structured quads) and, with a shape, the passive void faces to leave out of
+    the thresholding (the part is built on the shape's own edges; see
+    :func:`~pacto_ng.post.remesh.remesh`)."""
+    shape = getattr(problem, "shape", None)
+    if shape is None:
+        return None, ()
+    faces = {f.name for f in shape.faces}
+    return shape, tuple(n for n in getattr(setup, "void", ()) if n in faces)
+
+
 def thresholded_elements(th) -> np.ndarray:
     """Element ρ in {0, 1} of the thresholded design: 1 where at least half of the element's
-    area lies inside the clipped solid of :func:`~pacto_ng.post.threshold.threshold`."""
-    from .threshold import _cell_areas, mesh_to_pyvista
+    area lies inside the clipped solid of :func:`~pacto_ng.post.threshold.threshold` (0 in the
+    materials it left out)."""
+    from .threshold import _cell_areas, element_materials, mesh_to_pyvista
 
     grid = mesh_to_pyvista(th.source)
     grid.point_data["rho"] = th.nodal
@@ -226,7 +239,10 @@ def thresholded_elements(th) -> np.ndarray:
     solid = grid.clip_scalar(scalars="rho", value=th.threshold, invert=False)
     inside = np.bincount(np.asarray(solid.cell_data["cid"]), weights=_cell_areas(solid),
                          minlength=grid.n_cells)
-    return (inside >= 0.5 * _cell_areas(grid)).astype(float)
+    out = (inside >= 0.5 * _cell_areas(grid)).astype(float)
+    if th.excluded:
+        out[np.isin(element_materials(th.source), list(th.excluded))] = 0.0
+    return out
 
 
 def _copy_gf(gf):
@@ -280,7 +296,7 @@ def load_path_note(rebuilt, summary, rtol: float = 1e-4):
 
 
 def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
-                     connect: bool = True):
+                     connect: bool = True, exclude=()):
     """The threshold ``pacto analyse`` uses, and why: ``(record, Thresholded at it)``.
 
     ``requested`` is a number in (0, 1) or ``"volume"`` (the volume-preserving threshold).
@@ -288,7 +304,8 @@ def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
     output point, the threshold is lowered to the largest value (down to 0.1, to within 0.005)
     at which it does: a joint to the output that is still grey is kept, at the price of the
     grey material around it.  The record says what was asked, what was used, the design's
-    material volume and the area of the part at the threshold used.
+    material volume and the area of the part at the threshold used.  ``exclude``: materials
+    left out of the thresholding (:func:`~pacto_ng.post.threshold.threshold`).
     """
     from .remesh import _source_points
     from .threshold import (connecting_threshold, design_volume, part_contains, threshold,
@@ -301,7 +318,7 @@ def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
     what = (f"threshold {start:.4g} (volume-preserving)" if requested == "volume"
             else f"threshold {start:g}")
     if port is None or not connect:
-        th = threshold(mesh, rho, start)
+        th = threshold(mesh, rho, start, exclude=exclude)
         rec["reaches_output"] = None if port is None else part_contains(th, port, clamp)
         rec["note"] = what + ("" if port is None else
                               (": the part on the clamp contains the output point"
@@ -309,7 +326,7 @@ def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
                                ": the part on the clamp does not contain the output point "
                                "(not lowered: --keep-threshold)"))
     else:
-        used, th = connecting_threshold(mesh, rho, start, port, clamp)
+        used, th = connecting_threshold(mesh, rho, start, port, clamp, exclude=exclude)
         if used is None:
             rec.update(missed=True, reaches_output=False)
             rec["note"] = (f"{what}: the part on the clamp does not contain the output point, "
@@ -385,8 +402,9 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
 
     supports = setup.supports
     output = _output_of(setup)
+    shape, exclude = domain_of(problem, setup)
     choice, th = choose_threshold(problem.mesh, rho, threshold_value, output.region,
-                                  supports.clamp, connect=connect)
+                                  supports.clamp, connect=connect, exclude=exclude)
     threshold_value = choice["used"]
     # (a part that still misses the output is reported once the part is built: the warning on
     # the output port's shift below; a design with no solid on the clamp is an error there)
@@ -406,7 +424,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     for attempt, thr in enumerate(candidates):
         # the Darcy field of the thresholded design (same block, same P_in = load)
         if attempt:
-            th = threshold(problem.mesh, rho, thr)
+            th = threshold(problem.mesh, rho, thr, exclude=exclude)
         rho_thr = thresholded_elements(th)
         with compute():
             block.forward(rho_thr)
@@ -421,7 +439,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
                                pressure=p_final, p_in=run.load,
                                wet_boundaries=setup.pressure.inlet, kinds=tuple(kinds),
                                darcy_pressure=p_thr, darcy_p_in=run.load, expected=exp_pair,
-                               order=order, newton=newton)
+                               order=order, newton=newton, domain=shape, exclude=exclude)
             break
         except ValueError as err:
             # no solid on the clamp, nothing solid, no wetted boundary: the design cannot be
@@ -559,7 +577,8 @@ def _analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, ord
                   "remeshed_vs_kept": (rm.area - kept) / kept if kept else None,
                   "darcy_elements_solid": float(np.sum(rho_thr * problem.field.areas)
                                                 if hasattr(problem.field, "areas") else np.nan)},
-        "remesh": {"elements": rm.mesh.ne, "wetted_length": rm.wetted_length, "p_in": rm.p_in,
+        "remesh": {"elements": rm.mesh.ne, "geometry": rm.geometry,
+                   "wetted_length": rm.wetted_length, "p_in": rm.p_in,
                    "ports": {k: {"source": list(map(float, a)), "new": list(map(float, b))}
                              for k, (a, b) in rm.ports.items()},
                    "output_port_shift": shift},
@@ -609,6 +628,13 @@ def _report_md(d) -> str:
     L.append(f"ρ̄ thresholded at {s['threshold']:g} (iso-line of the area-weighted nodal density) "
              f"and remeshed with Netgen triangles of {s['maxh']:.4g} m ({rm['elements']} "
              f"elements).")
+    geo = rm.get("geometry", "traced")
+    if geo == "domain":
+        L.append("The part runs along the case's own geometry (its curved edges, holes and "
+                 "chamber walls, with their names) wherever the solid reaches the domain's "
+                 "boundary; inside, its boundary is the traced iso-line.")
+    elif geo != "traced":
+        L.append(f"The part's boundary is traced from the thresholded polygons: {geo[8:-1]}.")
     ch = s.get("threshold_choice")
     if ch:
         L.append(f"The threshold: {ch['note']}.  Material volume of the design "
@@ -711,14 +737,15 @@ def part_of_run(run: Run, threshold_value: float, maxh: float | None):
     with compute():
         problem = rebuild(run)
     rho = _design_density(problem)
+    shape, exclude = domain_of(problem, setup)
     kw = {}
     if setup.pressure is not None and problem.pressure_block is not None:
         kw = dict(pressure=_copy_gf(problem.pressure_block.gfp), p_in=run.load,
                   wet_boundaries=setup.pressure.inlet)
     h = 0.5 * problem.h if maxh is None else maxh
     try:
-        th = threshold(problem.mesh, rho, threshold_value)
-        rm = remesh(th, h, clamp=setup.supports.clamp, **kw)
+        th = threshold(problem.mesh, rho, threshold_value, exclude=exclude)
+        rm = remesh(th, h, clamp=setup.supports.clamp, domain=shape, **kw)
     except ValueError as err:
         raise InputError(f"{err}") from None
     return th, rm, problem
@@ -812,7 +839,9 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
     _say(quiet, f"{dst}: {run.case.name} part, threshold {th.threshold:g}, {rm.mesh.ne} "
                 f"triangles, area {rm.area:.6g} m² (thresholded {th.area:.6g}), boundaries "
                 f"{', '.join(_boundary_names(rm.mesh))}"
-                + (f", extruded by {run.params.thickness:g} m" if fmt == "stl" else ""))
+                + (f", extruded by {run.params.thickness:g} m" if fmt == "stl" else "")
+                + {"domain": ", on the case's own geometry", "traced": ""}.get(
+                    rm.geometry, f"; {rm.geometry}"))
     return 0
 
 
@@ -860,6 +889,30 @@ def _boundary_segments(vtu):
     return np.asarray(e.points)[:, :2][lines]
 
 
+def run_symmetry(run):
+    """The symmetry line of a run's mesh (:func:`~pacto_ng.post.domain.symmetry_line`), from
+    the case's mesh rebuilt; None when it has none or cannot be rebuilt."""
+    from .domain import symmetry_line
+
+    try:
+        from ..case import mesh_for
+
+        meshed = mesh_for(run.case, run.params)
+        mesh = meshed.mesh if hasattr(meshed, "mesh") else meshed[0]
+        return symmetry_line(mesh)
+    except Exception:  # noqa: BLE001 - a picture without its mirror image, not an error
+        return None
+
+
+def _mirrored_design(pts, tri, rho, line):
+    """The design triangles with their mirror image about ``line`` appended."""
+    if line is None:
+        return pts, tri, rho
+    n = len(pts)
+    return (np.vstack([pts, line.reflect(pts)]), np.vstack([tri, tri[:, ::-1] + n]),
+            np.concatenate([rho, rho]))
+
+
 def _labels(runs) -> list[str]:
     """``case model load`` per run, with the folder name where two would read the same."""
     base = [f"{r.case.name} {r.params.model} {r.load:.3g} {r.case.load_unit}" for r, _ in runs]
@@ -867,10 +920,11 @@ def _labels(runs) -> list[str]:
             for b, (r, _) in zip(base, runs)]
 
 
-def compare_runs(folders, *, out=None, quiet: bool = False) -> int:
+def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True) -> int:
     """``pacto compare``: the designs side by side, their thresholded outlines over each other
     (thesis Fig. 6.7) and, where ``analysis/analysis.json`` exists, their analysis curves in
-    one picture (thesis Figs 6.10/6.12)."""
+    one picture (thesis Figs 6.10/6.12).  A run solved on a symmetric half is drawn whole
+    (mirrored about its mesh's straight ``symmetry`` boundary) unless ``mirror`` is False."""
     from matplotlib.collections import LineCollection
     from matplotlib.tri import Triangulation
 
@@ -897,7 +951,9 @@ def compare_runs(folders, *, out=None, quiet: bool = False) -> int:
     has_curves = any(a is not None for _, a in runs)
     colours = ["tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown",
                "tab:pink", "tab:gray", "tab:olive", "tab:cyan"]
-    designs = [_design_triangles(r.path / "design.vtu") for r, _ in runs]
+    lines = [run_symmetry(r) if mirror else None for r, _ in runs]
+    designs = [_mirrored_design(*_design_triangles(r.path / "design.vtu"), ln)
+               for (r, _), ln in zip(runs, lines)]
     allp = np.vstack([d[0] for d in designs])
     w, h = np.ptp(allp, axis=0)
     aspect = h / max(w, 1e-300)
@@ -926,7 +982,10 @@ def compare_runs(folders, *, out=None, quiet: bool = False) -> int:
         c = colours[i % 10]
         rem = run.path / "analysis" / "remeshed.vtu"
         if rem.exists():
-            ax.add_collection(LineCollection(_boundary_segments(rem), colors=c, linewidths=1.2))
+            segs = _boundary_segments(rem)
+            if lines[i] is not None:
+                segs = np.concatenate([segs, lines[i].reflect(segs)])
+            ax.add_collection(LineCollection(segs, colors=c, linewidths=1.2))
         else:
             t = Triangulation(pts[:, 0], pts[:, 1], tri)
             nod = np.zeros(len(pts))

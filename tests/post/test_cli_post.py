@@ -196,6 +196,19 @@ def test_compare_writes_a_picture(pa_run, analysed, tmp_path, capsys):
     assert len(table) == 4 and "pa-inverter" in table[1] and "pa-inverter" in table[2]
 
 
+def test_the_part_is_built_on_the_case_geometry(pa_run, analysed):
+    """The rebuilt problem's shape reaches remesh: the analysed part runs along the case's own
+    edges (geometry "domain"), with their names; the half domain's symmetry line (y = 0) is
+    found for the whole-mechanism pictures."""
+    from pacto_ng.post.cli_commands import load_run, run_symmetry
+
+    _, data = analysed
+    assert data["remesh"]["geometry"] == "domain"
+    line = run_symmetry(load_run(pa_run, "compare"))
+    assert line is not None and line.direction == pytest.approx((1.0, 0.0))
+    assert abs(line.point[1]) < 1e-15
+
+
 # -- bad input: one line on stderr, exit 2 ------------------------------------------------------
 @pytest.mark.parametrize("extra, field", [
     (["--threshold", "0"], "--threshold"),
