@@ -153,7 +153,9 @@ def load_result(folder: str | os.PathLike, *, case: Case | None = None,
     folder : str or path
         A run's output folder (``pacto run ... --out DIR`` or :func:`run`'s ``out``).
     case : Case, optional
-        The case the run is expected to be of (an InputError if the folder is another case's).
+        The run's case: needed for a case built in a script or notebook (a run folder finds
+        only built-in cases and case files again); an InputError if the folder is another
+        case's.
     exit_code : int, optional
         The run's exit code (default: 1 if summary.json says a Newton failure stopped it,
         else 0).
@@ -167,10 +169,7 @@ def load_result(folder: str | os.PathLike, *, case: Case | None = None,
     from .threads import compute
 
     folder = Path(folder)
-    run_ = load_run(folder, "load_result")
-    if case is not None and case.name != run_.case.name:
-        raise InputError(f"load_result: '{folder}' is a run of '{run_.case.name}', not of "
-                         f"'{case.name}'")
+    run_ = load_run(folder, "load_result", case=case)
     with compute():
         problem = rebuild(run_)
     with open(folder / "history.csv", newline="") as fh:

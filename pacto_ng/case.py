@@ -249,7 +249,12 @@ def case_of_run(info: dict, command: str) -> Case:
         if not Path(file).is_file():
             raise InputError(f"{command}: the run's case file '{file}' no longer exists")
         return load_case_file(file)
-    return get_case(info["case"])
+    name = info["case"]
+    if name not in CASE_MODULES:
+        raise InputError(f"{command}: the run's case '{name}' was built in a script, not in a "
+                         "case file; from that script use pacto_ng.load_result(folder, "
+                         "case=CASE), or move CASE into a case file")
+    return get_case(name)
 
 
 def available_cases() -> list[Case]:
@@ -331,14 +336,11 @@ def mesh_for(case: Case, params: Parameters):
 
 
 def build_problem(case: Case, params: Parameters) -> Problem:
-    """Mesh, design field, filter, projection, [Darcy], mechanics and responses as a chain."""
-    from ngsolve import Parameter
-
-    from . import responses as R
-    from .design import DesignField, Embed, FixPassive
-    from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
-    from .physics.mechanics import Field, Mechanics
-    from .physics.newton import NewtonSettings
+    """The case's chain: mesh, design chain, energy, [Darcy pressure], mechanics, responses
+    and volume constraints, each from its builder (:mod:`pacto_ng.builders`)."""
+    from . import builders as B
+    from .geometry import check_inlet_touches_design, check_setup_names, check_vectors
+    from .physics.energy import make_energy
 
     if case.analysis_only:
         raise InputError(f"case '{case.name}' is an analysis, not an optimisation")
@@ -347,161 +349,22 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         raise InputError("model: 'auto' is chosen by 'pacto run' (pacto_ng.auto.choose_model), "
                          "not by build_problem")
     meshed = mesh_for(case, params)
-    mesh, h = meshed.mesh, meshed.h
     setup = case.make_setup(params)
-    from .geometry import check_inlet_touches_design, check_setup_names, check_vectors
-
-    check_setup_names(mesh, setup)
-    check_vectors(mesh, setup)
+    check_setup_names(meshed.mesh, setup)
+    check_vectors(meshed.mesh, setup)
     if setup.pressure is not None:
-        check_inlet_touches_design(mesh, setup.pressure.inlet, setup.void)
-    try:
-        field_ = DesignField(mesh, solid=setup.solid, void=setup.void)
-    except ValueError as err:
-        raise InputError(str(err)) from None
-    radius = params.filter_radius or 3.0 * h
-    nf = setup.materials
-    names = ["rho_bar"] if nf == 1 else ["rho_bar1", "rho_bar2"]
-    blocks, projections = [], []
-    if nf == 2:
-        blocks += [_Slice(field_.n, 0, "x1"), _Slice(field_.n, 1, "x2")]
-    for i, out in enumerate(names):
-        suf = "" if nf == 1 else str(i + 1)
-        xin = "x" if nf == 1 else f"x{suf}"
-        blocks.append(Embed(field_, inputs=(xin,), output=f"rho{suf}"))
-        if params.filter == "helmholtz":
-            flt = HelmholtzFilter(mesh, radius, inputs=(f"rho{suf}",), output=f"rho_tilde{suf}")
-        elif params.filter == "cone":
-            flt = ConeFilter(field_.centroids(), field_.areas, radius, inputs=(f"rho{suf}",),
-                             output=f"rho_tilde{suf}")
-        else:
-            flt = IdentityFilter(inputs=(f"rho{suf}",), output=f"rho_tilde{suf}")
-        blocks.append(flt)
-        pr = HeavisideProjection(params.beta, params.eta, inputs=(f"rho_tilde{suf}",),
-                                 output=f"rho_proj{suf}")
-        projections.append(pr)
-        blocks.append(pr)
-        blocks.append(FixPassive(field_, inputs=(f"rho_proj{suf}",), output=out))
-    penal = Parameter(params.penal)
-    from .physics.energy import make_energy
+        check_inlet_touches_design(meshed.mesh, setup.pressure.inlet, setup.void)
 
-    energy, guard, linear = make_energy(params, penal, tuple(names))
-    mech_fields = list(names)
-    body = None
-    follower = None  # residual density of a follower Darcy load (SPEC §4)
-    if params.load_type == "follower" and setup.pressure is None:
-        raise InputError(f"load_type: case '{case.name}' has no pressure load to follow the deformation")
-    pressure_block = None
-    if params.inlet and setup.pressure is None:
-        raise InputError(f"inlet: case '{case.name}' has no pressure load")
-    if setup.pressure is not None:
-        from .physics import darcy
+    design = B.design_chain(meshed, setup, params)
+    energy, guard, linear = make_energy(params, design.penal, design.names)
+    pressure = B.pressure_load(meshed, setup, params, energy, design.names, case.name)
+    mech = B.mechanics(meshed, setup, params, energy, guard, linear, design, pressure)
+    response = B.responses(mech, setup, params, pressure, case.name)
+    volume = B.volume_constraints(design, params)
 
-        if params.delta_s < 0.1 * h:
-            raise InputError(f"delta_s: {params.delta_s:g} is below a tenth of the element size "
-                             f"{h:g} (set delta_s in the units of the mesh)")
-        pressure = setup.pressure
-        if params.inlet:
-            pressure = Pressure(inlet=tuple(params.inlet.split("|")), zero=pressure.zero)
-        try:
-            # Wang: the follower load sees the deformation I + γ∇u of the energy's
-            # large-strain part (void: the fixed load), unless follower_wang=0
-            gamma = energy.gamma if params.model == "wang" and params.follower_wang else None
-            pressure_block, pfield, body = darcy.for_case(mesh, params, pressure, names[0],
-                                                          order=params.order, gamma=gamma)
-        except ValueError as err:
-            raise InputError(str(err)) from None
-        if params.load_type == "follower":
-            # -cof(F)∇p: a residual term (unsymmetric tangent, transposed adjoint).  It is
-            # affine in u in 2D, so a linear material keeps its one-step linear solve.
-            follower, body = body, None
-        blocks.append(pressure_block)
-        mech_fields.append(pfield)
-    loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force))) for ld in setup.loads)
-    newton = NewtonSettings(rtol=params.newton_rtol, max_iter=params.newton_max_iter,
-                            initial_increment=params.newton_increment,
-                            min_increment=params.newton_min_increment)
-    try:
-        mech = Mechanics(mesh, order=params.order, energy=energy, fields=mech_fields,
-                         supports=setup.supports, loads=loads, springs=setup.all_springs, body=body,
-                         thickness=params.thickness, guard=guard, linear=linear, newton=newton,
-                         residual_density=follower, realcompile=params.realcompile)
-    except ValueError as err:
-        raise InputError(str(err)) from None
-    blocks.append(mech)
-    reports = []
-    obj = setup.objective if not params.objective else params.objective
-    if obj not in OBJECTIVES:
-        raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{obj}')")
-    if obj == "compliance":
-        if follower is not None:
-            raise InputError("objective: compliance is not defined for a follower load (the load "
-                             "vector depends on u); use energy, mechanism, output or output_se")
-        if body is not None:
-            blocks.append(darcy.Compliance(mech, pressure_block))
-        else:
-            blocks.append(R.compliance(mech))
-        objective = "compliance"
-    elif obj == "energy":
-        blocks.append(R.StrainEnergy(mech))
-        objective = "se"
-    else:
-        if not setup.ports:
-            raise InputError(f"objective '{obj}' needs an output port")
-        blocks.append(R.output_displacement(mech, setup.output))
-        reports.append("delta")
-        if obj == "output":
-            blocks.append(R.Scale(-1.0, ("delta",), "objective"))
-        elif obj == "output_se":  # max Δ subject to SE <= se_max
-            se_max = params.se_max or setup.se_max
-            if not se_max > 0:
-                raise InputError(f"se_max: objective output_se needs a positive limit (case "
-                                 f"'{case.name}' has no default; --set se_max=...)")
-            blocks.append(R.Scale(-1.0, ("delta",), "objective"))
-            blocks.append(R.StrainEnergy(mech))
-            blocks.append(_Bound(se_max, ("se",), "se_limit"))
-            reports.append("se")
-        else:
-            blocks.append(R.StrainEnergy(mech))
-            blocks.append(R.MechanismRatio())
-            reports.append("se")
-        objective = "objective"
-    for i, out in enumerate(names):
-        vf = params.volfrac if i == 0 else params.volfrac2
-        if i == 0 or params.volfrac2 > 0:
-            blocks.append(R.Volume(field_, vf, inputs=(out,), output="volume" if i == 0 else "volume2"))
-    constraints = ["volume"] + (["volume2"] if nf == 2 and params.volfrac2 > 0 else [])
-    if obj == "output_se":
-        constraints.append("se_limit")
-    chain = Chain(blocks, inputs=("x",))
-    return Problem(case, params, mesh, field_, chain, objective, constraints, mech, projections,
-                   penal, setup, h, reports, pressure_block, nf, shape=meshed.shape)
-
-
-class _Bound:
-    """Block ``a -> a / bound - 1`` (a constraint ``a <= bound`` in the form ``g <= 0``)."""
-
-    def __init__(self, bound, inputs, output):
-        self.bound, self.inputs, self.output = float(bound), tuple(inputs), output
-
-    def forward(self, a):
-        return float(a) / self.bound - 1.0
-
-    def backward(self, g):
-        return (g / self.bound,)
-
-
-class _Slice:
-    """Block ``x -> x_i``: the i-th of several stacked design fields of n variables each."""
-
-    def __init__(self, n, i, output):
-        self.n, self.i = n, i
-        self.inputs, self.output = ("x",), output
-
-    def forward(self, x):
-        return np.asarray(x)[self.i * self.n:(self.i + 1) * self.n].copy()
-
-    def backward(self, g):
-        self._full = np.zeros(2 * self.n)
-        self._full[self.i * self.n:(self.i + 1) * self.n] = g
-        return (self._full,)
+    chain = Chain(design.blocks + pressure.blocks + [mech] + response.blocks + volume.blocks,
+                  inputs=("x",))
+    return Problem(case, params, meshed.mesh, design.field, chain, response.objective,
+                   volume.constraints + response.constraints, mech, design.projections,
+                   design.penal, setup, meshed.h, response.reports, pressure.block,
+                   setup.materials, shape=meshed.shape)

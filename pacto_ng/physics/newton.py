@@ -51,6 +51,19 @@ class NewtonSettings:
             raise ValueError("rtol must be positive and max_iter >= 1")
 
 
+def newton_settings(params) -> NewtonSettings:
+    """The Newton settings of a run's parameters (``newton_rtol``, ``newton_max_iter``,
+    ``newton_increment``, ``newton_min_increment``): the one place they are read."""
+    try:
+        return NewtonSettings(rtol=params.newton_rtol, max_iter=params.newton_max_iter,
+                              initial_increment=params.newton_increment,
+                              min_increment=params.newton_min_increment)
+    except ValueError as err:
+        from ..params import InputError
+
+        raise InputError(f"newton: {err}") from None
+
+
 @dataclass
 class NewtonResult:
     converged: bool

@@ -121,7 +121,7 @@ class Run:
         return float(self.params.load)
 
 
-def load_run(folder, command: str) -> Run:
+def load_run(folder, command: str, case=None) -> Run:
     """Read ``params.json``, ``summary.json`` and ``checkpoint.npz``; InputError if anything
     that a finished run holds is missing."""
     from ..case import case_of_run
@@ -136,7 +136,11 @@ def load_run(folder, command: str) -> Run:
     except (OSError, ValueError):
         raise InputError(f"{command}: '{folder}' holds no run (params.json missing or "
                          f"unreadable)") from None
-    case = case_of_run(info, command)  # an error in a user's case file is shown as itself
+    if case is None:  # an error in a user's case file is shown as itself
+        case = case_of_run(info, command)
+    elif case.name != info["case"]:
+        raise InputError(f"{command}: '{folder}' is a run of '{info['case']}', not of "
+                         f"'{case.name}'")
     try:
         params = Parameters(**info["params"])
     except (KeyError, TypeError) as err:
@@ -344,7 +348,7 @@ def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
 def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
                 order: int = 2, kinds=KINDS, quiet: bool = False, connect: bool = True) -> int:
     """``pacto analyse``: see the module docstring.  Returns the exit code (0)."""
-    from ..physics.newton import NewtonSettings
+    from ..physics.newton import newton_settings
     from .remesh import pressure_sampler
     from .report import post_analyse
     from .threshold import threshold
@@ -410,8 +414,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     # the output port's shift below; a design with no solid on the clamp is an error there)
     _say(quiet, "  " + choice["note"])
 
-    newton = NewtonSettings(rtol=p.newton_rtol, max_iter=p.newton_max_iter,
-                            initial_increment=p.newton_increment)
+    newton = newton_settings(p)
     out_dir = run.path / "analysis"
     ok_exp = [r for r in expected if r["converged"]]
     exp_pair = ([r["pressure"] for r in ok_exp], [r["delta"] for r in ok_exp]) if ok_exp else None

@@ -182,3 +182,21 @@ def test_unknown_case_name_and_missing_case_file(tmp_path):
     assert code == 2 and "unknown case 'no-such-case'" in err and len(err.strip().splitlines()) == 1
     code, err = run_cli("run", tmp_path / "nothing.py")
     assert code == 2 and "does not exist" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_case_built_in_a_script_runs_from_python(tmp_path, capsys):
+    """pn.run(CASE) on a Case made in the script itself returns its Result; the CLI, which can
+    find only built-in cases and case files again, says how to load such a run."""
+    import pacto_ng as pn
+    from pacto_ng.case import load_case_file
+
+    case = load_case_file(write_case(tmp_path))
+    case = pn.Case(case.name + "-script", case.summary, case.source, case.defaults,
+                   case.geometry, case.setup, load_unit="Pa")
+    res = pn.run(case, out=tmp_path / "r", iterations=2, maxh=0.003)
+    assert res.exit_code == 0 and len(res.history) == 2
+    assert np.isfinite(res.objective) and res.rho_bar.shape == (res.mesh.ne,)
+    assert res.summary["output_displacement"] == pytest.approx(
+        float(res.problem.values["delta"]), rel=1e-10)
+    assert main(["export", str(tmp_path / "r"), "--format", "stl", "--quiet"]) == 2
+    assert "built in a script" in capsys.readouterr().err

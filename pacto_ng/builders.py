@@ -1,0 +1,236 @@
+"""The builders of an optimisation chain, one concern each, called in order by
+:func:`pacto_ng.case.build_problem`:
+
+    meshed   = mesh_for(case, params)                          geometry -> mesh
+    design   = design_chain(meshed, setup, params)             x -> ρ -> ρ̃ -> ρ̄ (per field)
+    energy   = make_energy(params, design.penal, design.names) φ(∇u; ρ̄) of the model
+    pressure = pressure_load(meshed, setup, params, energy, design.names)   ρ̄ -> p, load
+    mech     = mechanics(meshed, setup, params, energy, design, pressure)   (ρ̄, p) -> u
+    response = responses(mech, setup, params, pressure, case_name)          u -> f0, g
+    volume   = volume_constraints(design, params)                           ρ̄ -> V/V* - 1
+
+Each returns the blocks it adds (with what the next builder needs); the problem is their chain.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .params import InputError
+
+
+@dataclass
+class DesignChain:
+    """Design variables to physical densities: the field, its blocks, the projections (whose
+    β the schedule sets), the SIMP penalty (an NGSolve Parameter) and the names of the
+    physical density field(s)."""
+
+    field: object
+    blocks: list
+    projections: list
+    penal: object
+    names: tuple[str, ...]
+
+
+@dataclass
+class PressureLoad:
+    """The Darcy pressure block and how its load enters the mechanics: a body force (fixed)
+    or a residual density (follower); all None for a case without pressure."""
+
+    block: object = None
+    field: object = None
+    body: object = None
+    follower: object = None
+
+    @property
+    def blocks(self) -> list:
+        return [] if self.block is None else [self.block]
+
+
+@dataclass
+class Responses:
+    """The response blocks, the objective's name, the responses reported each iteration and
+    the extra constraints (beyond the volume)."""
+
+    blocks: list
+    objective: str
+    reports: list = field(default_factory=list)
+    constraints: list = field(default_factory=list)
+
+
+def design_chain(meshed, setup, params) -> DesignChain:
+    """Embed, filter (Helmholtz, cone or none), project and fix the passive elements, for one
+    or two design fields (``setup.materials``)."""
+    from ngsolve import Parameter
+
+    from .design import DesignField, Embed, FixPassive
+    from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
+
+    mesh = meshed.mesh
+    try:
+        field_ = DesignField(mesh, solid=setup.solid, void=setup.void)
+    except ValueError as err:
+        raise InputError(str(err)) from None
+    radius = params.filter_radius or 3.0 * meshed.h
+    nf = setup.materials
+    names = ("rho_bar",) if nf == 1 else ("rho_bar1", "rho_bar2")
+    blocks, projections = [], []
+    if nf == 2:
+        blocks += [Slice(field_.n, 0, "x1"), Slice(field_.n, 1, "x2")]
+    for i, out in enumerate(names):
+        suf = "" if nf == 1 else str(i + 1)
+        xin = "x" if nf == 1 else f"x{suf}"
+        blocks.append(Embed(field_, inputs=(xin,), output=f"rho{suf}"))
+        if params.filter == "helmholtz":
+            flt = HelmholtzFilter(mesh, radius, inputs=(f"rho{suf}",), output=f"rho_tilde{suf}")
+        elif params.filter == "cone":
+            flt = ConeFilter(field_.centroids(), field_.areas, radius, inputs=(f"rho{suf}",),
+                             output=f"rho_tilde{suf}")
+        else:
+            flt = IdentityFilter(inputs=(f"rho{suf}",), output=f"rho_tilde{suf}")
+        blocks.append(flt)
+        pr = HeavisideProjection(params.beta, params.eta, inputs=(f"rho_tilde{suf}",),
+                                 output=f"rho_proj{suf}")
+        projections.append(pr)
+        blocks.append(pr)
+        blocks.append(FixPassive(field_, inputs=(f"rho_proj{suf}",), output=out))
+    return DesignChain(field_, blocks, projections, Parameter(params.penal), names)
+
+
+def pressure_load(meshed, setup, params, energy, names, case_name: str) -> PressureLoad:
+    """The Darcy pressure of the case's inlet and zero-pressure boundaries, and its load:
+    fixed (a body force) or follower (a residual density, SPEC §4)."""
+    from .case import Pressure
+
+    if params.load_type == "follower" and setup.pressure is None:
+        raise InputError(f"load_type: case '{case_name}' has no pressure load to follow the "
+                         "deformation")
+    if params.inlet and setup.pressure is None:
+        raise InputError(f"inlet: case '{case_name}' has no pressure load")
+    if setup.pressure is None:
+        return PressureLoad()
+    from .physics import darcy
+
+    h = meshed.h
+    if params.delta_s < 0.1 * h:
+        raise InputError(f"delta_s: {params.delta_s:g} is below a tenth of the element size "
+                         f"{h:g} (set delta_s in the units of the mesh)")
+    pressure = setup.pressure
+    if params.inlet:
+        pressure = Pressure(inlet=tuple(params.inlet.split("|")), zero=pressure.zero)
+    try:
+        # Wang: the follower load sees the deformation I + γ∇u of the energy's large-strain
+        # part (void: the fixed load), unless follower_wang=0
+        gamma = energy.gamma if params.model == "wang" and params.follower_wang else None
+        block, pfield, body = darcy.for_case(meshed.mesh, params, pressure, names[0],
+                                             order=params.order, gamma=gamma)
+    except ValueError as err:
+        raise InputError(str(err)) from None
+    if params.load_type == "follower":
+        # -cof(F)∇p: a residual term (unsymmetric tangent, transposed adjoint).  It is affine
+        # in u in 2D, so a linear material keeps its one-step linear solve.
+        return PressureLoad(block, pfield, None, body)
+    return PressureLoad(block, pfield, body, None)
+
+
+def mechanics(meshed, setup, params, energy, guard, linear, design: DesignChain,
+              pressure: PressureLoad):
+    """The mechanics block ``(ρ̄, [p]) -> u`` with the case's supports, loads and springs."""
+    from .physics.loads import PointLoad
+    from .physics.mechanics import Mechanics
+    from .physics.newton import newton_settings
+
+    fields = list(design.names) + ([pressure.field] if pressure.field is not None else [])
+    loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force)))
+                  for ld in setup.loads)
+    try:
+        return Mechanics(meshed.mesh, order=params.order, energy=energy, fields=fields,
+                         supports=setup.supports, loads=loads, springs=setup.all_springs,
+                         body=pressure.body, thickness=params.thickness, guard=guard,
+                         linear=linear, newton=newton_settings(params),
+                         residual_density=pressure.follower, realcompile=params.realcompile)
+    except ValueError as err:
+        raise InputError(str(err)) from None
+
+
+def responses(mech, setup, params, pressure: PressureLoad, case_name: str) -> Responses:
+    """The objective's blocks: compliance, strain energy, or an output displacement (alone,
+    over the strain energy, or under a strain-energy limit)."""
+    from . import responses as R
+    from .case import OBJECTIVES
+
+    obj = params.objective or setup.objective
+    if obj not in OBJECTIVES:
+        raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{obj}')")
+    if obj == "compliance":
+        if pressure.follower is not None:
+            raise InputError("objective: compliance is not defined for a follower load (the load "
+                             "vector depends on u); use energy, mechanism, output or output_se")
+        if pressure.body is not None:
+            from .physics import darcy
+
+            return Responses([darcy.Compliance(mech, pressure.block)], "compliance")
+        return Responses([R.compliance(mech)], "compliance")
+    if obj == "energy":
+        return Responses([R.StrainEnergy(mech)], "se")
+    if not setup.ports:
+        raise InputError(f"objective '{obj}' needs an output port")
+    blocks = [R.output_displacement(mech, setup.output)]
+    if obj == "output":
+        return Responses(blocks + [R.Scale(-1.0, ("delta",), "objective")], "objective",
+                         ["delta"])
+    if obj == "output_se":  # max Δ subject to SE <= se_max
+        se_max = params.se_max or setup.se_max
+        if not se_max > 0:
+            raise InputError(f"se_max: objective output_se needs a positive limit (case "
+                             f"'{case_name}' has no default; --set se_max=...)")
+        blocks += [R.Scale(-1.0, ("delta",), "objective"), R.StrainEnergy(mech),
+                   Bound(se_max, ("se",), "se_limit")]
+        return Responses(blocks, "objective", ["delta", "se"], ["se_limit"])
+    blocks += [R.StrainEnergy(mech), R.MechanismRatio()]
+    return Responses(blocks, "objective", ["delta", "se"])
+
+
+def volume_constraints(design: DesignChain, params) -> Responses:
+    """``V(ρ̄)/V* - 1 <= 0`` on the (total) solid, and on the stiff material where
+    ``volfrac2`` > 0 (two materials)."""
+    from . import responses as R
+
+    blocks, names = [], []
+    for i, out in enumerate(design.names):
+        vf = params.volfrac if i == 0 else params.volfrac2
+        if i == 0 or params.volfrac2 > 0:
+            name = "volume" if i == 0 else "volume2"
+            blocks.append(R.Volume(design.field, vf, inputs=(out,), output=name))
+            names.append(name)
+    return Responses(blocks, "volume", [], names)
+
+
+class Bound:
+    """Block ``a -> a / bound - 1`` (a constraint ``a <= bound`` in the form ``g <= 0``)."""
+
+    def __init__(self, bound, inputs, output):
+        self.bound, self.inputs, self.output = float(bound), tuple(inputs), output
+
+    def forward(self, a):
+        return float(a) / self.bound - 1.0
+
+    def backward(self, g):
+        return (g / self.bound,)
+
+
+class Slice:
+    """Block ``x -> x_i``: the i-th of several stacked design fields of n variables each."""
+
+    def __init__(self, n, i, output):
+        self.n, self.i = n, i
+        self.inputs, self.output = ("x",), output
+
+    def forward(self, x):
+        return np.asarray(x)[self.i * self.n:(self.i + 1) * self.n].copy()
+
+    def backward(self, g):
+        full = np.zeros(2 * self.n)
+        full[self.i * self.n:(self.i + 1) * self.n] = g
+        return (full,)
