@@ -1,0 +1,98 @@
+"""Jaw gripper: a pressure-actuated two-jaw gripper on its full, tapered body (no symmetry half).
+
+What it shows (a copyable example of the public API, ``import pacto_ng as pn`` and netgen.occ
+only): a non-rectangular full domain -- a body that tapers from its back edge to a front with a
+mouth cut into it -- built from several netgen.occ faces glued together: the design domain, a
+passive void ``object`` (where the gripped object sits, inside the mouth) and two passive solid
+jaw pads along the mouth; named edges (two clamped mounts, the pressure inlet between them on
+the back edge, the zero-pressure skin) and two named vertices, the jaw tips.  The output is the
+*multi-port* form ``Setup(port=(pn.Port(...), pn.Port(...)))``: Δ = d_top·u(top_jaw) +
+d_bottom·u(bottom_jaw) with the directions pointing towards each other, i.e. how much the mouth
+closes, each jaw against its own output spring k_out.
+
+Set-up: the back edge of height ``BACK`` carries the inlet in its middle and a clamped mount
+``MOUNT`` long at each end; the rest of the outline is at zero pressure; the mouth is ``2 GAP``
+high and ``MOUTH`` deep; objective ``mechanism`` (minimise -Δ/SE).  E1 = 1e8 Pa, plane strain,
+t = 1e-3 m, inlet pressure 1e5 Pa.  The default run (150 iterations) seals the inlet behind a
+thin back wall spanning the two mounts; the pressure bows that wall in, and a symmetric linkage
+of struts turns the push into both jaws swinging shut.
+
+    pacto run jaw-gripper                      # output/jaw-gripper-linear/
+    pacto check-gradients jaw-gripper
+    pacto analyse output/jaw-gripper-linear    # threshold, remesh, re-analysis
+"""
+from __future__ import annotations
+
+from netgen import occ
+
+import pacto_ng as pn
+
+LENGTH = 0.16      # back edge to the front (m)
+BACK = 0.12        # height of the back edge (m)
+FRONT = 0.08       # height of the front (m)
+MOUTH = 0.04       # depth of the mouth (m)
+GAP = 0.012        # half the height of the mouth (m)
+PAD = 0.004        # thickness of the passive solid jaw pads (m)
+MOUNT = 0.015      # length of each clamped mount at the ends of the back edge (m)
+
+
+def geometry(p: pn.Parameters):
+    """The body, the object's place and the jaw pads as named netgen.occ faces."""
+    L, B, F = LENGTH, BACK, FRONT
+    x0 = L - MOUTH                       # the bottom of the mouth
+    # the outline of the body with the mouth (counter-clockwise from the bottom mount)
+    body = (occ.WorkPlane().MoveTo(0, -B / 2)
+            .LineTo(L, -F / 2, name="skin")
+            .LineTo(L, -GAP, name="skin")
+            .LineTo(x0, -GAP, name="skin")
+            .LineTo(x0, GAP, name="skin")
+            .LineTo(L, GAP, name="skin")
+            .LineTo(L, F / 2, name="skin")
+            .LineTo(0, B / 2, name="skin")
+            .LineTo(0, B / 2 - MOUNT, name="mount")
+            .LineTo(0, -B / 2 + MOUNT, name="inlet")
+            .LineTo(0, -B / 2, name="mount")
+            .Face())
+    obj = occ.WorkPlane().MoveTo(x0, -GAP).Rectangle(MOUTH, 2 * GAP).Face()
+    obj.faces.name = "object"
+    obj.edges.name = "skin"
+    top = occ.WorkPlane().MoveTo(x0, GAP).Rectangle(MOUTH, PAD).Face()
+    bottom = occ.WorkPlane().MoveTo(x0, -GAP - PAD).Rectangle(MOUTH, PAD).Face()
+    pads = top + bottom
+    pads.faces.name = "pads"
+    design = body - pads
+    design.faces.name = "design"
+    shape = occ.Glue([design, pads, obj])
+    shape.vertices.Nearest((L, GAP, 0)).name = "top_jaw"
+    shape.vertices.Nearest((L, -GAP, 0)).name = "bottom_jaw"
+    return shape
+
+
+def setup(p: pn.Parameters) -> pn.Setup:
+    return pn.Setup(
+        supports=pn.Supports(clamp=("mount",)),
+        # Δ = -u_y(top jaw) + u_y(bottom jaw): the mouth closes; a spring on each jaw
+        port=(pn.Port("top_jaw", (0.0, -1.0), spring=p.k_out, weight=1.0),
+              pn.Port("bottom_jaw", (0.0, 1.0), spring=p.k_out, weight=1.0)),
+        solid=("pads",),
+        void=("object",),
+        pressure=pn.Pressure(inlet=("inlet",), zero=("skin", "mount")),
+        objective="mechanism",
+        # the typical |-Δ/SE| of a finished design (≈ 1 / (P_in L t)); scaled to 10
+        objective_ref=1.0 / (p.load * LENGTH * p.thickness),
+    )
+
+
+CASE = pn.Case(
+    name="jaw-gripper",
+    summary="two-jaw pressure gripper on its full tapered body, two output ports, mouth closes",
+    source="pacto_ng example (public API)",
+    defaults=pn.Parameters(
+        model="linear", maxh=0.004, plane="strain", thickness=1e-3, E1=1e8, E0=1e2, nu=0.4,
+        volfrac=0.25, filter="helmholtz", filter_radius=0.01, penal=3.0, penal_start=1.0,
+        penal_step=0.04, beta=1.0, beta_max=32.0, beta_every=15, eta_k=0.2, eta_h=0.3,
+        delta_s=0.003, load=1e5, k_out=1e4, iterations=150, move=0.05, tol=0.01),
+    geometry=geometry,
+    setup=setup,
+    load_unit="Pa",
+)
