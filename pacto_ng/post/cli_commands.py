@@ -262,11 +262,16 @@ def _output_of(setup):
     its direction."""
     from .reanalysis import Output
 
-    port = setup.port
+    ports = setup.ports
+    if len(ports) != 1:
+        raise InputError(f"analyse: the re-analysis follows one output port; this case has "
+                         f"{len(ports)} ({', '.join(p.region for p in ports)}): 'pacto export' "
+                         "writes its part")
+    port = ports[0]
     d = np.asarray(port.direction, dtype=float)
     d = d / np.linalg.norm(d)
     k = 0.0
-    for s in setup.springs:
+    for s in setup.all_springs:
         sd = np.asarray(s.direction, dtype=float)
         sd = sd / np.linalg.norm(sd)
         if s.region == port.region and abs(abs(sd @ d) - 1.0) < 1e-12:
@@ -362,7 +367,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     if bad or not kinds:
         raise InputError(f"--kinds: choose from {', '.join(KINDS)} (got {','.join(kinds) or 'none'})")
     run = load_run(folder, "analyse")
-    setup = run.case.setup(run.params)
+    setup = run.case.make_setup(run.params)
     if setup.pressure is None:
         raise InputError(f"analyse: case '{run.case.name}' has no pressure load; the re-analysis "
                          f"applies to pressure cases only ('pacto export {folder}' writes its part)")
@@ -371,6 +376,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
                          f"handles one material only ('pacto export {folder}' writes its part)")
     if setup.port is None:
         raise InputError(f"analyse: case '{run.case.name}' has no output port")
+    output = _output_of(setup)
     pressures = default_pressures(run.load) if pressures is None else list(pressures)
     t0 = time.perf_counter()
     _say(quiet, f"analyse {run.path}: {run.case.name}, model {run.params.model}, load "
@@ -405,7 +411,6 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
         f"{r['pressure']:.3g} Pa -> failed" for r in expected))
 
     supports = setup.supports
-    output = _output_of(setup)
     shape, exclude = domain_of(problem, setup)
     choice, th = choose_threshold(problem.mesh, rho, threshold_value, output.region,
                                   supports.clamp, connect=connect, exclude=exclude)
@@ -736,7 +741,7 @@ def part_of_run(run: Run, threshold_value: float, maxh: float | None):
     from .remesh import remesh
     from .threshold import threshold
 
-    setup = run.case.setup(run.params)
+    setup = run.case.make_setup(run.params)
     with compute():
         problem = rebuild(run)
     rho = _design_density(problem)
