@@ -241,7 +241,7 @@ def rebuilt(folder: Path, **changes):
     from pacto_ng.threads import compute
 
     run = load_run(folder, "extreme")
-    run.params = dataclasses.replace(run.params, load_ramp=0, realcompile=False, **changes)
+    run.params = run.params.replace(load_ramp=0, realcompile=False, **changes)
     with compute():
         return run, rebuild(run)
 

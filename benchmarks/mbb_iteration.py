@@ -24,14 +24,14 @@ def short_optimisation(case_name: str, nelx: int, nely: int, iterations: int):
     iterations (no convergence stop).  Call inside a TaskManager.  Returns (problem, state)."""
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
-    from pacto_ng.runner import initial_design, schedule_of
+    from pacto_ng.runner import initial_design
 
     case = get_case(case_name)
     params = case.defaults.with_overrides({"nelx": str(nelx), "nely": str(nely),
                                            "iterations": str(iterations)})
     problem = build_problem(case, params)
     state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
-    optimize(problem, schedule_of(params), iterations=iterations, tol=0.0, method="mma",
+    optimize(problem, params.schedule.schedule(), iterations=iterations, tol=0.0, method="mma",
              move=params.move, state=state)
     return problem, state
 

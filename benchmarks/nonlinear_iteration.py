@@ -24,7 +24,7 @@ def measure(model: str, maxh: float, order: int, load: float = 144e3, iterations
 
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
-    from pacto_ng.runner import initial_design, schedule_of
+    from pacto_ng.runner import initial_design
 
     if iterations < 4:
         raise ValueError("need >= 4 iterations (medians over >= 3 iterations after the first)")
@@ -38,7 +38,7 @@ def measure(model: str, maxh: float, order: int, load: float = 144e3, iterations
         problem = build_problem(case, params)
         setup = time.perf_counter() - t0
         state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
-        res = optimize(problem, schedule_of(params), iterations=iterations, tol=0.0,
+        res = optimize(problem, params.schedule.schedule(), iterations=iterations, tol=0.0,
                        method="mma", move=params.move, state=state)
     hist = state.history
     if res.stopped == "newton" or len(hist) < 4:

@@ -70,7 +70,7 @@ def profile(case_name="pa-inverter", model="neohookean", load=1e6, iterations=2,
 
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
-    from pacto_ng.runner import initial_design, schedule_of
+    from pacto_ng.runner import initial_design
 
     case = get_case(case_name)
     total = warmup + iterations
@@ -81,7 +81,7 @@ def profile(case_name="pa-inverter", model="neohookean", load=1e6, iterations=2,
     with compute(threads=threads):
         problem = build_problem(case, params)
         state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
-        schedule = schedule_of(params)
+        schedule = params.schedule.schedule()
         if warmup:
             optimize(problem, schedule, iterations=warmup, tol=0.0, method="mma",
                      move=params.move, state=state)

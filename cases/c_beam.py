@@ -12,10 +12,7 @@ from __future__ import annotations
 
 import sys
 
-from pacto_ng.case import Case, Setup
-from pacto_ng.params import Parameters
-from pacto_ng.physics.loads import PointLoad
-from pacto_ng.physics.mechanics import Supports
+from pacto_ng import Case, Parameters, PointLoad, Setup, Supports
 from pacto_ng.geometries import c_beam as geo
 
 
@@ -42,6 +39,6 @@ CASE = Case(
 )
 
 if __name__ == "__main__":
-    from pacto_ng.cli import main
+    from pacto_ng import main
 
     sys.exit(main(["run", CASE.name] + sys.argv[1:]))

@@ -10,11 +10,19 @@ from __future__ import annotations
 
 import sys
 
-from pacto_ng.case import Case, Setup
-from pacto_ng.params import Parameters
-from pacto_ng.physics.loads import PointLoad, Port, Spring
-from pacto_ng.physics.mechanics import Supports
+from dataclasses import dataclass
+
+from pacto_ng import Case, Parameters, PointLoad, Port, Settings, Setup, Spring, Supports, setting
 from pacto_ng.geometries import inverter as geo
+
+
+@dataclass(frozen=True)
+class Options(Settings):
+    """The inverter's own settings."""
+
+    load_width: float = setting(0.0, "m", "height of the input the force is spread over (0: 2 "
+                                "element sizes, the case's definition)", range="[0, inf)")
+    k_in: float = setting(4000.0, "N/m", "input spring stiffness", range="[0, inf)")
 
 
 def _h(p: Parameters) -> float:
@@ -39,14 +47,15 @@ CASE = Case(
     source="Thesis §5.2.3 (Table 5.4); Bendsøe & Sigmund (2003) inverter",
     defaults=Parameters(model="linear", maxh=1.5e-6, plane="strain", thickness=7e-6, E1=3e9,
                         E0=3e3, nu=0.3, volfrac=0.2, filter="helmholtz", penal=3.0, beta=1.0,
-                        beta_max=16.0, beta_every=25, load=0.1, k_in=4000.0, k_out=40.0,
+                        beta_max=16.0, beta_every=25, load=0.1, k_out=40.0,
                         iterations=200, tol=0.01),
     geometry=_geometry,
     setup=_setup,
+    options=Options(),
     load_unit="N",
 )
 
 if __name__ == "__main__":
-    from pacto_ng.cli import main
+    from pacto_ng import main
 
     sys.exit(main(["run", CASE.name] + sys.argv[1:]))

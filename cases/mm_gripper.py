@@ -22,8 +22,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 
-from pacto_ng.case import Case, Setup
-from pacto_ng.params import Parameters
+from pacto_ng import Case, Parameters, Setup
 from pacto_ng.cases import pa_gripper
 from pacto_ng.cases.pa_inverter import PA_DEFAULTS
 
@@ -36,7 +35,7 @@ CASE = Case(
     name="mm-gripper",
     summary="two-material pressure-actuated gripper (E1 soft, E2 stiff), minimise -Δ/SE",
     source="Thesis §6.4 (eq. 6.1); Pinskier, Kumar et al. (2023); Sigmund & Torquato (1997)",
-    defaults=dataclasses.replace(PA_DEFAULTS, maxh=0.002, E1=3e8, E2=3e9, E0=3e2, load=5e5,
+    defaults=PA_DEFAULTS.replace(maxh=0.002, E1=3e8, E2=3e9, E0=3e2, load=5e5,
                                  volfrac2=0.1),
     geometry=pa_gripper._geometry,
     setup=_setup,
@@ -44,6 +43,6 @@ CASE = Case(
 )
 
 if __name__ == "__main__":
-    from pacto_ng.cli import main
+    from pacto_ng import main
 
     sys.exit(main(["run", CASE.name] + sys.argv[1:]))

@@ -20,14 +20,10 @@ pa-inverter (see its docstring).
 """
 from __future__ import annotations
 
-import dataclasses
 
 import sys
 
-from pacto_ng.case import Case, Pressure, Setup, domain_size
-from pacto_ng.params import Parameters
-from pacto_ng.physics.loads import Port, Spring
-from pacto_ng.physics.mechanics import Supports
+from pacto_ng import Case, domain_size, Parameters, Port, Pressure, Setup, Spring, Supports
 from pacto_ng.geometries import pa_mechanism as geo
 from pacto_ng.cases.pa_inverter import PA_DEFAULTS, objective_ref, se_default
 
@@ -51,13 +47,13 @@ CASE = Case(
     name="pa-gripper",
     summary="pressure-actuated gripper (Darcy pressure), minimise -Δ/SE, the jaw closes",
     source="Thesis §6.2 (Table 6.1); Kumar, Frouws & Langelaar (2020), Struct Multidisc Optim 61",
-    defaults=dataclasses.replace(PA_DEFAULTS, maxh=0.002),
+    defaults=PA_DEFAULTS.replace(maxh=0.002),
     geometry=_geometry,
     setup=_setup,
     load_unit="Pa",
 )
 
 if __name__ == "__main__":
-    from pacto_ng.cli import main
+    from pacto_ng import main
 
     sys.exit(main(["run", CASE.name] + sys.argv[1:]))

@@ -24,13 +24,12 @@ unit-element set-up of the MATLAB codes (domain nelx x nely, 1 x 1 elements): ``
 """
 from __future__ import annotations
 
-import dataclasses
 import sys
 
-from pacto_ng.case import Case, Pressure, Setup, domain_size
-from pacto_ng.params import InputError, Parameters
-from pacto_ng.physics.loads import Port, Spring
-from pacto_ng.physics.mechanics import Supports
+from dataclasses import dataclass
+
+from pacto_ng import (Case, domain_size, InputError, Parameters, Port, Pressure, Settings,
+                      Setup, Spring, Supports, setting)
 from pacto_ng.geometries import pa_mechanism as geo
 
 #: default strain-energy limit of objective output_se in units of P_in² t A / E1 (A: the
@@ -48,6 +47,15 @@ PA_DEFAULTS = Parameters(
     volfrac=0.2, filter="helmholtz", filter_radius=0.012, penal=3.0, penal_start=1.0,
     penal_step=0.04, beta=1.0, beta_max=32.0, beta_every=15, load=1e6, k_out=1e4,
     iterations=160, move=0.05, tol=0.01)
+
+
+@dataclass(frozen=True)
+class Options(Settings):
+    """The pa-inverter's own settings."""
+
+    output_width: float = setting(0.0, "m", "the output spring and port spread over this length "
+                                  "of the right edge from the output corner (0: the corner "
+                                  "point, the case's definition)", range="[0, inf)")
 
 
 def se_default(p: Parameters, width: float, height: float) -> float:
@@ -102,9 +110,10 @@ CASE = Case(
     # p from 2, not 1: from p = 1 the optimiser leaves grey ρ̄ < 0.5 bars inside the cavity at
     # the thesis mesh; a smaller filter (0.008 m) avoids them there but leaks through thin walls
     # on 120 x 60 quads (measured, docs/benchmarks.md)
-    defaults=dataclasses.replace(PA_DEFAULTS, penal_start=2.0),
+    defaults=PA_DEFAULTS.replace(penal_start=2.0),
     geometry=_geometry,
     setup=_setup,
+    options=Options(),
     load_unit="Pa",
     # Wang at order 2: 0.17 % from the finest objective at 1.5x order 1's time per analysis
     # (order 1: 1.33 %; docs/benchmarks.md, trade curves); the extreme-pressure runs pin
@@ -113,6 +122,6 @@ CASE = Case(
 )
 
 if __name__ == "__main__":
-    from pacto_ng.cli import main
+    from pacto_ng import main
 
     sys.exit(main(["run", CASE.name] + sys.argv[1:]))

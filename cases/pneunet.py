@@ -21,10 +21,7 @@ from __future__ import annotations
 
 import sys
 
-from pacto_ng.case import Case, Pressure, Setup, domain_size
-from pacto_ng.params import Parameters
-from pacto_ng.physics.loads import Port, Spring
-from pacto_ng.physics.mechanics import Supports
+from pacto_ng import Case, domain_size, Parameters, Port, Pressure, Setup, Spring, Supports
 from pacto_ng.geometries import pneunet as geo
 from pacto_ng.cases.pa_inverter import objective_ref, se_default
 
@@ -59,6 +56,6 @@ CASE = Case(
 )
 
 if __name__ == "__main__":
-    from pacto_ng.cli import main
+    from pacto_ng import main
 
     sys.exit(main(["run", CASE.name] + sys.argv[1:]))

@@ -32,20 +32,30 @@ _source_subpackages()
 
 # -- the public API: what a case file, a script or a notebook uses ------------------------------
 from .params import InputError, Parameters  # noqa: E402
+from .settings import Settings, setting  # noqa: E402
 from .physics.loads import Outputs, PointLoad, Port, Spring  # noqa: E402
 from .physics.mechanics import Supports  # noqa: E402
 from .mesh import Layout, Region, Segment  # noqa: E402
-from .case import Case, Pressure, Setup, get_case, load_case_file  # noqa: E402
+from .case import Case, Pressure, Setup, domain_size, get_case, load_case_file  # noqa: E402
 from .geometry import load_cad, load_mesh, mesh_geometry  # noqa: E402
 from .api import Result, load_result, run  # noqa: E402
+
+
+def main(argv=None) -> int:
+    """The ``pacto`` command from Python: ``main(["run", "my_case.py", "--iterations", "50"])``
+    returns its exit code (0 done, 1 stopped by a numerical failure, 2 bad input)."""
+    from .cli import main as cli_main
+
+    return cli_main(argv)
+
 
 __all__ = [
     # a case
     "Case", "Setup", "Parameters", "Supports", "Pressure", "Port", "Outputs", "Spring",
-    "PointLoad",
+    "PointLoad", "Settings", "setting", "domain_size",
     # geometry
     "Layout", "Segment", "Region", "load_cad", "load_mesh", "mesh_geometry",
     # running
-    "run", "Result", "load_result", "get_case", "load_case_file", "InputError",
+    "run", "Result", "load_result", "get_case", "load_case_file", "InputError", "main",
     "__version__",
 ]

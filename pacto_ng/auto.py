@@ -10,7 +10,6 @@ measured strain and the reason are recorded in summary.json.
 """
 from __future__ import annotations
 
-import dataclasses
 
 import numpy as np
 
@@ -32,11 +31,11 @@ def green_lagrange_norms(mech) -> np.ndarray:
 def choose_model(case, params, threshold: float = STRAIN_THRESHOLD):
     """Return ``(params with the chosen model, record)`` for ``params.model == 'auto'``."""
     from .case import build_problem
-    from .runner import initial_design, schedule_of
+    from .runner import initial_design
 
-    lin = dataclasses.replace(params, model="linear")
+    lin = params.replace(model="linear")
     problem = build_problem(case, lin)
-    sched = schedule_of(lin)
+    sched = lin.schedule.schedule()
     problem.apply_schedule(*sched.values(0))
     problem.evaluate(initial_design(problem), gradients=False)
     norms = green_lagrange_norms(problem.mech)
@@ -48,4 +47,4 @@ def choose_model(case, params, threshold: float = STRAIN_THRESHOLD):
                  else "finite strains, the Neo-Hookean model is needed"))
     record = {"requested": "auto", "chosen": chosen, "strain_p99": strain, "strain_max": largest,
               "threshold": threshold, "reason": reason}
-    return dataclasses.replace(params, model=chosen), record
+    return params.replace(model=chosen), record

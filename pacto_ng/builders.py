@@ -18,6 +18,38 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .params import InputError
+from .settings import Settings, setting
+
+
+@dataclass(frozen=True)
+class DesignSettings(Settings):
+    """The design field: volume limits, filter, projection threshold and the start design."""
+
+    volfrac: float = setting(0.2, "", "allowed volume fraction of the design domain",
+                             range="(0, 1)")
+    volfrac2: float = setting(0.0, "", "volume fraction limit of the stiff material (0: none)",
+                              range="[0, 1)")
+    filter: str = setting("helmholtz", "", "helmholtz | cone | none",
+                          choices=("helmholtz", "cone", "none"))
+    filter_radius: float = setting(0.0, "m", "filter radius R (0: 3 mesh sizes)",
+                                   range="[0, inf)")
+    eta: float = setting(0.5, "", "projection threshold η", range="(0, 1)")
+    seed_density: float = setting(0.0, "", "initial design density (0: volfrac)",
+                                  range="[0, 1]")
+    init_design: str = setting("", "", "start from the design x of this run folder (its "
+                               "checkpoint.npz; the same case and mesh), e.g. a run at a "
+                               "lower load")
+
+
+@dataclass(frozen=True)
+class ObjectiveSettings(Settings):
+    """Which objective the case's set-up is optimised for."""
+
+    objective: str = setting("", "", "case objective variant (empty: the case's default)",
+                             choices=("", "compliance", "energy", "output", "mechanism",
+                                      "output_se"))
+    se_max: float = setting(0.0, "J", "strain-energy limit of objective output_se (0: the "
+                            "case's default)", range="[0, inf)")
 
 
 @dataclass
@@ -123,8 +155,8 @@ def pressure_load(meshed, setup, params, energy, names, case_name: str) -> Press
         # Wang: the follower load sees the deformation I + γ∇u of the energy's large-strain
         # part (void: the fixed load), unless follower_wang=0
         gamma = energy.gamma if params.model == "wang" and params.follower_wang else None
-        block, pfield, body = darcy.for_case(meshed.mesh, params, pressure, names[0],
-                                             order=params.order, gamma=gamma)
+        block, pfield, body = darcy.for_case(meshed.mesh, params.darcy, params.load, pressure,
+                                             names[0], order=params.order, gamma=gamma)
     except ValueError as err:
         raise InputError(str(err)) from None
     if params.load_type == "follower":
@@ -139,7 +171,6 @@ def mechanics(meshed, setup, params, energy, guard, linear, design: DesignChain,
     """The mechanics block ``(ρ̄, [p]) -> u`` with the case's supports, loads and springs."""
     from .physics.loads import PointLoad
     from .physics.mechanics import Mechanics
-    from .physics.newton import newton_settings
 
     fields = list(design.names) + ([pressure.field] if pressure.field is not None else [])
     loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force)))
@@ -148,7 +179,7 @@ def mechanics(meshed, setup, params, energy, guard, linear, design: DesignChain,
         return Mechanics(meshed.mesh, order=params.order, energy=energy, fields=fields,
                          supports=setup.supports, loads=loads, springs=setup.all_springs,
                          body=pressure.body, thickness=params.thickness, guard=guard,
-                         linear=linear, newton=newton_settings(params),
+                         linear=linear, newton=params.newton.settings(),
                          residual_density=pressure.follower, realcompile=params.realcompile)
     except ValueError as err:
         raise InputError(str(err)) from None

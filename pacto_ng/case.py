@@ -122,6 +122,9 @@ class Case:
     model_orders: dict = field(default_factory=dict)
     #: the case file a user's case was loaded from (empty for the built-in cases)
     file: str = ""
+    #: the case's own settings (a pacto_ng.Settings instance with their defaults), set like
+    #: any parameter: ``--set NAME=VALUE``, ``params.NAME``
+    options: object = None
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.strip():
@@ -133,6 +136,16 @@ class Case:
             if not callable(getattr(self, attr)):
                 raise InputError(f"case '{self.name}': {attr} must be a function of the "
                                  "parameters")
+        if self.options is not None and self.defaults.options is None:
+            object.__setattr__(self, "defaults", self.defaults.with_options(self.options))
+
+    def parameters(self, values: dict) -> Parameters:
+        """The case's parameters with ``values`` (flat names, e.g. a run's params.json)."""
+        known = set(self.defaults.keys())
+        # run folders of the version before case options kept every case's options
+        legacy = {k for k in ("load_width", "output_width", "k_in")
+                  if k in values and k not in known and values[k] == 0.0}
+        return self.defaults.replace(**{k: v for k, v in values.items() if k not in legacy})
 
     def make_geometry(self, params: Parameters):
         """The case's geometry for ``params`` (an error in a user's case file: one line)."""
@@ -165,7 +178,7 @@ class Case:
         """``params`` with ``order`` = 0 replaced by the case's order for its model."""
         if params.order or params.model == "auto":
             return params
-        return dataclasses.replace(params, order=self.order_for(params.model))
+        return params.replace(order=self.order_for(params.model))
 
 
 def is_case_file(name: str) -> bool:

@@ -27,9 +27,30 @@ import numpy as np
 
 from .mesh import Layout, layout_shape, netgen_mesh, structured_mesh
 from .params import InputError
+from .settings import Settings, setting
 
 CAD_SUFFIXES = (".step", ".stp", ".brep", ".iges", ".igs")
 MESH_SUFFIXES = (".msh", ".vol", ".vol.gz")
+
+
+@dataclass(frozen=True)
+class MeshSettings(Settings):
+    """How the case's geometry is meshed, and the displacement's element order."""
+
+    maxh: float = setting(0.01, "m", "Netgen triangle size (used when nelx = 0)",
+                          range="(0, inf)")
+    nelx: int = setting(0, "", "structured quads in x (0: Netgen triangles)", range="[0, 100000]")
+    nely: int = setting(0, "", "structured quads in y", range="[0, 100000]")
+    order: int = setting(0, "", "element order of the displacement (1, 2, 3; 0: the case's "
+                         "order for the model, see Case.model_orders)", choices=(0, 1, 2, 3))
+    unit_elements: bool = setting(False, "", "structured mesh of unit square elements (domain "
+                                  "nelx x nely)")
+
+    def check(self):
+        if (self.nelx > 0) != (self.nely > 0):
+            raise InputError("nelx, nely: give both (positive) or neither")
+        if self.unit_elements and self.nelx == 0:
+            raise InputError("unit_elements: needs a structured mesh (give --nelx and --nely)")
 
 
 @dataclass

@@ -7,7 +7,6 @@ a coarse one is used so that the check takes seconds.
 """
 from __future__ import annotations
 
-import dataclasses
 
 import numpy as np
 
@@ -28,7 +27,7 @@ def coarse_params(case, params, explicit_mesh: bool):
             changes.update(nelx=nx, nely=ny)
         elif size is not None:
             changes["maxh"] = max(params.maxh, size / 8)
-    return dataclasses.replace(params, **changes)
+    return params.replace(**changes)
 
 
 def check_case(case, params, *, seed: int = 0, quiet: bool = False, explicit_mesh: bool = False,

@@ -1,189 +1,198 @@
-"""Every parameter of a run, typed, with its unit and a one-line meaning, validated at
-construction.  A case supplies its defaults; ``--set NAME=VALUE`` overrides any of them.
+"""Every parameter of a run under its flat name, put together from the parts of the
+configuration, each defined and validated next to the code that reads it:
+
+==============  ==========================================  ============================
+part            settings                                    defined in
+==============  ==========================================  ============================
+``mesh``        maxh, nelx, nely, order, unit_elements      :mod:`pacto_ng.geometry`
+``material``    model, plane, thickness, E0, E1, E2, nu,    :mod:`pacto_ng.physics.energy`
+                wang_*
+``design``      volfrac, volfrac2, filter, filter_radius,   :mod:`pacto_ng.builders`
+                eta, seed_density, init_design
+``schedule``    penal*, beta*, load_ramp                    :mod:`pacto_ng.optimize.schedules`
+``loads``       load, k_out                                 :mod:`pacto_ng.physics.loads`
+``darcy``       Kv, Ks, eta_k, beta_k, eta_h, beta_h, r,    :mod:`pacto_ng.physics.darcy`
+                delta_s, p_out, load_type, inlet, ...
+``responses``   objective, se_max                           :mod:`pacto_ng.builders`
+``newton``      newton_*, realcompile                       :mod:`pacto_ng.physics.newton`
+``optimization``  iterations, optimizer, move, tol,         :mod:`pacto_ng.optimize.driver`
+                obj_tol, load_adapt
+``case``        the case's own options (e.g. the            the case's file
+                cantilever's load_width)
+==============  ==========================================  ============================
+
+A case supplies its defaults; ``--set NAME=VALUE`` overrides any of them by its flat name.
+``params.E1`` reads a setting by that name, ``params.darcy`` a whole part.
 """
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass, field, fields
+import math
+from dataclasses import fields
 
 
 class InputError(ValueError):
     """Bad user input: the CLI prints the one-line message and exits with code 2."""
 
 
-def _p(default, unit="", help=""):
-    return field(default=default, metadata={"unit": unit, "help": help})
+_PARTS = None
 
 
-@dataclass(frozen=True)
+def parts() -> tuple:
+    """``(part name, Settings class)`` of every part of the configuration but the case's."""
+    global _PARTS
+    if _PARTS is None:
+        from .builders import DesignSettings, ObjectiveSettings
+        from .geometry import MeshSettings
+        from .optimize.driver import OptimizerSettings
+        from .optimize.schedules import ScheduleSettings
+        from .physics.darcy import DarcySettings
+        from .physics.energy import MaterialSettings
+        from .physics.loads import LoadSettings
+        from .physics.newton import NewtonParameters
+
+        _PARTS = (("mesh", MeshSettings), ("material", MaterialSettings),
+                  ("design", DesignSettings), ("schedule", ScheduleSettings),
+                  ("loads", LoadSettings), ("darcy", DarcySettings),
+                  ("responses", ObjectiveSettings), ("newton", NewtonParameters),
+                  ("optimization", OptimizerSettings))
+    return _PARTS
+
+
+def _convert(name: str, text: str, default):
+    """``text`` (a command-line value) as the type of ``default``."""
+    try:
+        if isinstance(default, bool):
+            low = text.strip().lower()
+            if low in ("1", "true", "yes", "on"):
+                return True
+            if low in ("0", "false", "no", "off"):
+                return False
+            raise ValueError(text)
+        if isinstance(default, int):
+            value = float(text)
+            if not math.isfinite(value) or value != int(value):
+                raise ValueError(text)
+            return int(value)
+        if isinstance(default, float):
+            return float(text)
+        return str(text)
+    except (ValueError, OverflowError):
+        kind = {bool: "true/false", int: "an integer", float: "a number"}.get(type(default), "text")
+        raise InputError(f"--set {name}: cannot read '{text}' as {kind}") from None
+
+
 class Parameters:
-    # -- model and discretisation
-    model: str = _p("linear", "", "mechanics: linear | gnl | neohookean | wang")
-    order: int = _p(0, "", "element order of the displacement (1, 2, 3; 0: the case's order for the "
-                    "model, see Case.model_orders)")
-    maxh: float = _p(0.01, "m", "Netgen triangle size (used when nelx = 0)")
-    nelx: int = _p(0, "", "structured quads in x (0: Netgen triangles)")
-    nely: int = _p(0, "", "structured quads in y")
-    plane: str = _p("strain", "", "strain | stress")
-    thickness: float = _p(1e-3, "m", "out-of-plane thickness t")
-    # -- materials
-    E1: float = _p(3e9, "Pa", "Young's modulus of the solid (soft material with two materials)")
-    E2: float = _p(3e9, "Pa", "Young's modulus of the stiff second material")
-    E0: float = _p(3e3, "Pa", "Young's modulus of void")
-    nu: float = _p(0.4, "", "Poisson's ratio")
-    wang_beta: float = _p(100.0, "", "Wang interpolation sharpness β1")
-    wang_eta: float = _p(0.001, "", "Wang interpolation threshold η1")
-    wang_gamma: float = _p(-1.0, "", "Wang: a constant γ in [0, 1] instead of eq. 5.2 (-1: eq. 5.2)")
-    # -- design
-    volfrac: float = _p(0.2, "", "allowed volume fraction of the design domain")
-    filter: str = _p("helmholtz", "", "helmholtz | cone | none")
-    filter_radius: float = _p(0.0, "m", "filter radius R (0: 3 mesh sizes)")
-    penal: float = _p(3.0, "", "SIMP penalty p (final value)")
-    penal_start: float = _p(0.0, "", "penalty continuation start (0: none)")
-    penal_step: float = _p(0.05, "", "penalty increment per penal_every iterations")
-    penal_every: int = _p(1, "", "iterations between penalty increments")
-    beta: float = _p(1.0, "", "projection sharpness β (start value; 0: no projection)")
-    beta_max: float = _p(0.0, "", "final β of the doubling schedule (0: constant β)")
-    beta_every: int = _p(10, "", "iterations between β doublings")
-    eta: float = _p(0.5, "", "projection threshold η")
-    # -- loads and ports
-    load: float = _p(1.0, "N", "load magnitude (force in N, or inlet pressure in Pa)")
-    load_width: float = _p(0.0, "m", "width of a spread force load: the cantilever's tip patch, the inverter's input (0: 4 and 2 element sizes, the cases' definitions)")
-    output_width: float = _p(0.0, "m", "pa-inverter: the output spring and port spread over this length of the right edge from the output corner (0: the corner point, the case's definition)")
-    load_ramp: int = _p(0, "", "iterations over which the load rises to full (0: none)")
-    load_adapt: float = _p(1.2, "", "on a Newton failure go on at the load reached, raising it by this factor per iteration (0: stop at the failure)")
-    k_in: float = _p(0.0, "N/m", "input spring stiffness")
-    k_out: float = _p(0.0, "N/m", "output spring stiffness")
-    # -- Darcy pressure (SPEC §2)
-    Kv: float = _p(1.0, "m^2/(Pa s)", "flow coefficient of void")
-    Ks: float = _p(1e-7, "m^2/(Pa s)", "flow coefficient of solid")
-    eta_k: float = _p(0.3, "", "flow coefficient step threshold ηk")
-    beta_k: float = _p(10.0, "", "flow coefficient step sharpness βk")
-    eta_h: float = _p(0.2, "", "drainage step threshold ηh")
-    beta_h: float = _p(10.0, "", "drainage step sharpness βh")
-    r: float = _p(0.1, "", "pressure ratio reached at depth delta_s in solid")
-    delta_s: float = _p(0.002, "m", "pressure penetration depth Δs")
-    p_out: float = _p(0.0, "Pa", "drainage outside pressure")
-    load_type: str = _p("fixed", "", "Darcy load: fixed | follower")
-    follower_wang: bool = _p(True, "", "Wang model: the follower load sees I + γ∇u (void: fixed load)")
-    load_sensitivity: bool = _p(True, "", "include the pressure-load sensitivity (off: study only)")
-    volfrac2: float = _p(0.0, "", "volume fraction limit of the stiff material (0: none)")
-    inlet: str = _p("", "", "Darcy inlet boundary name(s), '|'-separated (empty: the case's own)")
-    se_max: float = _p(0.0, "J", "strain-energy limit of objective output_se (0: the case's default)")
-    unit_elements: bool = _p(False, "", "structured mesh of unit square elements (domain nelx x nely)")
-    # -- optimisation
-    iterations: int = _p(100, "", "maximum optimisation iterations")
-    optimizer: str = _p("mma", "", "mma | gcmma")
-    move: float = _p(0.1, "", "move limit per iteration")
-    tol: float = _p(0.01, "", "stop when the largest design change falls below this")
-    obj_tol: float = _p(1e-4, "", "... or the objective changed less than this (relative) over 5 iterations")
-    objective: str = _p("", "", "case objective variant (empty: the case's default)")
-    seed_density: float = _p(0.0, "", "initial design density (0: volfrac)")
-    init_design: str = _p("", "", "start from the design x of this run folder (its checkpoint.npz; "
-                          "the same case and mesh), e.g. a run at a lower load")
-    # -- Newton
-    newton_rtol: float = _p(1e-10, "", "Newton residual tolerance (relative to the load)")
-    newton_max_iter: int = _p(30, "", "Newton iterations per load step")
-    newton_increment: float = _p(1.0, "", "first load increment of Newton continuation (fraction)")
-    realcompile: bool = _p(False, "", "compile the Newton forms to machine code (C++ compiler; ~10-30 s once, 2.5-3.5x faster assembly)")
-    newton_min_increment: float = _p(1.0 / 1024, "", "smallest load increment before Newton gives up (fraction)")
+    """Every parameter of a run, by flat name, from the parts of the configuration.
 
-    def __post_init__(self):
-        from .physics.materials import MODELS
+    ``Parameters(E1=1e8, maxh=0.002, ...)`` builds every part with those values (the rest at
+    their defaults), each part checking its own values; ``options`` is the case's own part
+    (a :class:`~pacto_ng.settings.Settings` instance), if it has one.  Immutable: use
+    :meth:`replace` or :meth:`with_overrides` for a changed copy.
+    """
 
-        if self.model not in MODELS + ("auto",):
-            raise InputError(f"model: unknown model '{self.model}' (choose from {', '.join(MODELS)})")
-        if self.order not in (0, 1, 2, 3):
-            raise InputError(f"order: must be 1, 2 or 3, or 0 for the case's choice (got {self.order})")
-        if self.plane not in ("strain", "stress"):
-            raise InputError(f"plane: must be 'strain' or 'stress' (got '{self.plane}')")
-        if self.filter not in ("helmholtz", "cone", "none"):
-            raise InputError(f"filter: must be helmholtz, cone or none (got '{self.filter}')")
-        if self.optimizer not in ("mma", "gcmma"):
-            raise InputError(f"optimizer: must be mma or gcmma (got '{self.optimizer}')")
-        for name in ("E1", "E2", "E0", "thickness", "maxh", "penal"):
-            if not getattr(self, name) > 0:
-                raise InputError(f"{name}: must be positive (got {getattr(self, name)})")
-        if not self.E0 < self.E1:
-            raise InputError(f"E0: must be smaller than E1 (got {self.E0} >= {self.E1})")
-        if not -1.0 < self.nu < 0.5:
-            raise InputError(f"nu: Poisson's ratio must lie in (-1, 0.5) (got {self.nu})")
-        if not 0.0 < self.volfrac < 1.0:
-            raise InputError(f"volfrac: must lie in (0, 1) (got {self.volfrac})")
-        if not 0.0 < self.eta < 1.0:
-            raise InputError(f"eta: must lie in (0, 1) (got {self.eta})")
-        if self.beta < 0 or self.beta_max < 0:
-            raise InputError("beta: must be >= 0")
-        if self.filter_radius < 0:
-            raise InputError("filter_radius: must be >= 0")
-        if self.nelx < 0 or self.nely < 0 or (self.nelx > 0) != (self.nely > 0):
-            raise InputError("nelx, nely: give both (positive) or neither")
-        if not 0 < self.move <= 1:
-            raise InputError(f"move: must lie in (0, 1] (got {self.move})")
-        if self.iterations < 0:
-            raise InputError("iterations: must be >= 0")
-        if self.k_in < 0 or self.k_out < 0:
-            raise InputError("k_in, k_out: spring stiffnesses must be >= 0")
-        if not 0 < self.newton_increment <= 1:
-            raise InputError("newton_increment: must lie in (0, 1]")
-        if not 0 < self.newton_min_increment <= self.newton_increment:
-            raise InputError("newton_min_increment: must lie in (0, newton_increment]")
-        if self.load_ramp < 0:
-            raise InputError("load_ramp: must be >= 0")
-        if self.load_adapt != 0 and not self.load_adapt > 1:
-            raise InputError(f"load_adapt: must be 0 (off) or a growth factor > 1 (got {self.load_adapt})")
-        if not 0.0 < self.r < 1.0:
-            raise InputError(f"r: must lie in (0, 1) (got {self.r})")
-        if self.load_width < 0:
-            raise InputError(f"load_width: must be >= 0 (got {self.load_width})")
-        if self.output_width < 0:
-            raise InputError(f"output_width: must be >= 0 (got {self.output_width})")
-        if not self.delta_s > 0:
-            raise InputError(f"delta_s: must be positive (got {self.delta_s})")
-        if not 0.0 < self.Ks < self.Kv:
-            raise InputError(f"Ks: must satisfy 0 < Ks < Kv (got Ks={self.Ks}, Kv={self.Kv})")
-        if self.wang_gamma != -1.0 and not 0.0 <= self.wang_gamma <= 1.0:
-            raise InputError(f"wang_gamma: must be -1 (eq. 5.2) or lie in [0, 1] (got {self.wang_gamma:g})")
-        if self.load_type not in ("fixed", "follower"):
-            raise InputError(f"load_type: must be fixed or follower (got '{self.load_type}')")
-        if not 0.0 <= self.volfrac2 < 1.0:
-            raise InputError(f"volfrac2: must lie in [0, 1) (got {self.volfrac2})")
-        if self.se_max < 0:
-            raise InputError(f"se_max: must be >= 0 (got {self.se_max})")
-        if self.unit_elements and self.nelx == 0:
-            raise InputError("unit_elements: needs a structured mesh (give --nelx and --nely)")
+    __slots__ = ("_parts", "_index")
 
-    # -- helpers --------------------------------------------------------------------------
+    def __init__(self, options=None, **values):
+        index = {}
+        for part, cls in parts():
+            for f in fields(cls):
+                index[f.name] = part
+        if options is not None:
+            for f in fields(options):
+                if f.name in index:
+                    raise InputError(f"case options: '{f.name}' is already a parameter of the "
+                                     f"toolkit ({index[f.name]})")
+                index[f.name] = "case"
+        unknown = sorted(set(values) - set(index))
+        if unknown:
+            raise InputError(f"{unknown[0]}: unknown parameter (see --show-parameters)")
+        built = {}
+        for part, cls in parts():
+            built[part] = cls(**{k: v for k, v in values.items() if index[k] == part})
+        if options is not None:
+            import dataclasses
+
+            built["case"] = dataclasses.replace(
+                options, **{k: v for k, v in values.items() if index[k] == "case"})
+        object.__setattr__(self, "_parts", built)
+        object.__setattr__(self, "_index", index)
+
+    # -- reading -----------------------------------------------------------------------------
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        parts_ = object.__getattribute__(self, "_parts")
+        if name in parts_:
+            return parts_[name]
+        index = object.__getattribute__(self, "_index")
+        if name in index:
+            return getattr(parts_[index[name]], name)
+        raise AttributeError(f"no parameter '{name}'")
+
+    def __setattr__(self, name, value):
+        raise AttributeError("Parameters are immutable: use replace() or with_overrides()")
+
+    @property
+    def options(self):
+        """The case's own part (None if the case has no options)."""
+        return self._parts.get("case")
+
+    def keys(self) -> list[str]:
+        """Every flat name, the case's options included."""
+        return list(self._index)
+
     @classmethod
     def names(cls) -> list[str]:
-        return [f.name for f in fields(cls)]
-
-    def with_overrides(self, overrides: dict[str, str]) -> "Parameters":
-        """Apply ``NAME=VALUE`` strings, converting to each field's type."""
-        kinds = {f.name: f.type for f in fields(self)}
-        changes = {}
-        for name, text in overrides.items():
-            if name not in kinds:
-                raise InputError(f"--set: unknown parameter '{name}' (see --show-parameters)")
-            cur = getattr(self, name)
-            try:
-                if isinstance(cur, bool):
-                    val = text.lower() in ("1", "true", "yes", "on")
-                elif isinstance(cur, int):
-                    val = int(float(text))
-                elif isinstance(cur, float):
-                    val = float(text)
-                else:
-                    val = str(text)
-            except ValueError:
-                raise InputError(f"--set {name}: cannot read '{text}' as {type(cur).__name__}") from None
-            changes[name] = val
-        return dataclasses.replace(self, **changes)
-
-    def describe(self, units: dict[str, str] | None = None) -> list[tuple[str, object, str, str]]:
-        units = units or {}
-        return [(f.name, getattr(self, f.name), units.get(f.name, f.metadata.get("unit", "")),
-                 f.metadata.get("help", "")) for f in fields(self)]
+        """The flat names of the toolkit's parameters (without any case's options)."""
+        return [f.name for _, part in parts() for f in fields(part)]
 
     def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
+        """Every parameter by flat name (params.json, summary.json)."""
+        return {name: getattr(self._parts[part], name) for name, part in self._index.items()}
+
+    def describe(self, units: dict[str, str] | None = None) -> list[tuple[str, object, str, str]]:
+        """``(name, value, unit, meaning)`` of every parameter, part by part."""
+        units = units or {}
+        rows = []
+        for part in self._parts.values():
+            for f in fields(part):
+                rows.append((f.name, getattr(part, f.name),
+                             units.get(f.name, f.metadata.get("unit", "")),
+                             f.metadata.get("help", "")))
+        return rows
+
+    # -- changed copies ------------------------------------------------------------------------
+    def replace(self, **changes) -> "Parameters":
+        """A copy with ``changes`` (flat names) applied and checked."""
+        return Parameters(self.options, **{**self.to_dict(), **changes})
+
+    def with_overrides(self, overrides: dict[str, str]) -> "Parameters":
+        """Apply ``NAME=VALUE`` strings, converting to each parameter's declared type."""
+        changes = {}
+        for name, text in overrides.items():
+            if name not in self._index:
+                raise InputError(f"--set: unknown parameter '{name}' (see --show-parameters)")
+            changes[name] = _convert(name, text, getattr(self, name))
+        return self.replace(**changes)
+
+    def with_options(self, options) -> "Parameters":
+        """These parameters with the case's own part ``options`` (its defaults) added."""
+        return Parameters(options, **self.to_dict())
+
+    def __eq__(self, other):
+        return isinstance(other, Parameters) and self.to_dict() == other.to_dict() \
+            and type(self.options) is type(other.options)
+
+    def __hash__(self):
+        return hash(tuple(sorted((k, repr(v)) for k, v in self.to_dict().items())))
+
+    def __repr__(self):
+        changed = {k: v for k, v in self.to_dict().items()}
+        return "Parameters(" + ", ".join(f"{k}={v!r}" for k, v in changed.items()) + ")"
+
+    def __reduce__(self):
+        return (_rebuild, (self.options, self.to_dict()))
+
+
+def _rebuild(options, values):
+    return Parameters(options, **values)

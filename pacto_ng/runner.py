@@ -14,7 +14,6 @@ DIR/convergence.png    objective and volume against iteration
 """
 from __future__ import annotations
 
-import dataclasses
 
 import csv
 import json
@@ -26,7 +25,6 @@ import numpy as np
 
 from .case import Case, Problem, build_problem, case_of_run
 from .optimize.driver import LoopState, optimize
-from .optimize.schedules import Schedule
 from .params import InputError, Parameters
 from .physics.mechanics import NewtonFailure
 
@@ -47,13 +45,6 @@ def prepare_output(out: str | os.PathLike) -> Path:
     except OSError as err:
         raise InputError(f"--out: output folder '{path}' is not writable ({err.strerror})") from None
     return path
-
-
-def schedule_of(p: Parameters) -> Schedule:
-    return Schedule(penal=p.penal, penal_start=p.penal_start if p.penal_start > 0 else None,
-                    penal_step=p.penal_step, penal_every=p.penal_every, beta_start=p.beta,
-                    beta_max=p.beta_max if p.beta_max > 0 else None, beta_every=p.beta_every,
-                    load_ramp=p.load_ramp)
 
 
 def initial_design(problem: Problem) -> np.ndarray:
@@ -183,7 +174,7 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         if not quiet:
             print(_progress(row, params.iterations), flush=True)
 
-    result = optimize(problem, schedule_of(params), iterations=params.iterations, tol=params.tol,
+    result = optimize(problem, params.schedule.schedule(), iterations=params.iterations, tol=params.tol,
                       method=params.optimizer, move=params.move, state=state,
                       on_iteration=on_iteration, obj_tol=params.obj_tol,
                       load_adapt=params.load_adapt)
@@ -193,7 +184,7 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         final_x = state.x
     # final analysis of the design that is reported (the schedule's last values)
     k_last = max(state.k - 1, 0)
-    problem.apply_schedule(*schedule_of(params).values(k_last))
+    problem.apply_schedule(*params.schedule.schedule().values(k_last))
     u_last, res_last = problem.mech.gfu.vec.CreateVector(), problem.mech.result
     u_last.data = problem.mech.gfu.vec  # the last iteration's equilibrium (a warm start)
     try:
@@ -489,7 +480,7 @@ def evaluate_design(case: Case, params: Parameters, density: str, out, *, filter
     if problem.n_design_fields != 1 and not Path(density).suffix.lower() == ".npz":
         raise InputError("evaluate: two-material cases need both fields: give the run's "
                          "checkpoint.npz")
-    sched = schedule_of(params)
+    sched = params.schedule.schedule()
     if Path(density).suffix.lower() == ".npz":  # the run's own last penalty and β
         penal, beta, _ = sched.values(max(checkpoint_iteration(density) - 1, 0))
         problem.apply_schedule(penal, beta, 1.0)
@@ -531,9 +522,9 @@ def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int |
     except (OSError, ValueError):
         raise InputError(f"resume: '{path}' holds no run (params.json missing or unreadable)") from None
     case = case_of_run(info, "resume")
-    params = Parameters(**info["params"])
+    params = case.parameters(info["params"])
     if iterations is not None:
         if iterations < params.iterations:
             raise InputError(f"iterations: {iterations} is below the run's cap {params.iterations}")
-        params = dataclasses.replace(params, iterations=iterations)
+        params = params.replace(iterations=iterations)
     return run_case(case, params, path, quiet=quiet, resume=True)

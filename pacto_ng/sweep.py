@@ -351,7 +351,8 @@ def run_one(case_name: str, params: dict, folder: str, resume: bool) -> dict:
     os.environ["PACTO_THREADS"] = "1"  # one NGSolve thread per worker (run_case sets it)
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
-        code = run_case(get_case(case_name), Parameters(**params), folder, quiet=True,
+        case = get_case(case_name)
+        code = run_case(case, case.parameters(params), folder, quiet=True,
                         resume=resume)
     return {"exit_code": int(code), "output": buf.getvalue().strip()}
 

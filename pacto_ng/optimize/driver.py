@@ -22,9 +22,33 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..params import InputError
 from ..physics.mechanics import NewtonFailure
+from ..settings import Settings, setting
 from .mma import Optimizer
 from .schedules import Schedule
+
+
+@dataclass(frozen=True)
+class OptimizerSettings(Settings):
+    """The optimisation loop: optimiser, move limit, stopping tests, adaptive load
+    continuation."""
+
+    iterations: int = setting(100, "", "maximum optimisation iterations", range="[0, 1000000]")
+    optimizer: str = setting("mma", "", "mma | gcmma", choices=("mma", "gcmma"))
+    move: float = setting(0.1, "", "move limit per iteration", range="(0, 1]")
+    tol: float = setting(0.01, "", "stop when the largest design change falls below this",
+                         range="[0, 1]")
+    obj_tol: float = setting(1e-4, "", "... or the objective changed less than this (relative) "
+                             "over 5 iterations", range="[0, 1]")
+    load_adapt: float = setting(1.2, "", "on a Newton failure go on at the load reached, "
+                                "raising it by this factor per iteration (0: stop at the "
+                                "failure)", range="[0, 100]")
+
+    def check(self):
+        if self.load_adapt != 0 and not self.load_adapt > 1:
+            raise InputError(f"load_adapt: must be 0 (off) or a growth factor > 1 (got "
+                             f"{self.load_adapt:g})")
 
 
 @dataclass

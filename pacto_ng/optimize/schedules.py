@@ -12,6 +12,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..params import InputError
+from ..settings import Settings, setting
+
 
 @dataclass(frozen=True)
 class Schedule:
@@ -75,3 +78,36 @@ class Schedule:
         if any(abs(a - b) > 1e-12 for a, b in zip(now, final)):
             return False
         return all(self.values(max(k - j, 0)) == now for j in range(window + 1))
+
+
+@dataclass(frozen=True)
+class ScheduleSettings(Settings):
+    """The continuation of the SIMP penalty, the projection's β and the load factor."""
+
+    penal: float = setting(3.0, "", "SIMP penalty p (final value)", range="(0, 20]")
+    penal_start: float = setting(0.0, "", "penalty continuation start (0: none)",
+                                 range="[0, 20]")
+    penal_step: float = setting(0.05, "", "penalty increment per penal_every iterations",
+                                range="(0, 20]")
+    penal_every: int = setting(1, "", "iterations between penalty increments",
+                               range="[1, 100000]")
+    beta: float = setting(1.0, "", "projection sharpness β (start value; 0: no projection)",
+                          range="[0, 1e4]")
+    beta_max: float = setting(0.0, "", "final β of the doubling schedule (0: constant β)",
+                              range="[0, 1e4]")
+    beta_every: int = setting(10, "", "iterations between β doublings", range="[1, 100000]")
+    load_ramp: int = setting(0, "", "iterations over which the load rises to full (0: none)",
+                             range="[0, 100000]")
+
+    def check(self):
+        if self.penal_start > self.penal:
+            raise InputError(f"penal_start: must not exceed penal ({self.penal_start:g} > "
+                             f"{self.penal:g})")
+
+    def schedule(self) -> Schedule:
+        """The schedule these settings describe."""
+        return Schedule(penal=self.penal,
+                        penal_start=self.penal_start if self.penal_start > 0 else None,
+                        penal_step=self.penal_step, penal_every=self.penal_every,
+                        beta_start=self.beta, beta_max=self.beta_max if self.beta_max > 0 else None,
+                        beta_every=self.beta_every, load_ramp=self.load_ramp)

@@ -41,11 +41,44 @@ from __future__ import annotations
 
 import numpy as np
 
+from dataclasses import dataclass
+
 from ..interpolation import heaviside_deriv_np, heaviside_np
+from ..params import InputError
+from ..settings import Settings, setting
 from .mechanics import Field, integration_rules
 
-__all__ = ["DarcyPressure", "darcy_body", "darcy_follower", "pressure_field", "Compliance",
+__all__ = ["DarcySettings", "DarcyPressure", "darcy_body", "darcy_follower", "pressure_field", "Compliance",
            "DarcyCompliance", "for_case"]
+
+
+@dataclass(frozen=True)
+class DarcySettings(Settings):
+    """The Darcy–drainage pressure model (SPEC §2, thesis Table 6.1) and its load."""
+
+    Kv: float = setting(1.0, "m^2/(Pa s)", "flow coefficient of void", range="(0, inf)")
+    Ks: float = setting(1e-7, "m^2/(Pa s)", "flow coefficient of solid", range="(0, inf)")
+    eta_k: float = setting(0.3, "", "flow coefficient step threshold ηk", range="(0, 1)")
+    beta_k: float = setting(10.0, "", "flow coefficient step sharpness βk", range="[0, 1e4]")
+    eta_h: float = setting(0.2, "", "drainage step threshold ηh", range="(0, 1)")
+    beta_h: float = setting(10.0, "", "drainage step sharpness βh", range="[0, 1e4]")
+    r: float = setting(0.1, "", "pressure ratio reached at depth delta_s in solid",
+                       range="(0, 1)")
+    delta_s: float = setting(0.002, "m", "pressure penetration depth Δs", range="(0, inf)")
+    p_out: float = setting(0.0, "Pa", "drainage outside pressure", range="[-1e300, 1e300]")
+    load_type: str = setting("fixed", "", "Darcy load: fixed | follower",
+                             choices=("fixed", "follower"))
+    follower_wang: bool = setting(True, "", "Wang model: the follower load sees I + γ∇u "
+                                  "(void: fixed load)")
+    load_sensitivity: bool = setting(True, "", "include the pressure-load sensitivity (off: "
+                                     "study only)")
+    inlet: str = setting("", "", "Darcy inlet boundary name(s), '|'-separated (empty: the "
+                         "case's own)")
+
+    def check(self):
+        if not self.Ks < self.Kv:
+            raise InputError(f"Ks: must satisfy 0 < Ks < Kv (got Ks={self.Ks:g}, "
+                             f"Kv={self.Kv:g})")
 
 
 def _names(value, what: str) -> tuple[str, ...]:
@@ -199,25 +232,12 @@ class DarcyPressure:
             raise ValueError(f"zero: boundary {both} is also an inlet")
         if order not in (1, 2, 3, 4):
             raise ValueError(f"order: must be 1, 2, 3 or 4 (got {order})")
-        for name, v in (("p_in", p_in), ("p_out", p_out)):
-            if not np.isfinite(v):
-                raise ValueError(f"{name}: must be finite (got {v})")
-        if not Kv > 0:
-            raise ValueError(f"Kv: must be positive (got {Kv})")
-        if not Ks > 0:
-            raise ValueError(f"Ks: must be positive (got {Ks})")
-        if not Ks < Kv:
-            raise ValueError(f"Ks: must be smaller than Kv (got Ks={Ks}, Kv={Kv})")
-        if not 0.0 < r < 1.0:
-            raise ValueError(f"r: must lie in (0, 1) (got {r})")
-        if not delta_s > 0:
-            raise ValueError(f"delta_s: must be positive (got {delta_s})")
-        for name, v in (("eta_k", eta_k), ("eta_h", eta_h)):
-            if not 0.0 < v < 1.0:
-                raise ValueError(f"{name}: must lie in (0, 1) (got {v})")
-        for name, v in (("beta_k", beta_k), ("beta_h", beta_h)):
-            if not v >= 0:
-                raise ValueError(f"{name}: must be >= 0 (got {v})")
+        if not np.isfinite(p_in):
+            raise ValueError(f"p_in: must be finite (got {p_in})")
+        # the model's parameters: checked by their declarations (one place)
+        DarcySettings(Kv=float(Kv), Ks=float(Ks), eta_k=float(eta_k), beta_k=float(beta_k),
+                      eta_h=float(eta_h), beta_h=float(beta_h), r=float(r),
+                      delta_s=float(delta_s), p_out=float(p_out))
 
     # -- block interface ------------------------------------------------------------------------
     def forward(self, rho):
@@ -455,27 +475,22 @@ class Compliance:
 DarcyCompliance = Compliance
 
 
-def for_case(mesh, params, pressure, rho_name: str = "rho_bar", *, order: int = 1,
-             output: str = "p", load_type: str | None = None, gamma=None):
+def for_case(mesh, settings: DarcySettings, p_in: float, pressure, rho_name: str = "rho_bar", *,
+             order: int = 1, output: str = "p", gamma=None):
     """Build the Darcy part of a case: ``(DarcyPressure block, Field for Mechanics, load)``.
 
-    ``pressure`` has ``inlet`` and ``zero`` (boundary names); ``params`` supplies
-    ``load`` (= P_in), Kv, Ks, eta_k, beta_k, eta_h, beta_h, r, delta_s, p_out,
-    load_sensitivity and load_type (SPEC §2 defaults in :class:`~pacto_ng.params.Parameters`).
-    ``load_type`` (default ``params.load_type``) chooses the third item: ``"fixed"`` gives
-    :func:`darcy_body` (``Mechanics(body=...)``), ``"follower"`` gives :func:`darcy_follower`
+    ``pressure`` has ``inlet`` and ``zero`` (boundary names); ``p_in`` is the inlet pressure.
+    ``settings.load_type`` chooses the third item: ``"fixed"`` gives :func:`darcy_body`
+    (``Mechanics(body=...)``), ``"follower"`` gives :func:`darcy_follower`
     (``Mechanics(residual_density=...)``), with ``gamma`` passed on to it.
     """
-    load_type = params.load_type if load_type is None else load_type
-    if load_type not in ("fixed", "follower"):
-        raise ValueError(f"load_type: must be fixed or follower (got '{load_type}')")
-    block = DarcyPressure(mesh, inlet=pressure.inlet, zero=pressure.zero, p_in=params.load,
-                          order=order, Kv=params.Kv, Ks=params.Ks, eta_k=params.eta_k,
-                          beta_k=params.beta_k, eta_h=params.eta_h, beta_h=params.beta_h,
-                          r=params.r, delta_s=params.delta_s, p_out=params.p_out,
-                          sensitivity=params.load_sensitivity, inputs=(rho_name,),
+    d = settings
+    block = DarcyPressure(mesh, inlet=pressure.inlet, zero=pressure.zero, p_in=p_in,
+                          order=order, Kv=d.Kv, Ks=d.Ks, eta_k=d.eta_k, beta_k=d.beta_k,
+                          eta_h=d.eta_h, beta_h=d.beta_h, r=d.r, delta_s=d.delta_s,
+                          p_out=d.p_out, sensitivity=d.load_sensitivity, inputs=(rho_name,),
                           output=output)
-    load = darcy_body(output) if load_type == "fixed" else darcy_follower(output, gamma)
+    load = darcy_body(output) if d.load_type == "fixed" else darcy_follower(output, gamma)
     return block, block.field(), load
 
 

@@ -13,6 +13,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..settings import Settings, setting
+
+
+@dataclass(frozen=True)
+class LoadSettings(Settings):
+    """The load's magnitude and the output spring of the cases."""
+
+    load: float = setting(1.0, "N", "load magnitude (force in N, or inlet pressure in Pa)",
+                          range="[-1e30, 1e30]")
+    k_out: float = setting(0.0, "N/m", "output spring stiffness", range="[0, 1e30]")
+
+    def check(self):
+        from ..params import InputError
+
+        if self.load == 0:
+            raise InputError("load: must not be zero")
+
 
 def _region(mesh, name):
     if name in mesh.GetBBoundaries():

@@ -142,7 +142,7 @@ def load_run(folder, command: str, case=None) -> Run:
         raise InputError(f"{command}: '{folder}' is a run of '{info['case']}', not of "
                          f"'{case.name}'")
     try:
-        params = Parameters(**info["params"])
+        params = case.parameters(info["params"])
     except (KeyError, TypeError) as err:
         raise InputError(f"{command}: '{path / 'params.json'}' has no valid parameters "
                          f"({err})") from None
@@ -171,13 +171,12 @@ def rebuild(run: Run):
     for summary.json).  Returns the problem; ``problem.values`` hold ρ̄, p and Δ."""
     from ..case import build_problem
     from ..physics.mechanics import NewtonFailure
-    from ..runner import schedule_of
 
     problem = build_problem(run.case, run.params)
     if run.x.size != problem.field.n * problem.n_design_fields:
         raise InputError(f"the design in '{run.path}' has {run.x.size} values, the rebuilt "
                          f"problem {problem.field.n * problem.n_design_fields} (mesh changed?)")
-    problem.apply_schedule(*schedule_of(run.params).values(max(run.k - 1, 0)))
+    problem.apply_schedule(*run.params.schedule.schedule().values(max(run.k - 1, 0)))
     problem.failure = None
     try:
         problem.chain.forward(x=run.x)
@@ -353,7 +352,6 @@ def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
 def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
                 order: int = 2, kinds=KINDS, quiet: bool = False, connect: bool = True) -> int:
     """``pacto analyse``: see the module docstring.  Returns the exit code (0)."""
-    from ..physics.newton import newton_settings
     from .remesh import pressure_sampler
     from .report import post_analyse
     from .threshold import threshold
@@ -419,7 +417,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     # the output port's shift below; a design with no solid on the clamp is an error there)
     _say(quiet, "  " + choice["note"])
 
-    newton = newton_settings(p)
+    newton = p.newton.settings()
     out_dir = run.path / "analysis"
     ok_exp = [r for r in expected if r["converged"]]
     exp_pair = ([r["pressure"] for r in ok_exp], [r["delta"] for r in ok_exp]) if ok_exp else None

@@ -25,7 +25,8 @@ def write_case(folder, name="finger", replace=()):
 
 def run_cli(*args):
     """``pacto ARGS`` in a fresh process: exit code and stderr (what a user sees)."""
-    r = subprocess.run([sys.executable, "-m", "pacto_ng.cli", *map(str, args)],
+    r = subprocess.run([sys.executable, "-c", "import sys; from pacto_ng import main; "
+                        "sys.exit(main(sys.argv[1:]))", *map(str, args)],
                        capture_output=True, text=True, timeout=300)
     return r.returncode, r.stderr
 

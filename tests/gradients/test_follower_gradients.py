@@ -100,7 +100,7 @@ def _case(objective="mechanism", pressure=True):
         loads=() if pressure else (PointLoad("output", (-p.load * 1e-6, 0.0)),),
         pressure=Pressure(inlet=("inlet",), zero=("zero",)) if pressure else None)
     return Case(name="follower-test", summary="small pa-inverter", source="this test",
-                defaults=defaults, layout=lambda p: small_pa_layout(), setup=setup, load_unit="Pa")
+                defaults=defaults, geometry=lambda p: small_pa_layout(), setup=setup, load_unit="Pa")
 
 
 @pytest.mark.parametrize("model", ["neohookean", "wang"])
@@ -110,7 +110,7 @@ def test_build_problem_follower(model):
     from pacto_ng.case import build_problem
 
     case = _case()
-    problem = build_problem(case, dataclasses.replace(case.defaults, model=model))
+    problem = build_problem(case, case.defaults.replace(model=model))
     mech = problem.mech
     assert not mech.symmetric and mech._body is None and mech._rdens is not None
     x0 = np.random.default_rng(4).uniform(0.3, 0.7, problem.field.n)
@@ -130,7 +130,7 @@ def test_build_problem_follower_input_errors():
 
     case = _case()
     with pytest.raises(InputError, match="compliance is not defined for a follower load"):
-        build_problem(case, dataclasses.replace(case.defaults, objective="compliance"))
+        build_problem(case, case.defaults.replace(objective="compliance"))
     case = _case(pressure=False)
     with pytest.raises(InputError, match="has no pressure load"):
         build_problem(case, case.defaults)

@@ -235,7 +235,7 @@ def test_optimisation_history_with_constant_gamma_equals_the_limit_model(gamma, 
     Neo-Hookean, to 1e-10 relative."""
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
-    from pacto_ng.runner import initial_design, schedule_of
+    from pacto_ng.runner import initial_design
 
     case = get_case("cantilever")
     hist = {}
@@ -245,7 +245,7 @@ def test_optimisation_history_with_constant_gamma_equals_the_limit_model(gamma, 
                                                "order": "1", "iterations": "4", **extra})
         problem = build_problem(case, params)
         state = LoopState(k=0, x=initial_design(problem), opt_state=None, scale=None)
-        optimize(problem, schedule_of(params), iterations=4, tol=0.0, method="mma",
+        optimize(problem, params.schedule.schedule(), iterations=4, tol=0.0, method="mma",
                  move=params.move, state=state)
         hist[model] = np.array([h["objective"] for h in state.history])
     a, b = hist["wang"], hist[reference]
