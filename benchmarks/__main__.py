@@ -97,9 +97,9 @@ def run_peer(quick):
                 "the `MMD_AT_PLUS_A` ordering (scipy has no sparse Cholesky), ours NGSolve's "
                 "`sparsecholesky` with a numeric refactorisation (`Update`) per evaluation.")
     text.append("")
-    text.append("What the linear block does here (`_LinearSystem`, "
-                "pacto_ng/physics/mechanics.py): C = ∂²(tφ)/∂G² is found to be a modulus "
-                "times a fixed tensor per element (SIMP), so K and the Darcy matrix come from "
+    text.append("What the linear block does here (`LinearSystem`, "
+                "pacto_ng/physics/linear_system.py): the SIMP energy declares C = ∂²(tφ)/∂G² "
+                "a modulus times a fixed tensor per element (checked once), so K and the Darcy matrix come from "
                 "element matrices computed once, at the second design (pacto_ng/physics/"
                 "scatter.py: a sparse product per design, no integration), and so do ∂SE/∂ρ, λᵀ∂R/∂ρ and the Darcy "
                 "sensitivity; the Darcy load is a design-independent coupling matrix B (f = B p, "

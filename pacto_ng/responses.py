@@ -68,7 +68,7 @@ class StrainEnergy:
         self.inputs = ("u",) + mech.inputs
         self.output = output
         self.gfu = GridFunction(mech.fes)
-        dens = mech.thickness * mech._energy(Grad(self.gfu), mech.coeffs)
+        dens = mech.thickness * mech.energy(Grad(self.gfu), mech.coeffs)
         self._dens = dens.Compile()
         # ∂SE/∂u as the residual of the energy alone, Apply of a Variation form: the same
         # integrand and quadrature as a LinearForm of dens.Diff(u, v) (equal to 1e-14), but
@@ -76,23 +76,30 @@ class StrainEnergy:
         u = mech.fes.TrialFunction()
         self._energy_form = BilinearForm(mech.fes, symmetric=True)
         self._energy_form += Variation(
-            (mech.thickness * mech._energy(Grad(u), mech.coeffs)).Compile() * mech.DX)
+            (mech.thickness * mech.energy(Grad(u), mech.coeffs)).Compile() * mech.DX)
         self._du_vec = self.gfu.vec.CreateVector()
         # a quadratic energy (linear mechanics): SE, ∂SE/∂u and ∂SE/∂ρ from the tangent's C;
         # otherwise ∂SE/∂field by automatic differentiation (FieldGradient)
-        lin = getattr(mech, "_lin", None)
-        self._quad = lin if (lin is not None and lin.quadratic) else None
+        lin = mech.linear_system  # (its energy is quadratic)
+        self._quad = lin
         self._dfield = {}
+        reads = mech.energy_fields
         for f in mech.fields:
-            if not mech._energy_fields[f.name]:
-                self._dfield[f.name] = None  # the energy does not depend on it (the pressure)
-            elif self._quad is not None and f.name in lin._dC:
+            if not reads[f.name]:
+                self._dfield[f.name] = None  # the energy does not read it (the pressure)
+            elif lin is not None and f.name in lin.field_names:
                 self._dfield[f.name] = lin.field_form(f.name, self.gfu, self.gfu, 0.5)
             else:
                 self._dfield[f.name] = FieldGradient(
-                    f, lambda c: mech.thickness * mech._energy(Grad(self.gfu), c), mech.coeffs,
+                    f, lambda c: mech.thickness * mech.energy(Grad(self.gfu), c), mech.coeffs,
                     mech.DX)
         self._integrate = Integrate
+
+    @property
+    def uses_linear_system(self) -> bool:
+        """Whether SE's derivatives come from the mechanics block's quadratic linear system
+        (``C`` per element) instead of automatic differentiation."""
+        return self._quad is not None
 
     def forward(self, u, *fields):
         # the field values are those the mechanics block was last run with (same chain)

@@ -1,17 +1,92 @@
 """The strain-energy density of a run's model: the material's energy (or the Wang
-interpolation of it) with the SIMP modulus of the design field(s)."""
+interpolation of it) with the SIMP modulus of the design field(s), and what an energy
+*declares* about itself (:class:`EnergyTraits`), from which the mechanics block picks its
+assembly."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 from ..params import InputError
 from ..settings import Settings, setting
 
 
+class DeclarationError(ValueError):
+    """An energy's (or a body load's) declaration contradicts what it computes: raised by the
+    check of the declaration when the mechanics block is built, never silently passed over."""
+
+
+@dataclass(frozen=True)
+class EnergyTraits:
+    """What a strain-energy density ``φ(G; fields)`` declares about itself.
+
+    :class:`~pacto_ng.physics.mechanics.Mechanics` chooses its assembly from this declaration
+    (nothing is probed); the defaults declare nothing and give the general route (``Variation``:
+    automatic differentiation of the energy, always correct).  An energy carries its traits as
+    the attribute ``traits`` (:func:`declare`, :func:`traits_of`).
+
+    reads : tuple of str or None
+        The fields ``φ`` depends on (None: any of the block's fields).  A field it does not read
+        gives no strain-energy sensitivity, and may enter the residual through a body load
+        linear in it (the Darcy pressure: the load vector ``B p`` with a fixed matrix ``B``).
+    quadratic : bool
+        ``φ = ½ G:C:G`` exactly, with ``C = ∂²φ/∂G²`` independent of ``G`` and constant on each
+        element (a function of element-wise fields only, not of the position).  A linear,
+        conservative block then assembles ``K`` from ``C`` per element and takes the strain
+        energy, its gradient and the field sensitivities from ``C``.  Implies ``stress_free``.
+        Verified when the block is built (a wrong declaration raises ``ValueError``).
+    stress_free : bool
+        ``∂φ/∂G = 0`` at ``G = 0`` for every value of the fields: the residual at ``u = 0`` is
+        minus the load vector (its norm, Newton's reference, without evaluating the energy).
+    modulus : callable or None
+        ``values -> (E, {field: ∂E/∂field})`` on numpy arrays of the element values of the fields
+        read: ``φ(G; fields) = E(fields) φ1(G)`` on every element with one fixed ``φ1`` (SIMP).
+        With ``quadratic``, ``C = E C1``: from the second design on ``K`` and the field
+        sensitivities come from element matrices computed once
+        (:class:`~pacto_ng.physics.scatter.ElementMatrices`) and ``E`` per design from numpy.
+        Verified against the energy's CF when the block is built (``ValueError`` if wrong).
+    """
+
+    reads: tuple[str, ...] | None = None
+    quadratic: bool = False
+    stress_free: bool = False
+    modulus: Callable | None = None
+
+    def __post_init__(self):
+        if self.reads is not None:
+            object.__setattr__(self, "reads", tuple(self.reads))
+        if self.quadratic and not self.stress_free:
+            object.__setattr__(self, "stress_free", True)  # ∂(½ G:C:G)/∂G = C G = 0 at G = 0
+
+
+#: the traits of an energy that declares nothing: the general route
+GENERAL = EnergyTraits()
+
+
+def traits_of(energy) -> EnergyTraits:
+    """The :class:`EnergyTraits` an energy declares (its ``traits`` attribute), else
+    :data:`GENERAL`."""
+    traits = getattr(energy, "traits", None)
+    if traits is None:
+        return GENERAL
+    if not isinstance(traits, EnergyTraits):
+        raise TypeError(f"energy.traits must be an EnergyTraits (got {type(traits).__name__})")
+    return traits
+
+
+def declare(energy: Callable, **traits) -> Callable:
+    """Attach ``EnergyTraits(**traits)`` to the callable ``energy`` and return it."""
+    energy.traits = EnergyTraits(**traits)
+    return energy
+
+
 def make_energy(params: Parameters, penal, fields=("rho_bar",)):
-    """Strain-energy density ``(G, coeffs) -> CF`` and the J-guard for the chosen model."""
+    """Strain-energy density ``(G, coeffs) -> CF`` and the J-guard for the chosen model; the
+    energy carries its :class:`EnergyTraits`."""
     from ..interpolation import simp2_cf, simp2_np, simp_cf, simp_np
     from .materials import get_material, jacobian
+
+    fields = tuple(fields)
 
     def modulus(c):
         if len(fields) == 2:
@@ -28,7 +103,8 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
             gamma_fn = lambda c: CF(params.wang_gamma)  # noqa: E731
         # the WangModel itself is the energy (callable), so γ and its measures stay reachable
         model = wang.wang_model(modulus, params.nu, params.plane, fields[0], penal,
-                                beta=params.wang_beta, eta=params.wang_eta, gamma_fn=gamma_fn)
+                                beta=params.wang_beta, eta=params.wang_eta, gamma_fn=gamma_fn,
+                                reads=fields)
         return model, model.guard, False
     mat = get_material(params.model)
 
@@ -36,9 +112,7 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
         return mat.energy(G, modulus(c), params.nu, params.plane)
 
     def modulus_np(values):
-        """The modulus and its derivatives on the element values of the fields (numpy): the
-        linear path's per-design coefficient (checked against the energy when the mechanics
-        block is built, see physics.mechanics._LinearSystem)."""
+        """The modulus and its derivatives on the element values of the fields (numpy)."""
         p = penal.Get()
         if len(fields) == 2:
             E, d1, d2 = simp2_np(values[fields[0]], values[fields[1]], params.E0, params.E1,
@@ -47,7 +121,8 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
         E, d = simp_np(values[fields[0]], params.E0, params.E1, p)
         return E, {fields[0]: d}
 
-    energy.modulus_np = modulus_np
+    declare(energy, reads=fields, quadratic=mat.linear, stress_free=mat.stress_free,
+            modulus=modulus_np if mat.proportional_to_E else None)
     guard = (lambda G, c: jacobian(G)) if mat.needs_positive_J else None
     return energy, guard, mat.linear
 

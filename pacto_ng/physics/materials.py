@@ -178,19 +178,33 @@ def second_piola_kirchhoff(phi, G):
 
 @dataclass(frozen=True)
 class Material:
-    """A named strain-energy model.  ``energy(G, E, ν, plane)``; ``needs_positive_J`` says whether
-    a state with ``det F <= 0`` is outside the model's domain (the Newton guard checks it)."""
+    """A named strain-energy model ``energy(G, E, ν, plane)`` and what it declares:
+
+    * ``needs_positive_J``: a state with ``det F <= 0`` is outside the model's domain (the
+      Newton guard checks it);
+    * ``linear``: ``φ = ½ G:C:G`` with ``C`` independent of ``G`` (the residual is linear in u);
+    * ``stress_free``: ``∂φ/∂G = 0`` at ``G = 0``;
+    * ``proportional_to_E``: ``φ = E φ1(G; ν, plane)`` (the Lamé constants are proportional to
+      ``E``; the plane-stress stretch of the Neo-Hookean model does not depend on it).
+
+    :func:`~pacto_ng.physics.energy.make_energy` turns these into the energy's
+    :class:`~pacto_ng.physics.energy.EnergyTraits`."""
 
     name: str
     energy: object
     needs_positive_J: bool
     linear: bool
+    stress_free: bool
+    proportional_to_E: bool
 
 
 MATERIALS = {
-    "linear": Material("linear", linear_energy, False, True),
-    "gnl": Material("gnl", svk_energy, False, False),
-    "neohookean": Material("neohookean", neohookean_energy, True, False),
+    "linear": Material("linear", linear_energy, needs_positive_J=False, linear=True,
+                       stress_free=True, proportional_to_E=True),
+    "gnl": Material("gnl", svk_energy, needs_positive_J=False, linear=False, stress_free=True,
+                    proportional_to_E=True),
+    "neohookean": Material("neohookean", neohookean_energy, needs_positive_J=True, linear=False,
+                           stress_free=True, proportional_to_E=True),
 }
 
 

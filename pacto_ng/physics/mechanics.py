@@ -6,11 +6,7 @@ The total potential is
 
 with thickness ``t`` and load factor ``s``.  The residual ``R = ∂Π/∂u`` and the tangent come from
 NGSolve's ``Variation`` (automatic differentiation).  Equilibrium is found by
-:func:`~pacto_ng.physics.newton.solve_with_continuation`.  A linear, conservative problem
-(``linear=True``, no residual terms; a body load is assembled once per design) whose energy is
-quadratic in ``∇u`` instead assembles
-``K`` from the symbolic Hessian ``∂²(tφ)/∂G²`` of the same energy and evaluates
-``R(u) = K u - s f`` element by element (:class:`_LinearSystem`; equal to round-off).
+:func:`~pacto_ng.physics.newton.solve_with_continuation`.
 
 Loads that are not the derivative of a potential (follower loads) enter the residual directly:
 
@@ -34,14 +30,23 @@ trial/test functions (residual, tangent) and once with ``(u, λ)`` as GridFuncti
 (sensitivity), so its field dependence is differentiated by NGSolve too.  ``residual_terms``
 must not depend on the fields (they are left out of ``∂R/∂ρ``).
 
-Two shortcuts, each checked on random states when the block is built and used only where the
-check passes: a field that enters only through a body load linear in it (the Darcy pressure)
-gives the load as ``B p`` and ``λᵀ∂R/∂p = -s Bᵀλ`` with a design-independent matrix ``B``
-(:class:`_BodyCoupling`); and a linear energy whose ``C`` is a modulus times a fixed tensor per
-element (SIMP) gets ``K`` and its element sensitivities from element matrices computed once
-(:class:`~pacto_ng.physics.scatter.ElementMatrices`).  The same quadrature rule is
-pinned in the residual, tangent and sensitivity forms (see docs: a mismatch gives 1e-2 adjoint
-errors at order 2).
+The assembly is chosen from what the energy *declares*
+(:class:`~pacto_ng.physics.energy.EnergyTraits`, its ``traits`` attribute; an energy that
+declares nothing gets the general route above), never from probes:
+
+* a quadratic energy (``φ = ½ G:C:G``, C per element) in a linear, conservative block: ``K``
+  from ``C`` and ``R(u) = K u - s f`` element by element, with a declared numpy modulus
+  (``C = E C1``, SIMP) from element matrices from the second design on
+  (:class:`~pacto_ng.physics.linear_system.LinearSystem`);
+* a field the energy does not read that enters through a body load linear in it (the Darcy
+  pressure): the load ``B p`` and ``λᵀ∂R/∂p = -s Bᵀλ`` with a design-independent ``B``
+  (:class:`~pacto_ng.physics.body_coupling.BodyCoupling`);
+* a stress-free energy with a body load: the load norm from the load vectors.
+
+The declarations that a fast route relies on are verified once when the block is built and a
+wrong one raises :class:`~pacto_ng.physics.energy.DeclarationError`.  :attr:`Mechanics.assembly`
+says which routes are in use.  The same quadrature rule is pinned in the residual, tangent and
+sensitivity forms (see docs: a mismatch gives 1e-2 adjoint errors at order 2).
 """
 from __future__ import annotations
 
@@ -50,7 +55,12 @@ from typing import Callable
 
 import numpy as np
 
+from .body_coupling import BodyCoupling
+from .energy import EnergyTraits, traits_of
+from .linear_system import LinearSystem
 from .newton import NewtonResult, NewtonSettings, solve_with_continuation
+
+_UNDECLARED = object()  # a body without the attribute linear_in
 
 
 class NewtonFailure(RuntimeError):
@@ -122,460 +132,6 @@ class FieldGradient:
         self.form.Apply(self.field.gf.vec, self.vec)
 
 
-def _save_fields(mech):
-    """Copies of the values of every field of ``mech`` (for :func:`_restore_fields`)."""
-    return [f.gf.vec.FV().NumPy().copy() for f in mech.fields]
-
-
-def _restore_fields(mech, saved):
-    for f, v in zip(mech.fields, saved):
-        f.gf.vec.FV().NumPy()[:] = v
-
-
-def _random_fields(mech, rng):
-    """Random values for every field of ``mech`` (densities in [0.2, 1], others in [-1, 1])."""
-    for f in mech.fields:
-        lo = 0.2 if f.space is mech.l2 else -1.0
-        f.gf.vec.FV().NumPy()[:] = rng.uniform(lo, 1.0, len(f.gf.vec))
-
-
-def _energy_dependence(mech, tol=1e-14) -> dict:
-    """``{field name: whether the energy density changes with it}``, checked at the quadrature
-    points for a fixed ``∇u``: random values of every field, then new random values of that
-    field alone (the values are restored afterwards).  A field that cannot be told counts as
-    a dependence (the general path)."""
-    from ngsolve import CF, VOL
-
-    d = mech.mesh.dim
-    G = CF(tuple(0.05 * (k + 1) for k in range(d * d)), dims=(d, d))
-    out = {}
-    saved = _save_fields(mech)
-    try:
-        pts = mech.mesh.MapToAllElements(mech.rules, VOL)
-        cf = (mech.thickness * mech._energy(G, mech.coeffs)).Compile()
-    except Exception:
-        return {f.name: True for f in mech.fields}
-    try:
-        for field in mech.fields:
-            rng = np.random.default_rng(2468)
-            try:
-                _random_fields(mech, rng)
-                a = np.asarray(cf(pts)).ravel()
-                field.gf.vec.FV().NumPy()[:] = rng.uniform(
-                    0.2 if field.space is mech.l2 else -1.0, 1.0, len(field.gf.vec))
-                b = np.asarray(cf(pts)).ravel()
-                scale = max(float(np.max(np.abs(a))), 1e-300)
-                out[field.name] = not (np.all(np.isfinite(a))
-                                       and np.max(np.abs(a - b)) <= tol * scale)
-            except Exception:
-                out[field.name] = True
-        return out
-    finally:
-        _restore_fields(mech, saved)
-
-
-class _BodyCoupling:
-    """A body load that is linear in one field and independent of every other:
-    ``t ∫ b(v; fields) dΩ = B p`` with the design-independent mixed matrix
-    ``B = t ∫ b(v; q) dΩ`` (trial ``q`` in the field's space, test ``v`` in the displacement
-    space), assembled once.  Example: the Darcy load ``b = -∇p``.
-
-    Then the load vector of a design is one product ``B p`` (no LinearForm assembly), and, when
-    nothing else depends on the field (the energy does not, no residual density), the adjoint
-    term ``λᵀ ∂R/∂p = -s Bᵀλ`` is one transposed product (no ``Variation`` form's ``Apply``;
-    measured, 120 x 80 Q1: 38 ms against 0.2 ms).
-
-    :meth:`build` checks the property on two random states of all fields (the load vector of
-    the LinearForm against ``B p`` to 1e-12) and returns None when it fails.
-    """
-
-    def __init__(self, mat, field):
-        self.mat, self.field = mat, field
-        self.vec = None
-
-    @classmethod
-    def build(cls, mech, field, body_form, tol=1e-12):
-        from ngsolve import BilinearForm
-
-        if field.space is mech.l2:
-            return None
-        saved = _save_fields(mech)
-        try:
-            c = dict(mech.coeffs)
-            c[field.name] = field.space.TrialFunction()
-            B = BilinearForm(trialspace=field.space, testspace=mech.fes)
-            B += (mech.thickness * mech._body(mech.fes.TestFunction(), c)).Compile() * mech.DX
-            B.Assemble()
-            rng = np.random.default_rng(97531)
-            Bp = body_form.vec.CreateVector()
-            for _ in range(2):
-                _random_fields(mech, rng)
-                body_form.Assemble()
-                Bp.data = B.mat * field.gf.vec
-                ref, got = body_form.vec.FV().NumPy(), Bp.FV().NumPy()
-                scale = float(np.max(np.abs(ref)))
-                if not (scale > 0 and np.all(np.isfinite(got))
-                        and np.max(np.abs(ref - got)) <= tol * scale):
-                    return None
-            out = cls(B.mat, field)
-            out.vec = body_form.vec.CreateVector()
-            return out
-        except Exception:
-            return None  # e.g. a body NGSolve cannot write as a bilinear form: the general path
-        finally:
-            _restore_fields(mech, saved)
-
-    def load(self):
-        """``t ∫ b(v) dΩ`` for the field's current values: ``B p``."""
-        self.vec.data = self.mat * self.field.gf.vec
-        return self.vec
-
-    def adjoint_term(self, lam, load, out):
-        """``out = s Bᵀλ`` (= ``-λᵀ ∂R/∂p``, the backward pass's contribution)."""
-        out.data = load * (self.mat.T * lam)
-
-
-class _LinearSystem:
-    """``K`` and ``f`` of a linear, conservative mechanics problem: ``R(u) = K u - s f``.
-
-    ``K`` is the Hessian of the (quadratic) potential, assembled as a symbolic bilinear form
-    instead of by ``AssembleLinearization`` of the ``Variation`` form (second-order automatic
-    differentiation at every quadrature point, 3-7x slower).  The integrand is
-    ``(C ∇u) : ∇v`` with the fourth-order tensor ``C = ∂²(t φ)/∂G²`` obtained from the energy
-    by ``.Diff`` twice.  When ``C`` is constant on each element (it depends on the element-wise
-    fields only) it is evaluated once per element and handed to the form as an L2-order-0
-    field; otherwise the form is ``∂(t φ)/∂G [∇v]`` with ``G = ∇u`` the trial function.
-    Springs enter as ``∂/∂u`` of their energies.  ``f`` (the external load at unit load
-    factor) is the LinearForm of the loads' work and ``t b·v`` (``b·u`` is linear in u).
-
-    ``quadratic``: additionally ``t φ(G) = ½ G:C:G`` exactly (no constant or linear part), so
-    that the strain energy, its gradient ``K_φ u`` (``K`` minus the design-independent spring
-    matrix) and the field derivatives ``∫ (∂C/∂ρ ∇u) : ∇w`` follow from ``C`` too.
-
-    Both properties are checked once at construction, with random values of every field, at
-    the block's quadrature points (C at two different G; C against its element-wise constant
-    projection; φ and ∂φ/∂G against ½ G:C:G and C G).  Equal to the ``Variation`` tangent,
-    residual and sensitivities to round-off (tests/physics/test_linear_fast.py).
-    """
-
-    def __init__(self, mech):
-        from ngsolve import (CF, L2, BilinearForm, GridFunction, Grad, LinearForm, QUAD, TRIG,
-                             VOL, IntegrationRule)
-
-        self.mech = mech
-        self._Ku, self._Ku_at = None, None  # K u of the last residual and (version, u) of it
-        mesh, fes, DX = mech.mesh, mech.fes, mech.DX
-        d = self.d = mesh.dim
-        dd = d * d
-        u, v = fes.TnT()
-        self.stale = True
-        self.version = 0  # increases with every assembly (a new design)
-        # C = ∂²(tφ)/∂G² at two different (constant) G
-        Gs = [CF(tuple(0.1 * (k + 1) * (1 + j) for k in range(dd)), dims=(d, d)).MakeVariable()
-              for j in range(2)]
-        try:
-            phis = [mech.thickness * mech._energy(G, mech.coeffs) for G in Gs]
-            Cs = [phi.Diff(G).Diff(G).Reshape((dd, dd)).Compile() for phi, G in zip(phis, Gs)]
-        except Exception:  # an energy NGSolve cannot differentiate without a direction
-            Cs = None
-        self.C = None
-        self.valid, self.elementwise, self.quadratic = (
-            self._check(Cs, phis, Gs, mesh, mech) if Cs is not None else (False, False, False))
-        if not self.valid:
-            return  # not a pure quadratic-plus-constant energy: Mechanics keeps Variation
-        if self.elementwise:
-            self.C = Cs[0]
-            self.l2C = L2(mesh, order=0, dim=dd * dd)
-            self.gfC = GridFunction(self.l2C)
-            self._centroids = mesh.MapToAllElements(
-                {TRIG: IntegrationRule([(1 / 3, 1 / 3)], [0.5]),
-                 QUAD: IntegrationRule([(0.5, 0.5)], [1.0])}, VOL)
-            # (not compiled: the plain tree assembles faster here, 0.052 against 0.067 s)
-            integrand = (self.gfC.Reshape((dd, dd)) * Grad(u).Reshape((dd,))) \
-                * Grad(v).Reshape((dd,))
-        else:
-            Gu = Grad(u)
-            integrand = (mech.thickness * mech._energy(Gu, mech.coeffs)).Diff(Gu, Grad(v)).Compile()
-        self.a = BilinearForm(fes, symmetric=True)
-        self.a += integrand * DX
-        self.springs = None
-        if mech.springs:
-            self.springs = BilinearForm(fes, symmetric=True)
-            for sp in mech.springs:
-                self.a += sp.energy(mesh, u).Diff(u, v)
-                self.springs += sp.energy(mesh, u).Diff(u, v)
-            self.springs.Assemble()  # design-independent
-        self.f = LinearForm(fes)
-        terms = [ld.work(mesh, v) for ld in mech.loads]
-        # a body load linear in one field (the Darcy pressure): B p, with the point loads
-        # (design independent) assembled once
-        self._coupling = mech._coupling
-        if mech._body is not None and self._coupling is None:
-            terms.append((mech.thickness * mech._body(v, mech.coeffs)).Compile() * DX)
-        for t in terms:
-            self.f += t
-        self.has_load = bool(terms) or self._coupling is not None
-        self._fpoints = None
-        if self._coupling is not None:
-            self._fpoints = self.f.vec.CreateVector()
-            self._fpoints[:] = 0.0
-            if terms:
-                self.f.Assemble()
-                self._fpoints.data = self.f.vec
-        # ∂C/∂field for the element-wise fields (quadratic energies), evaluated on demand
-        self._dC, self._dC_version = {}, -1
-        if self.quadratic:
-            for f in mech.fields:
-                if f.space is mech.l2:
-                    self._dC[f.name] = (self.C.Diff(f.gf, mech.one).Compile(),
-                                        GridFunction(self.l2C))
-        # C = g(fields) C1 (one modulus times a fixed tensor per element, e.g. SIMP): from the
-        # second design on, the matrix from precomputed element matrices (ElementMatrices; not
-        # for the first, so that a single analysis does not pay for building them), g from the
-        # energy at a fixed G
-        self.scatter = None
-        self._separable = None
-        self._modulus = None
-        if self.quadratic:
-            self._check_separable(mech)
-
-    def _check_separable(self, mech, tol=1e-12):
-        """Whether ``C = g(fields) C1`` per element, checked on two random states of the fields
-        (restored afterwards): ``C(state 2) = (φ(G*; state 2) / φ(G*; state 1)) C(state 1)`` with
-        the energy ``φ`` at a fixed ``G*``.  Then :class:`~pacto_ng.physics.scatter.ElementMatrices`
-        can give ``K``, and per design only ``g`` and ``∂g/∂field`` are evaluated (one CF at the
-        centroids) instead of the 16 entries of ``C`` and of every ``∂C/∂field``."""
-        from ngsolve import CF
-
-        d = self.d
-        ne = mech.mesh.ne
-        names = list(self._dC)
-        G = CF(tuple(0.1 * (k + 1) for k in range(d * d)), dims=(d, d))
-        phi = mech.thickness * mech._energy(G, mech.coeffs)
-        gcf = CF((phi,) + tuple(phi.Diff(mech.coeffs[n], mech.one) for n in names)).Compile()
-        rng = np.random.default_rng(1357)
-        saved = _save_fields(mech)
-        modulus_np = getattr(mech._energy, "modulus_np", None)
-        try:
-            states = []
-            for _ in range(2):
-                _random_fields(mech, rng)
-                states.append((np.asarray(self.C(self._centroids)).reshape(ne, -1),
-                               np.asarray(gcf(self._centroids)).reshape(ne, -1),
-                               {n: v.copy() for n, v in self._field_values(names).items()}))
-            (c1, v1, f1), (c2, v2, f2) = states
-            phi1 = v1[:, 0]
-            if not (np.all(np.isfinite(c1)) and np.all(phi1 > 0)):
-                return
-            g = v2[:, 0] / phi1
-            if not np.max(np.abs(c2 - g[:, None] * c1)) <= tol * float(np.max(np.abs(c2))):
-                return
-            self._modulus = self._check_modulus(modulus_np, names, f1, f2, g,
-                                                v2[:, 1:] / phi1[:, None], tol)
-        except Exception:
-            return
-        finally:
-            _restore_fields(mech, saved)
-        self._separable = True
-        self._gcf, self._C1, self._phi1, self._names = gcf, c1, phi1, names
-        self._g = self._dg = None
-
-    def _field_values(self, names):
-        return {n: self.mech.coeffs[n].vec.FV().NumPy() for n in names}
-
-    @staticmethod
-    def _check_modulus(modulus_np, names, f1, f2, g, dg, tol):
-        """``(modulus_np, E at state 1)`` if the energy's numpy modulus (``energy.modulus_np``:
-        element values of the fields -> ``(E, {field: ∂E/∂field})``) gives ``g = E / E(state
-        1)`` and ``∂g/∂field`` of the CF at state 2 to ``tol``; else None (the CF is used).
-        Evaluating it costs a few numpy operations per design instead of a CF at every element
-        centre (measured at 120 x 80, one thread: 108 against 118 ms per analysis)."""
-        if modulus_np is None:
-            return None
-        try:
-            E1 = np.asarray(modulus_np(f1)[0], dtype=float).copy()
-            gn, dgn = _LinearSystem._relative_modulus(modulus_np, f2, E1, names)
-            if not np.max(np.abs(gn - g)) <= tol * float(np.max(np.abs(g))):
-                return None
-            for j in range(len(names)):
-                if not np.max(np.abs(dgn[:, j] - dg[:, j])) <= tol * max(
-                        float(np.max(np.abs(dg[:, j]))), 1e-300):
-                    return None
-        except Exception:
-            return None
-        return modulus_np, E1
-
-    @staticmethod
-    def _relative_modulus(modulus_np, values, E1, names):
-        """``(g, ∂g/∂field as columns in the order of names)`` with ``g = E / E1``."""
-        E, dE = modulus_np(values)
-        E = np.asarray(E, dtype=float)
-        dg = np.column_stack([np.asarray(dE.get(n, np.zeros_like(E))) for n in names])
-        return E / E1, dg / E1[:, None]
-
-    def _build_scatter(self):
-        """Build the element matrices (once; on failure the assembly stays symbolic)."""
-        from .scatter import ElementMatrices
-
-        self._separable = None
-        gfc = self.gfC.vec.FV().NumPy()
-        c1 = self._C1
-        setc = lambda cs: gfc.__setitem__(slice(None), (cs[0][:, None] * c1).ravel())
-        try:
-            self.scatter = ElementMatrices.build(self.a, self.mech.fes, setc, 1)
-        except Exception:
-            self.scatter = None
-
-    @staticmethod
-    def _check(Cs, phis, Gs, mesh, mech, tol=1e-12):
-        """``(valid, elementwise, quadratic)`` for random field values (restored afterwards).
-
-        valid: ``C`` is the same at two different ``G`` and ``∂φ/∂G = C G`` (no linear term,
-        so that ``R(u) = K u - s f``); elementwise: ``C`` equals its element-wise constant
-        projection; quadratic: also ``φ(G) = ½ G:C:G`` (no constant).
-        """
-        from ngsolve import L2, VOL, GridFunction
-
-        rng = np.random.default_rng(12345)
-        saved = _save_fields(mech)
-        try:
-            for f in mech.fields:
-                f.gf.vec.FV().NumPy()[:] = rng.uniform(0.2, 1.0, len(f.gf.vec))
-            pts = mesh.MapToAllElements(mech.rules, VOL)
-            c0, c1 = (np.asarray(C(pts)) for C in Cs)
-            scale = max(float(np.max(np.abs(c0))), 1e-300)
-            if not (np.all(np.isfinite(c0)) and np.max(np.abs(c0 - c1)) <= tol * scale):
-                return False, False, False
-            G = Gs[0]
-            gv = np.asarray(G(pts)).reshape(len(c0), -1)
-            CG = np.einsum("pij,pj->pi", c0.reshape(len(c0), gv.shape[1], gv.shape[1]), gv)
-            dphi = np.asarray(phis[0].Diff(G)(pts)).reshape(gv.shape)
-            if not np.max(np.abs(dphi - CG)) <= tol * max(float(np.max(np.abs(CG))), 1e-300):
-                return False, False, False
-            phi = np.asarray(phis[0](pts)).ravel()
-            quad = bool(np.max(np.abs(phi - 0.5 * np.einsum("pi,pi->p", gv, CG)))
-                        <= tol * max(float(np.max(np.abs(phi))), 1e-300))
-            g = GridFunction(L2(mesh, order=0, dim=c0.shape[1]))
-            g.Set(Cs[0])
-            elementwise = bool(np.max(np.abs(np.asarray(g(pts)) - c0)) <= tol * scale)
-            return True, elementwise, quad and elementwise
-        except Exception:
-            return False, False, False
-        finally:
-            _restore_fields(mech, saved)
-
-    def assemble(self):
-        """Assemble ``K`` and ``f`` for the current fields (once per design)."""
-        if not self.stale:
-            return
-        if self._separable and self.version >= 1:
-            self._build_scatter()  # a second design: from now on worth the element matrices
-        if self.scatter is not None:
-            if self._modulus is not None:
-                modulus_np, E1 = self._modulus
-                self._g, self._dg = self._relative_modulus(
-                    modulus_np, self._field_values(self._names), E1, self._names)
-            else:
-                vals = np.asarray(self._gcf(self._centroids)).reshape(len(self._phi1), -1)
-                self._g = vals[:, 0] / self._phi1
-                self._dg = vals[:, 1:] / self._phi1[:, None]
-            self.gfC.vec.FV().NumPy()[:] = (self._g[:, None] * self._C1).ravel()
-            self.scatter.assemble([self._g])
-        else:
-            if self.C is not None:
-                self.gfC.vec.FV().NumPy()[:] = np.asarray(self.C(self._centroids)).ravel()
-            self.a.Assemble()
-        if self._coupling is not None:
-            self.f.vec.data = self._fpoints + self._coupling.load()
-        elif self.has_load:
-            self.f.Assemble()
-        else:
-            self.f.vec[:] = 0.0
-        self.stale = False
-        self.version += 1
-
-    def residual(self, vec, out, load):
-        self.assemble()
-        # element by element (Apply), not K u: the product with the assembled K cancels large
-        # terms where the structure moves rigidly; from the element gradients the residual is
-        # exact to round-off of ∇u (measured on a PneuNet design: K u gave Newton a residual
-        # floor whose noise reached SE at 4e-11 and the finite differences at 1e-5)
-        self.a.Apply(vec, out)
-        # K u of this state, for energy_gradient (Newton's last residual is at the solution)
-        if self._Ku is None:
-            self._Ku = out.CreateVector()
-        self._Ku.data = out
-        self._Ku_at = (self.version, vec.FV().NumPy().copy())
-        out.data -= load * self.f.vec
-
-    def load_norm(self):
-        self.assemble()
-        return float(np.linalg.norm(self.f.vec.FV().NumPy()[self.mech.free]))
-
-    # -- quadratic energies: strain energy and its derivatives from C ---------------------------
-    def energy_gradient(self, vec, out):
-        """``∂/∂u t∫φ(∇u) = K u - K_springs u`` (element by element, as :meth:`residual`)."""
-        self.assemble()
-        at = self._Ku_at
-        if at is not None and at[0] == self.version and np.array_equal(at[1], vec.FV().NumPy()):
-            out.data = self._Ku  # the residual's K u at this state (the same Apply)
-        else:
-            self.a.Apply(vec, out)
-        if self.springs is not None:
-            out.data -= self.springs.mat * vec
-
-    def field_form(self, name, gu, gw, factor=1.0, extra=None):
-        """LinearForm ``factor ∫ (∂C/∂field ∇gu) : ∇gw q (+ extra q)`` on the element space;
-        call :meth:`prepare_fields` before assembling it."""
-        from ngsolve import Grad, LinearForm
-
-        m, dd = self.mech, self.d * self.d
-        dC = self._dC[name][1].Reshape((dd, dd))
-        cf = factor * ((dC * Grad(gu).Reshape((dd,))) * Grad(gw).Reshape((dd,)))
-        lf = LinearForm(m.l2)
-        lf += cf * m.l2.TestFunction() * m.DX
-        if extra is not None:
-            lf += extra.Compile() * m.l2.TestFunction() * m.DX
-        if self._separable and extra is None:
-            return _FieldForm(self, name, gu, gw, factor, lf)
-        return lf
-
-    def prepare_fields(self):
-        """Evaluate ``∂C/∂field`` per element for the current design (once per design)."""
-        self.assemble()
-        if self._dC_version == self.version:
-            return
-        if self.scatter is not None:  # ∂g/∂field came with g (assemble)
-            self._dC_version = self.version
-            return
-        for cf, gf in self._dC.values():
-            gf.vec.FV().NumPy()[:] = np.asarray(cf(self._centroids)).ravel()
-        self._dC_version = self.version
-
-
-class _FieldForm:
-    """``factor ∫ (∂C/∂field ∇gu) : ∇gw q dΩ`` per element: with the element matrices of
-    :class:`~pacto_ng.physics.scatter.ElementMatrices` (once built) as
-    ``factor ∂g/∂field · gw_eᵀ K1_e gu_e``, before that the LinearForm ``lf``.  Used like a
-    LinearForm: ``Assemble()``, then ``vec``."""
-
-    def __init__(self, lin, name, gu, gw, factor, lf):
-        self.lin, self.j, self.gu, self.gw, self.factor = lin, lin._names.index(name), gu, gw, factor
-        self.lf = lf
-        self._vec = lin.mech.one.vec.CreateVector()
-        self.vec = lf.vec
-
-    def Assemble(self):
-        lin = self.lin
-        if lin.scatter is None:
-            self.lf.Assemble()
-            self.vec = self.lf.vec
-            return
-        q = lin.scatter.quadratic(self.gw.vec.FV().NumPy(), self.gu.vec.FV().NumPy())[0]
-        self._vec.FV().NumPy()[:] = self.factor * lin._dg[:, self.j] * q
-        self.vec = self._vec
-
-
 @dataclass
 class Field:
     """A coefficient the energy depends on: element-wise (L2-0, numpy input) or a given space."""
@@ -595,12 +151,23 @@ class Mechanics:
         Polynomial order of the VectorH1 displacement (1, 2, 3).
     energy : callable ``(G, coeffs) -> CF``
         Strain-energy density per unit volume; ``G = ∇u`` and ``coeffs`` maps every field name
-        to its GridFunction.
+        to its GridFunction.  Its ``traits`` attribute
+        (:class:`~pacto_ng.physics.energy.EnergyTraits`, e.g. from
+        :func:`~pacto_ng.physics.energy.make_energy` or
+        :func:`~pacto_ng.physics.energy.declare`) chooses the fast routes; without it the
+        general route is used.
     fields : sequence of str or Field
         The block inputs (element-wise densities by default; a :class:`Field` with a space for
         e.g. the pressure).
     body : callable ``(u, coeffs) -> CF`` or None
-        Body-force potential density ``b·u`` per unit volume (scaled by the load factor).
+        Body-force potential density ``b·u`` per unit volume (scaled by the load factor),
+        linear in ``u``.  Its attribute ``linear_in`` (a field name, or None) declares the one
+        field it reads, linearly (the load vector is then ``B p``, see
+        :class:`~pacto_ng.physics.body_coupling.BodyCoupling`); without the attribute that
+        field is the one field on its own space (not element-wise) that the energy declares it
+        does not read, if there is exactly one.  Verified when the block is built
+        (:class:`~pacto_ng.physics.energy.DeclarationError`); ``linear_in = None`` takes the
+        general route.
     guard : callable ``(G, coeffs) -> CF`` or None
         A CF that must stay positive at every integration point (``det F``), or None.
     linear : bool
@@ -633,6 +200,12 @@ class Mechanics:
     inverse : str or None
         Direct solver of the tangent; default ``sparsecholesky`` for a symmetric tangent and
         ``umfpack`` otherwise.  With an unsymmetric tangent the adjoint solves ``Kᵀ λ = ∂J/∂u``.
+
+    Public state: ``result`` (the :class:`~pacto_ng.physics.newton.NewtonResult` of the last
+    forward pass: iterations, load reached, ...; None before), ``gfu`` (the displacement),
+    ``lam`` (the adjoint state), :attr:`state` / :meth:`set_state` (the warm start),
+    ``adjoint_solves`` / ``adjoint_solves_skipped`` and ``self_adjoint_shortcut`` (set False
+    to always solve the adjoint), :attr:`assembly` (the routes in use).
     """
 
     def __init__(self, mesh, *, order: int = 1, energy: Callable, fields=("rho_bar",),
@@ -688,6 +261,13 @@ class Mechanics:
         self.rules = integration_rules(intorder or 2 * order)
         self.DX = dx(intrules=self.rules)
         self._energy, self._body, self._guard = energy, body, guard
+        self._traits = traits_of(energy)
+        reads = self._traits.reads
+        if reads is not None and not set(reads) <= set(self.inputs):
+            raise ValueError(f"the energy declares it reads {', '.join(reads)}, but the block's "
+                             f"fields are {', '.join(self.inputs) or 'none'}")
+        # whether the energy reads each field (declared; every field where it declares nothing)
+        self._reads = {f.name: reads is None or f.name in reads for f in self.fields}
         self._rdens = residual_density
         self.loads, self.springs = tuple(loads), tuple(springs)
 
@@ -703,16 +283,13 @@ class Mechanics:
             self._fbody = LinearForm(self.fes)
             self._fbody += (self.thickness * body(self.fes.TestFunction(), self.coeffs)).Compile() * self.DX
         self._fbody_stale = True
-        # which fields the energy depends on; a field that enters only through a body load
-        # linear in it (the Darcy pressure) gives the load as B p (_BodyCoupling)
-        self._energy_fields = _energy_dependence(self)
+        # which fields the energy reads (declared); a field that enters only through a body
+        # load linear in it (the Darcy pressure) gives the load as B p (BodyCoupling)
         self._coupling = None
         if self._fbody is not None:
-            for f in self.fields:
-                if not self._energy_fields[f.name]:
-                    self._coupling = _BodyCoupling.build(self, f, self._fbody)
-                    if self._coupling is not None:
-                        break
+            field = self._coupled_field(body)
+            if field is not None:
+                self._coupling = BodyCoupling.build(self, field, self._fbody)
         if residual_density is not None:
             self.a += self.hot(self.residual_density(u, self.fes.TestFunction())) * self.DX
         if residual_terms is not None:
@@ -720,9 +297,8 @@ class Mechanics:
         # a linear, conservative problem: R(u) = K u - s f with K independent of u and s (also
         # with a design-dependent body load: f is then assembled once per design)
         self._lin = None
-        if linear and conservative:
-            lin = _LinearSystem(self)
-            self._lin = lin if lin.valid else None
+        if linear and conservative and self._traits.quadratic:
+            self._lin = LinearSystem(self, self._coupling)
         # vector of the external load at unit load factor (for norms)
         self._inv = None
         self._tangent_at = None  # id of the state the factorisation belongs to
@@ -742,7 +318,7 @@ class Mechanics:
                     and residual_density is None):
                 # only the body load depends on this field: λᵀ∂R/∂p = -s Bᵀλ
                 self._sens[f.name] = self._coupling
-            elif self._lin is not None and f.name in self._lin._dC:
+            elif self._lin is not None and f.name in self._lin.field_names:
                 # λᵀ ∂R/∂ρ = ∫ (∂C/∂ρ ∇u) : ∇λ - s t ∂(b·λ)/∂ρ (quadratic energy, b·u linear)
                 extra = None
                 if body is not None and self._coupling is None:
@@ -750,57 +326,104 @@ class Mechanics:
                         f.gf, self.one)
                 self._sens[f.name] = self._lin.field_form(f.name, self.gfu, self.lam, 1.0, extra)
             else:
-                self._sens[f.name] = FieldGradient(f, self._adjoint_lagrangian, self.coeffs,
+                self._sens[f.name] = FieldGradient(f, self.adjoint_lagrangian, self.coeffs,
                                                    self.DX)
         self._rhs = self.gfu.vec.CreateVector()
         self._ext = self.gfu.vec.CreateVector()
         # with only design-independent loads the load vector is fixed: its norm is computed once
         self._fixed_loads = body is None and conservative
         self._unit_load_norm = None
+        self._f_unit = None  # the unit external load vector (the self-adjoint shortcut's)
+        self.self_adjoint_shortcut = True  # compliance: λ = u / s without a solve
         self.adjoint_solves_skipped = 0  # adjoints that were the primal (compliance)
         self.adjoint_solves = 0  # adjoints solved with the factorised tangent
         self._ramp_first = None  # first increment of the last successful ramp from zero
-        # a design-dependent load on a stress-free energy (∂φ/∂G = 0 at G = 0): R(0) = -s f,
-        # so the load norm is that of f = (point/edge loads) + (body load) -- no Apply of the
-        # energy at u = 0.  The point loads are design independent: assembled here, once; the
-        # body load is the residual's own LinearForm (_fbody)
+        # a design-dependent load on a stress-free energy (∂φ/∂G = 0 at G = 0, declared):
+        # R(0) = -s f, so the load norm is that of f = (point/edge loads) + (body load) -- no
+        # Apply of the energy at u = 0.  The point loads are design independent: assembled
+        # here, once; the body load is the residual's own LinearForm (_fbody)
         self._load_form = None
-        if conservative and body is not None and self._lin is None and self._stress_free():
+        if conservative and body is not None and self._lin is None and self._traits.stress_free:
             v = self.fes.TestFunction()
             self._load_form = LinearForm(self.fes)
             for ld in self.loads:
                 self._load_form += ld.work(mesh, v)
             self._load_form.Assemble()
 
-    def _stress_free(self, tol=1e-13) -> bool:
-        """Whether ``∂(tφ)/∂G`` vanishes at ``G = 0`` (to ``tol`` of the stress at a unit
-        strain), checked at the quadrature points with random field values (restored)."""
-        from ngsolve import CF, VOL, GridFunction, Grad
-
-        rng = np.random.default_rng(54321)
-        saved = _save_fields(self)
-        try:
+    def _coupled_field(self, body):
+        """The field a body load is linear in, alone (see ``body`` in the class docstring), or
+        None."""
+        declared = getattr(body, "linear_in", _UNDECLARED)
+        if declared is None:
+            return None
+        if declared is not _UNDECLARED:
             for f in self.fields:
-                f.gf.vec.FV().NumPy()[:] = rng.uniform(0.2, 1.0, len(f.gf.vec))
-            pts = self.mesh.MapToAllElements(self.rules, VOL)
-            w = GridFunction(self.fes)  # u = 0: ∇w = 0 at every point
-            G = Grad(w)
-            s0 = np.asarray((self.thickness * self._energy(G, self.coeffs)).Diff(G)(pts))
-            d = self.mesh.dim
-            G1 = CF(tuple(1e-3 * (1 + k) for k in range(d * d)), dims=(d, d)).MakeVariable()
-            s1 = np.asarray((self.thickness * self._energy(G1, self.coeffs)).Diff(G1)(pts))
-            ref = np.max(np.abs(s1)) / (1e-3 * d * d)
-            return bool(np.all(np.isfinite(s0)) and ref > 0 and np.max(np.abs(s0)) <= tol * ref)
-        except Exception:
-            return False
-        finally:
-            _restore_fields(self, saved)
+                if f.name == declared:
+                    return f
+            raise ValueError(f"body.linear_in: '{declared}' is not a field of the block "
+                             f"(fields: {', '.join(self.inputs)})")
+        candidates = [f for f in self.fields
+                      if f.space is not self.l2 and not self._reads[f.name]]
+        return candidates[0] if len(candidates) == 1 else None
 
     # -- the energy ------------------------------------------------------------------------
     @property
     def energy(self) -> Callable:
         """The strain-energy density ``(G, coeffs) -> CF`` this block was built with."""
         return self._energy
+
+    @property
+    def energy_traits(self) -> EnergyTraits:
+        """What the energy declares (:class:`~pacto_ng.physics.energy.EnergyTraits`)."""
+        return self._traits
+
+    @property
+    def energy_fields(self) -> dict:
+        """``{field name: whether the energy reads it}`` (declared; True for every field of an
+        energy that declares nothing)."""
+        return dict(self._reads)
+
+    @property
+    def body(self) -> Callable | None:
+        """The body-force potential density ``(u, coeffs) -> CF`` (None: no body load)."""
+        return self._body
+
+    @property
+    def has_residual_density(self) -> bool:
+        """Whether a non-conservative volume term (a follower load) is part of the residual."""
+        return self._rdens is not None
+
+    @property
+    def linear_system(self) -> LinearSystem | None:
+        """The :class:`~pacto_ng.physics.linear_system.LinearSystem` of a linear, conservative
+        block with a quadratic energy (None: the general route)."""
+        return self._lin
+
+    @property
+    def assembly(self) -> dict:
+        """The routes in use (read-only description, for tests and the run summary):
+
+        * ``linear_system``: None (``Variation``), ``"hessian"`` (``K`` from ``C`` per element)
+          or ``"element_matrices"`` (``K`` from element matrices, from the second design on);
+        * ``modulus``: ``"numpy"`` when ``E`` per design comes from the declared numpy modulus;
+        * ``body_coupling``: the fields whose body load is ``B p``;
+        * ``load_norm``: ``"linear_system"``, ``"load_vectors"`` (stress-free energy: the norm
+          of point and body loads), ``"fixed"`` (design-independent loads: computed once) or
+          ``"residual"`` (the residual at ``u = 0``).
+        """
+        lin = self._lin
+        if self._fixed_loads:
+            norm = "fixed"
+        elif lin is not None:
+            norm = "linear_system"
+        elif self._load_form is not None:
+            norm = "load_vectors"
+        else:
+            norm = "residual"
+        return {"linear_system": None if lin is None else lin.route,
+                "modulus": "numpy" if lin is not None and lin.uses_modulus else None,
+                "body_coupling": () if self._coupling is None else (self._coupling.field.name,),
+                "load_norm": norm}
 
     def hot(self, cf):
         """``cf`` compiled for a form that Newton assembles in every iteration."""
@@ -819,7 +442,7 @@ class Mechanics:
             dens = dens - self.load * self.thickness * self._body(u, coeffs)
         return dens
 
-    def _adjoint_lagrangian(self, coeffs):
+    def adjoint_lagrangian(self, coeffs):
         """``λᵀ R(u)`` per unit area with the fields ``coeffs`` (u, λ: the block's states)."""
         lag = self.volume_density(self.gfu, coeffs).Diff(self.gfu, self.lam)
         if self._rdens is not None:
@@ -931,6 +554,39 @@ class Mechanics:
         self.residual(self._ext, self._rhs, load)
         return float(np.linalg.norm(self._rhs.FV().NumPy()[self.free]))
 
+    def load_changed(self):
+        """Say that the loads changed outside the load factor (e.g. a pressure Parameter inside
+        a load): the unit load vector and its norm, kept for design-independent loads, are
+        recomputed at the next use."""
+        self._unit_load_norm = None
+        self._f_unit = None
+
+    # -- the warm state ---------------------------------------------------------------------
+    @property
+    def state(self) -> np.ndarray:
+        """A copy of the current displacement vector (the next forward pass's warm start)."""
+        return self.gfu.vec.FV().NumPy().copy()
+
+    @property
+    def state_converged(self) -> bool:
+        """Whether the current displacement is a converged equilibrium."""
+        return bool(self.result is not None and self.result.converged)
+
+    def set_state(self, u=None, *, converged: bool, result: NewtonResult | None = None):
+        """Set the displacement (a numpy array or vector; None keeps it) and whether it is an
+        equilibrium: the next forward pass starts from it if so, else ramps from zero.
+        ``result`` (a :class:`NewtonResult`) replaces the default record of a converged state
+        at the full load."""
+        if u is not None:
+            if isinstance(u, np.ndarray):
+                self.gfu.vec.FV().NumPy()[:] = u
+            else:
+                self.gfu.vec.data = u
+        if result is not None:
+            self.result = result
+        else:
+            self.result = NewtonResult(True, load_reached=1.0) if converged else None
+
     # -- block interface ------------------------------------------------------------------------
     def set_fields(self, *values):
         for f, v in zip(self.fields, values):
@@ -980,8 +636,9 @@ class Mechanics:
         the solves.
         """
         lam = self.gfu.vec.CreateVector()
-        f = getattr(self, "_f_unit", None)
-        if self.linear and self._fixed_loads and self.symmetric and f is not None and self.target != 0:
+        f = self._f_unit
+        if (self.self_adjoint_shortcut and self.linear and self._fixed_loads and self.symmetric
+                and f is not None and self.target != 0):
             g = dJdu.FV().NumPy()
             ff = float(f @ f)
             c = float(g[self.free] @ f[self.free]) / ff if ff > 0 else 0.0
@@ -997,24 +654,32 @@ class Mechanics:
         self.adjoint_solves += 1
         return lam
 
+    def _minus_sensitivity(self, f):
+        """``-λᵀ ∂R/∂field`` for the current ``u``, ``λ`` and design (the backward pass's term):
+        a numpy array for an element-wise field, else a vector of the field's space."""
+        lf = self._sens[f.name]  # a LinearForm, a FieldGradient or a BodyCoupling
+        if isinstance(lf, BodyCoupling):
+            v = f.gf.vec.CreateVector()
+            lf.adjoint_term(self.lam.vec, self.load.Get(), v)
+            return v
+        lf.Assemble()
+        if f.space is self.l2:
+            return -lf.vec.FV().NumPy().copy()
+        v = lf.vec.CreateVector()
+        v.data = -1.0 * lf.vec
+        return v
+
+    def field_sensitivity(self, name) -> np.ndarray:
+        """``λᵀ ∂R/∂field`` (numpy) for the current ``u`` (``gfu``), ``λ`` (``lam``) and design."""
+        if self._lin is not None:
+            self._lin.prepare_fields()
+        f = self.fields[self.inputs.index(name)]
+        g = self._minus_sensitivity(f)
+        return -(g if isinstance(g, np.ndarray) else g.FV().NumPy())
+
     def backward(self, dJdu):
         lam = self.adjoint(dJdu)
         self.lam.vec.data = lam
         if self._lin is not None:
             self._lin.prepare_fields()
-        grads = []
-        for f in self.fields:
-            lf = self._sens[f.name]  # a LinearForm, a FieldGradient or a _BodyCoupling
-            if isinstance(lf, _BodyCoupling):
-                v = f.gf.vec.CreateVector()
-                lf.adjoint_term(self.lam.vec, self.load.Get(), v)
-                grads.append(v)
-                continue
-            lf.Assemble()
-            if f.space is self.l2:
-                grads.append(-lf.vec.FV().NumPy().copy())
-            else:
-                v = lf.vec.CreateVector()
-                v.data = -1.0 * lf.vec
-                grads.append(v)
-        return tuple(grads)
+        return tuple(self._minus_sensitivity(f) for f in self.fields)

@@ -79,6 +79,9 @@ class ElementMatrices:
         Above this many entries of the ``S_k`` together (about 12 bytes each), :meth:`build`
         returns None (the memory of high orders on fine meshes), and the form is assembled as
         before.  The build costs one assembly per colour and term (about 4-12 colours).
+
+    A form that is not of this kind (an entry no single element explains, or the check against
+    NGSolve's assembly with random coefficients) raises ``ValueError``: the caller declared it.
     """
 
     def __init__(self, form, values, v0, rows, cols, S, lower):
@@ -104,7 +107,8 @@ class ElementMatrices:
         ip, cols = np.array(ip, dtype=np.int64), np.array(ind, dtype=np.int64)
         rows = np.repeat(np.arange(len(ip) - 1), np.diff(ip))
         if len(rows) != len(values):
-            return None
+            raise ValueError("ElementMatrices: the matrix's CSR structure does not match its "
+                             "values")
         lower = bool(np.all(cols <= rows))  # symmetric storage: the lower triangle only
         colour = element_colours(mesh)
         parts = [([], [], []) for _ in range(nterms)]  # (entries, elements, values) per term
@@ -124,7 +128,8 @@ class ElementMatrices:
                 dv = values - v0
                 if np.any(dv[~mine] != 0.0):
                     set_coefficients(zero)
-                    return None  # an entry no single element explains: not of this form
+                    raise ValueError("ElementMatrices: an entry no single element explains "
+                                     "(the form is not Σ c_k a_k with element-wise c_k)")
                 nz = np.flatnonzero(mine & (dv != 0.0))
                 parts[k][0].append(nz)
                 parts[k][1].append(owner[rows[nz]])
@@ -141,7 +146,8 @@ class ElementMatrices:
         out.assemble(c)
         scale = max(float(np.max(np.abs(ref))), 1e-300)
         if not np.max(np.abs(values - ref)) <= tol * scale:
-            return None
+            raise ValueError(f"ElementMatrices: the scattered matrix differs from NGSolve's "
+                             f"assembly by {np.max(np.abs(values - ref)) / scale:.2e} (relative)")
         return out
 
     def assemble(self, coeffs):

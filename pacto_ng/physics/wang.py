@@ -103,6 +103,9 @@ class WangModel:
         The large-strain energy ``φ_H`` (default Neo-Hookean).
     gamma_fn : callable ``coeffs -> CF`` or None
         Replaces eq. 5.2 by a prescribed ``γ`` (fixed patterns such as the C-beam's, or tests).
+    reads : tuple of str or None
+        The fields ``modulus`` and ``γ`` read (None: not declared, any field); part of
+        :attr:`traits`.
     """
 
     modulus: Callable
@@ -114,6 +117,7 @@ class WangModel:
     eta: object = 0.001
     hyper: object = "neohookean"
     gamma_fn: Callable | None = None
+    reads: tuple[str, ...] | None = None
 
     def __post_init__(self):
         _hyper(self.hyper)
@@ -146,6 +150,16 @@ class WangModel:
     def guard(self):
         """The Newton guard ``(G, coeffs) -> det(I + γG)`` (None if ``φ_H`` accepts any F)."""
         return self.jacobian if _hyper(self.hyper)[1] else None
+
+    @property
+    def traits(self):
+        """The energy's declaration (:class:`~pacto_ng.physics.energy.EnergyTraits`): the fields
+        it reads; stress-free at ``G = 0`` for a named ``φ_H`` (``∂φ_W/∂G = γ P_H(0) - γ σ_L(0)
+        + σ_L(0) = 0``); not quadratic (the general route)."""
+        from .energy import EnergyTraits
+
+        named = isinstance(self.hyper, str)
+        return EnergyTraits(reads=self.reads, stress_free=named)
 
     def __call__(self, G, coeffs):
         """The model as an energy density ``(G, coeffs) -> CF`` (same as :meth:`energy`)."""
@@ -187,6 +201,7 @@ class WangModel:
 
 def wang_model(modulus: Callable, nu: float, plane: str = "strain", field: str = "rho_bar",
                penal=3.0, *, beta=100.0, eta=0.001, hyper="neohookean",
-               gamma_fn: Callable | None = None) -> WangModel:
+               gamma_fn: Callable | None = None, reads=None) -> WangModel:
     """Factory of the Wang model; ``energy, guard = wang_model(...)`` (see :class:`WangModel`)."""
-    return WangModel(modulus, nu, plane, field, penal, beta, eta, hyper, gamma_fn)
+    return WangModel(modulus, nu, plane, field, penal, beta, eta, hyper, gamma_fn,
+                     None if reads is None else tuple(reads))

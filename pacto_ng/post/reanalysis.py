@@ -285,7 +285,7 @@ class Reanalysis:
         # relative tolerance) belongs to the previous pressure.  Without this reset a sweep
         # 1 -> 10 -> 100 Pa judged the residual at 100 Pa against the load at 1 Pa, asked for
         # a 100x smaller residual than rtol and failed at the round-off floor.
-        self.mech._unit_load_norm = None
+        self.mech.load_changed()
         try:
             self.mech.forward()
             ok = True

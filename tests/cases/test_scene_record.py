@@ -52,7 +52,7 @@ def test_self_adjoint_shortcut_gives_the_solved_gradient():
         x = np.random.default_rng(5).uniform(0.2, 1.0, problem.field.n)
         f0, _, g0, _ = problem.evaluate(x)
         assert problem.mech.adjoint_solves_skipped == 1 and problem.mech.adjoint_solves == 0
-        problem.mech._f_unit = None  # no shortcut from here on
+        problem.mech.self_adjoint_shortcut = False  # no shortcut from here on
         f1, _, g1, _ = problem.evaluate(x)
         assert problem.mech.adjoint_solves == 1
     assert f1 == f0

@@ -112,7 +112,7 @@ def test_build_problem_follower(model):
     case = _case()
     problem = build_problem(case, case.defaults.replace(model=model))
     mech = problem.mech
-    assert not mech.symmetric and mech._body is None and mech._rdens is not None
+    assert not mech.symmetric and mech.body is None and mech.has_residual_density
     x0 = np.random.default_rng(4).uniform(0.3, 0.7, problem.field.n)
     problem.chain.forward(x=x0)
     assert mech.result.converged and mech.result.iterations > 1

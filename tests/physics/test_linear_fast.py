@@ -1,5 +1,5 @@
-"""The symbolic linear system of a linear, conservative Mechanics block (``Mechanics._lin``)
-against the automatic-differentiation route it replaces: the tangent from
+"""The symbolic linear system of a linear, conservative Mechanics block whose energy declares
+itself quadratic (``Mechanics.linear_system``) against the automatic-differentiation route it replaces: the tangent from
 ``AssembleLinearization`` of the ``Variation`` form, the residual from ``Apply``, the strain
 energy from ``Integrate`` and every derivative from ``.Diff``."""
 import numpy as np
@@ -8,6 +8,7 @@ import scipy.sparse as sp
 
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.physics.darcy import DarcyPressure, darcy_body
+from pacto_ng.physics.energy import DeclarationError, declare
 from pacto_ng.physics.loads import PointLoad, Spring
 from pacto_ng.physics.materials import linear_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
@@ -21,11 +22,15 @@ SUP = Supports(clamp=("fixed",), fix_y=("symmetry",))
 
 def _variation_residual(mech, vec, out, load=1.0):
     """The general route: Apply of the Variation form minus the body load's LinearForm."""
+    from ngsolve import LinearForm
+
     mech.load.Set(load)
     mech.a.Apply(vec, out)
-    if mech._fbody is not None:
-        mech._fbody.Assemble()
-        out.data -= load * mech._fbody.vec
+    if mech.body is not None:
+        lf = LinearForm(mech.fes)
+        lf += mech.thickness * mech.body(mech.fes.TestFunction(), mech.coeffs) * mech.DX
+        lf.Assemble()
+        out.data -= load * lf.vec
 
 def _diff_form(dens, field, DX):
     """The reference: the LinearForm of the symbolic derivative ``dens.Diff(field, q)``."""
@@ -45,10 +50,15 @@ def _rel(a, b):
     return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
 
 
+def _simp(plane="stress"):
+    """SIMP linear elasticity declared quadratic (no numpy modulus: C per element per design)."""
+    return declare(lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4,
+                                              plane), reads=("rho_bar",), quadratic=True)
+
+
 def _block(kind, order, energy=None, plane="stress", darcy=False):
     mesh = small_pa_mesh(kind)
-    energy = energy or (lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4,
-                                                   plane))
+    energy = energy or _simp(plane)
     fields, body, loads, dar = ["rho_bar"], None, (), None
     if darcy:
         dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e5, order=order)
@@ -66,10 +76,9 @@ def _block(kind, order, energy=None, plane="stress", darcy=False):
     return mech, rng
 
 
-def _compare(mech, rng, *, elementwise, quadratic):
-    lin = mech._lin
-    assert lin is not None
-    assert lin.elementwise is elementwise and lin.quadratic is quadratic
+def _compare(mech, rng):
+    lin = mech.linear_system
+    assert lin is not None and mech.assembly["linear_system"] is not None
     u = mech.gfu.vec
     u.FV().NumPy()[:] = np.where(mech.free, 1e-4 * rng.standard_normal(len(mech.free)), 0.0)
     mech.assemble_tangent(u, 1.0)
@@ -95,7 +104,8 @@ def _compare(mech, rng, *, elementwise, quadratic):
 @pytest.mark.parametrize("plane", ["stress", "strain"])
 def test_symbolic_tangent_and_residual_equal_the_variation_ones(kind, order, plane):
     mech, rng = _block(kind, order, plane=plane)
-    _compare(mech, rng, elementwise=True, quadratic=True)
+    _compare(mech, rng)
+    assert mech.assembly["linear_system"] == "hessian" and mech.assembly["modulus"] is None
 
 
 @pytest.mark.parametrize("kind,order", [("trig", 1), ("quads", 2)])
@@ -104,9 +114,9 @@ def test_design_dependent_body_load_takes_the_symbolic_route(kind, order):
     norm equal the Variation ones, and so does λᵀ∂R/∂field for both fields (ρ through C and
     the body term, p through the body term)."""
     mech, rng = _block(kind, order, darcy=True)
-    _compare(mech, rng, elementwise=True, quadratic=True)
+    _compare(mech, rng)
+    assert mech.assembly["body_coupling"] == ("p",)
     mech.lam.vec.FV().NumPy()[:] = np.where(mech.free, rng.standard_normal(len(mech.free)), 0.0)
-    mech._lin.prepare_fields()
     for f, g in zip(mech.fields, mech.backward(mech.lam.vec)):
         gen = _diff_form(mech.volume_density(mech.gfu).Diff(mech.gfu, mech.lam), f, mech.DX)
         a = g if isinstance(g, np.ndarray) else g.FV().NumPy()
@@ -130,32 +140,63 @@ def test_pressure_case_finite_differences_at_the_round_off_floor():
     assert worst <= 1e-7
 
 
-def test_position_dependent_energy_uses_the_trial_function_form():
-    """E depends on x: C is not constant per element, so the tangent is the Diff form."""
+def _undeclared_and_declared(energy):
+    """``(block of the energy as it is, block of the energy declared quadratic)``; the second
+    is None when the declaration is refused (its DeclarationError is returned instead)."""
+    mech, _ = _block("quads", 1, energy=energy)
+    try:
+        _block("quads", 1, energy=declare(energy, reads=("rho_bar",), quadratic=True))
+    except DeclarationError as err:
+        return mech, err
+    raise AssertionError("a wrong quadratic declaration was accepted")
+
+
+def test_position_dependent_energy_is_not_quadratic_per_element():
+    """E depends on x: C is not constant per element.  Undeclared: the general route; declared
+    quadratic: refused."""
     from ngsolve import x
 
     energy = lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0) * (1 + 50 * x), 0.4)
-    mech, rng = _block("trig", 2, energy=energy)
-    _compare(mech, rng, elementwise=False, quadratic=False)
+    mech, err = _undeclared_and_declared(energy)
+    assert mech.linear_system is None and mech.assembly["linear_system"] is None
+    assert "constant on each element" in str(err)
 
 
 def test_energy_with_a_linear_term_keeps_the_variation_route():
-    """A pre-stress σ0 : G: the residual is not K u - s f, so Mechanics keeps ``Variation``."""
+    """A pre-stress σ0 : G: the residual is not K u - s f, so Mechanics keeps ``Variation``,
+    and a quadratic declaration is refused."""
     from ngsolve import CF, InnerProduct
 
     s0 = CF((1e3, 2e3, 2e3, -1e3), dims=(2, 2))
     energy = lambda G, c: (linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4)
                            + InnerProduct(s0, G))
-    mech, rng = _block("quads", 1, energy=energy)
-    assert mech._lin is None
+    mech, err = _undeclared_and_declared(energy)
+    assert mech.linear_system is None
+    assert "linear term" in str(err)
 
 
 def test_energy_with_a_constant_is_not_quadratic():
-    """φ + const: the same K and residual, but SE is not ½ u·K_φ u (StrainEnergy integrates)."""
+    """φ + const: SE is not ½ u·K_φ u, so it is not quadratic (StrainEnergy integrates and
+    differentiates it automatically); a quadratic declaration is refused."""
     energy = lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4) + 7.0
-    mech, rng = _block("quads", 1, energy=energy)
-    _compare(mech, rng, elementwise=True, quadratic=False)
-    assert StrainEnergy(mech)._quad is None
+    mech, err = _undeclared_and_declared(energy)
+    assert mech.linear_system is None and not StrainEnergy(mech).uses_linear_system
+    assert "constant in G" in str(err)
+
+
+def test_undeclared_energy_takes_the_general_route():
+    """The same SIMP energy without its declaration (with a Darcy load): no linear system and
+    no body coupling (the energy may read p), and the Variation route gives the same solution
+    as the declared one."""
+    declared, _ = _block("trig", 1, darcy=True)
+    plain, _ = _block("trig", 1, energy=lambda G, c: _simp()(G, c), darcy=True)
+    assert declared.assembly["linear_system"] == "hessian"
+    assert declared.assembly["body_coupling"] == ("p",)
+    assert plain.assembly == {"linear_system": None, "modulus": None, "body_coupling": (),
+                              "load_norm": "residual"}
+    u1, u2 = declared.forward(), plain.forward()
+    assert np.max(np.abs(u1.FV().NumPy())) > 0
+    assert _rel(u2.FV().NumPy(), u1.FV().NumPy()) <= 1e-10
 
 
 @pytest.mark.parametrize("kind,order", [("trig", 1), ("quads", 2)])
@@ -167,14 +208,14 @@ def test_quadratic_energy_responses_and_sensitivities(kind, order):
     u = mech.gfu.vec
     u.FV().NumPy()[:] = np.where(mech.free, 1e-4 * rng.standard_normal(len(mech.free)), 0.0)
     se = StrainEnergy(mech)
-    assert se._quad is not None
+    assert se.uses_linear_system
     val = se.forward(u)
-    dens = mech.thickness * mech._energy(Grad(se.gfu), mech.coeffs)
+    dens = mech.thickness * mech.energy(Grad(se.gfu), mech.coeffs)
     assert val == pytest.approx(Integrate(dens * mech.DX, mech.mesh), rel=1e-12)
     du, drho = se.backward(1.0)
     w = mech.fes.TrialFunction()
     ef = BilinearForm(mech.fes)
-    ef += Variation((mech.thickness * mech._energy(Grad(w), mech.coeffs)) * mech.DX)
+    ef += Variation((mech.thickness * mech.energy(Grad(w), mech.coeffs)) * mech.DX)
     ref = u.CreateVector()
     ef.Apply(u, ref)
     assert _rel(du.FV().NumPy(), ref.FV().NumPy()) <= 1e-12
@@ -183,11 +224,9 @@ def test_quadratic_energy_responses_and_sensitivities(kind, order):
     assert _rel(drho, lf.vec.FV().NumPy()) <= 1e-12
     # mechanics sensitivity λᵀ∂R/∂ρ (through C and the body term) against the Diff form
     mech.lam.vec.FV().NumPy()[:] = np.where(mech.free, rng.standard_normal(len(mech.free)), 0.0)
-    mech._lin.prepare_fields()
-    lf_fast = mech._sens["rho_bar"]
-    lf_fast.Assemble()
+    fast = mech.field_sensitivity("rho_bar")
     gen = _diff_form(mech.volume_density(mech.gfu).Diff(mech.gfu, mech.lam), f_rho, mech.DX)
-    assert _rel(lf_fast.vec.FV().NumPy(), gen.vec.FV().NumPy()) <= 1e-12
+    assert _rel(fast, gen.vec.FV().NumPy()) <= 1e-12
 
 
 def test_new_design_reassembles():
@@ -221,7 +260,7 @@ def test_load_norm_of_a_stress_free_energy_equals_the_residual_at_zero(model, pl
     mech = Mechanics(mesh, order=1, energy=energy, fields=("rho_bar", dar.field()),
                      supports=SUP, springs=(Spring("output", 1e4, (1.0, 0.0)),),
                      body=darcy_body("p"), thickness=1e-3, guard=guard, linear=linear)
-    assert mech._load_form is not None
+    assert mech.assembly["load_norm"] == "load_vectors"
     rng = np.random.default_rng(5)
     rho = rng.uniform(0.05, 1.0, mesh.ne)
     mech.set_fields(rho, dar.forward(rho))
@@ -245,7 +284,7 @@ def test_prestressed_energy_keeps_the_residual_load_norm():
                            + InnerProduct(s0, G))
     mech = Mechanics(mesh, order=1, energy=energy, fields=("rho_bar", dar.field()),
                      supports=SUP, body=darcy_body("p"), thickness=1e-3)
-    assert mech._load_form is None
+    assert mech.assembly["load_norm"] == "residual"
 
 
 # -- the numpy modulus of the element-matrix route ------------------------------------------
@@ -258,34 +297,35 @@ def _case_energy(penal=3.0, fields=("rho_bar",), wrong=False):
     params = Parameters(model="linear", E0=3e3, E1=3e9, E2=6e9, nu=0.4, plane="stress")
     energy, _, _ = make_energy(params, Parameter(penal), fields)
     if wrong:  # a numpy twin that is not the energy's modulus (p = 2.9): must be refused
+        import dataclasses
+
         from pacto_ng.interpolation import simp_np
 
         def bad(values):
             E, d = simp_np(values[fields[0]], 3e3, 3e9, 2.9)
             return E, {fields[0]: d}
-        energy.modulus_np = bad
+        energy.traits = dataclasses.replace(energy.traits, modulus=bad)
     return energy
 
 
 @pytest.mark.parametrize("kind,order", [("trig", 1), ("quads", 2)])
 def test_numpy_modulus_gives_the_variation_tangent_and_sensitivities(kind, order):
-    """The case's energy carries ``modulus_np``: it is checked against the CF when the block is
-    built and then gives g and ∂g/∂ρ per design; from the second design on (element matrices)
-    K, R and λᵀ∂R/∂ρ equal the Variation / Diff ones."""
+    """The case's energy declares its numpy modulus: it is checked against the CF when the block
+    is built and then gives g and ∂g/∂ρ per design; from the second design on (element
+    matrices) K, R and λᵀ∂R/∂ρ equal the Variation / Diff ones."""
     mech, rng = _block(kind, order, energy=_case_energy())
-    lin = mech._lin
-    assert lin._modulus is not None
+    assert mech.assembly["modulus"] == "numpy"
     mech.assemble_tangent(mech.gfu.vec, 1.0)  # the first design: assembled by NGSolve
+    assert mech.assembly["linear_system"] == "hessian"
     mech.set_fields(rng.uniform(0.05, 1.0, mech.mesh.ne))  # the second design
-    _compare(mech, rng, elementwise=True, quadratic=True)
-    assert lin.scatter is not None  # the element-matrix route, with the numpy modulus
+    _compare(mech, rng)
+    # the element-matrix route, with the numpy modulus
+    assert mech.assembly["linear_system"] == "element_matrices"
     f_rho = mech.fields[0]
     mech.lam.vec.FV().NumPy()[:] = np.where(mech.free, rng.standard_normal(len(mech.free)), 0.0)
-    lin.prepare_fields()
-    lf_fast = mech._sens["rho_bar"]
-    lf_fast.Assemble()
+    fast = mech.field_sensitivity("rho_bar")
     gen = _diff_form(mech.volume_density(mech.gfu).Diff(mech.gfu, mech.lam), f_rho, mech.DX)
-    assert _rel(lf_fast.vec.FV().NumPy(), gen.vec.FV().NumPy()) <= 1e-12
+    assert _rel(fast, gen.vec.FV().NumPy()) <= 1e-12
 
 
 def test_numpy_modulus_follows_the_penalty_parameter():
@@ -300,14 +340,14 @@ def test_numpy_modulus_follows_the_penalty_parameter():
     energy, _, _ = make_energy(Parameters(model="linear", E0=3e3, E1=3e9, nu=0.4,
                                           plane="stress"), penal)
     mech, rng = _block("trig", 1, energy=energy)
-    assert mech._lin._modulus is not None
+    assert mech.assembly["modulus"] == "numpy"
     mech.assemble_tangent(mech.gfu.vec, 1.0)
     mech.set_fields(rng.uniform(0.05, 1.0, mech.mesh.ne))
     mech.assemble_tangent(mech.gfu.vec, 1.0)
-    assert mech._lin.scatter is not None
+    assert mech.assembly["linear_system"] == "element_matrices"
     penal.Set(3.0)
     mech.set_fields(rng.uniform(0.05, 1.0, mech.mesh.ne))
-    _compare(mech, rng, elementwise=True, quadratic=True)
+    _compare(mech, rng)
 
 
 def test_two_material_numpy_modulus_and_a_wrong_one():
@@ -316,13 +356,13 @@ def test_two_material_numpy_modulus_and_a_wrong_one():
     mech = Mechanics(mesh, order=1, energy=_case_energy(fields=mesh_fields), fields=mesh_fields,
                      supports=SUP, loads=(PointLoad("output", (0.0, -1.0)),), thickness=1e-3,
                      linear=True)
-    assert mech._lin._modulus is not None
+    assert mech.assembly["modulus"] == "numpy"
     rng = np.random.default_rng(5)
     for _ in range(2):
         mech.set_fields(rng.uniform(0.05, 1.0, mesh.ne), rng.uniform(0.05, 1.0, mesh.ne))
         mech.assemble_tangent(mech.gfu.vec, 1.0)
-    assert mech._lin.scatter is not None
+    assert mech.assembly["linear_system"] == "element_matrices"
     mech.set_fields(rng.uniform(0.05, 1.0, mesh.ne), rng.uniform(0.05, 1.0, mesh.ne))
-    _compare(mech, rng, elementwise=True, quadratic=True)
-    bad, _ = _block("trig", 1, energy=_case_energy(wrong=True))
-    assert bad._lin._separable and bad._lin._modulus is None  # refused: the CF is used
+    _compare(mech, rng)
+    with pytest.raises(DeclarationError, match="modulus"):  # refused, with the reason
+        _block("trig", 1, energy=_case_energy(wrong=True))

@@ -6,6 +6,7 @@ import scipy.sparse as sp
 
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.physics.darcy import DarcyPressure
+from pacto_ng.physics.energy import DeclarationError, declare, make_energy
 from pacto_ng.physics.loads import PointLoad, Spring
 from pacto_ng.physics.materials import linear_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
@@ -70,31 +71,49 @@ def _mech(kind, order, energy):
 
 @pytest.mark.parametrize("kind,order", [("trig", 1), ("quads", 2)])
 def test_simp_stiffness_from_element_matrices(kind, order):
-    """SIMP: C = E(ρ̄) C1, so the tangent comes from the element matrices; equal to the
-    symbolic form's assembly, springs included."""
-    energy = lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0), 0.4, "stress")
+    """SIMP declares C = E(ρ̄) C1, so from the second design on the tangent comes from the
+    element matrices; equal to the Variation tangent, springs included."""
+    from ngsolve import Parameter
+
+    from pacto_ng.params import Parameters
+
+    energy, _, _ = make_energy(Parameters(model="linear", E0=3e3, E1=3e9, nu=0.4,
+                                          plane="stress"), Parameter(3.0))
     mech, mesh = _mech(kind, order, energy)
-    lin = mech._lin
-    assert lin._separable and lin.scatter is None
-    lin._build_scatter()
-    assert lin.scatter is not None
-    rho = np.random.default_rng(2).uniform(0.01, 1.0, mesh.ne)
-    mech.set_fields(rho)
-    lin.assemble()
-    K = _csr(lin.a.mat).copy()
-    lin.gfC.vec.FV().NumPy()[:] = np.asarray(lin.C(lin._centroids)).ravel()
-    lin.a.Assemble()
-    K_ref = _csr(lin.a.mat)
+    rng = np.random.default_rng(2)
+    mech.set_fields(rng.uniform(0.01, 1.0, mesh.ne))
+    mech.assemble_tangent(mech.gfu.vec, 1.0)
+    assert mech.assembly["linear_system"] == "hessian"  # the first design: no element matrices
+    mech.set_fields(rng.uniform(0.01, 1.0, mesh.ne))
+    mech.assemble_tangent(mech.gfu.vec, 1.0)
+    assert mech.assembly["linear_system"] == "element_matrices"
+    K = _csr(mech.matrix).copy()
+    mech.a.AssembleLinearization(mech.gfu.vec)
+    K_ref = _csr(mech.a.mat)
     assert abs(K - K_ref).max() <= 1e-12 * abs(K_ref).max()
 
 
 def test_not_proportional_stiffness_keeps_the_assembly():
-    """ν depending on ρ̄: C(ρ̄) is not a multiple of one tensor, so no element matrices."""
+    """ν depending on ρ̄: C(ρ̄) is not a multiple of one tensor.  Declared quadratic without a
+    modulus: no element matrices, also from the second design on; declared with the SIMP
+    modulus: refused."""
+    from pacto_ng.interpolation import simp_np
+
     energy = lambda G, c: linear_energy(G, simp_cf(c["rho_bar"], 3e3, 3e9, 3.0),
                                         0.2 + 0.2 * c["rho_bar"], "stress")
-    mech, _ = _mech("trig", 1, energy)
-    assert mech._lin is not None and mech._lin.elementwise
-    assert not mech._lin._separable and mech._lin.scatter is None
+    mech, mesh = _mech("trig", 1, declare(energy, reads=("rho_bar",), quadratic=True))
+    rng = np.random.default_rng(2)
+    for _ in range(2):
+        mech.set_fields(rng.uniform(0.01, 1.0, mesh.ne))
+        mech.assemble_tangent(mech.gfu.vec, 1.0)
+    assert mech.assembly["linear_system"] == "hessian" and mech.assembly["modulus"] is None
+
+    def modulus(values):
+        E, d = simp_np(values["rho_bar"], 3e3, 3e9, 3.0)
+        return E, {"rho_bar": d}
+
+    with pytest.raises(DeclarationError, match="not E\\(fields\\) C1"):
+        _mech("trig", 1, declare(energy, reads=("rho_bar",), quadratic=True, modulus=modulus))
 
 
 def test_element_matrix_budget_falls_back():
@@ -120,9 +139,11 @@ def test_element_matrices_come_with_the_second_design():
     rng = np.random.default_rng(4)
     x1, x2 = (rng.uniform(0.2, 0.8, problem.field.n) for _ in range(2))
     f1, _, g1, _ = problem.evaluate(x1)
-    assert problem.mech._lin.scatter is None and problem.pressure_block._scatter is None
+    assert problem.mech.assembly["linear_system"] == "hessian"
+    assert problem.pressure_block._scatter is None
     problem.evaluate(x2)
-    assert problem.mech._lin.scatter is not None and problem.pressure_block._scatter is not None
+    assert problem.mech.assembly["linear_system"] == "element_matrices"
+    assert problem.pressure_block._scatter is not None
     f1b, _, g1b, _ = problem.evaluate(x1)
     assert abs(f1b - f1) <= 1e-12 * abs(f1)  # measured 2.4e-14
     assert np.max(np.abs(g1b - g1)) <= 1e-11 * np.max(np.abs(g1))  # measured 1.2e-13
