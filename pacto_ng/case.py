@@ -108,6 +108,40 @@ class Setup:
 
 @dataclass(frozen=True)
 class Case:
+    """A case: what is optimised, on which geometry, with which defaults.
+
+    Parameters
+    ----------
+    name : str
+        The case's name (``pacto cases``; the default output folder ``output/NAME-MODEL``).
+    summary : str
+        One line: what it optimises and what it shows.
+    source : str
+        Where the set-up comes from (a paper, a thesis section, "my lab's gripper").
+    defaults : Parameters
+        The case's default parameters (``pacto run CASE --show-parameters`` lists them).
+    geometry : callable
+        ``geometry(params)`` -> a netgen.occ shape with named faces, edges and vertices, a
+        :class:`~pacto_ng.mesh.Layout`, a CAD or mesh file path, or an ``ngsolve.Mesh``
+        (:mod:`pacto_ng.geometry`).
+    setup : callable
+        ``setup(params)`` -> :class:`Setup`: supports, loads, springs, ports, passive regions,
+        pressure and objective, by the geometry's names.
+    load_unit : str
+        The unit of ``--load`` ("N", or "Pa" for pressure cases).
+    analysis_only : bool
+        An analysis, not an optimisation (the C-beam).
+    notes : str
+        Free text.
+    model_orders : dict
+        Displacement order per model where it is not 1 (``order`` = 0 resolves through it).
+    file : str
+        Set by :func:`load_case_file`: the case file it came from.
+    options : Settings, optional
+        The case's own settings with their defaults (a :class:`~pacto_ng.settings.Settings`
+        instance), set like any parameter (``--set NAME=VALUE``) and read as ``params.NAME``.
+    """
+
     name: str
     summary: str
     source: str

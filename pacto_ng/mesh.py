@@ -156,17 +156,35 @@ def layout_shape(layout: Layout):
                     e.name = r.boundary
     for name, (px, py) in layout.points:
         v = shape.vertices.Nearest((px, py, 0))
-        v.name = name
+        if _at_vertex(v, px, py, layout):
+            v.name = name
     return shape
 
 
+def _at_vertex(vertex, px, py, layout) -> bool:
+    p = vertex.p
+    return abs(p.x - px) + abs(p.y - py) <= 1e-9 * max(layout.width, layout.height)
+
+
 def netgen_mesh(layout: Layout, maxh: float, *, quad_dominated: bool = False):
-    """Netgen triangle mesh of ``layout`` with element size ``maxh`` (returns ngsolve.Mesh)."""
+    """Netgen triangle mesh of ``layout`` with element size ``maxh`` (returns ngsolve.Mesh).
+
+    A point that is a vertex of the layout (a corner, a segment's end, a region's corner) is
+    that vertex of the mesh; any other point is the mesh node nearest to it."""
     from netgen import occ
+    from netgen.meshing import Element0D
     import ngsolve
 
-    geo = occ.OCCGeometry(layout_shape(layout), dim=2)
+    shape = layout_shape(layout)
+    geo = occ.OCCGeometry(shape, dim=2)
     ngm = geo.GenerateMesh(maxh=maxh, quad_dominated=quad_dominated)
+    inner = [(name, xy) for name, xy in layout.points
+             if not _at_vertex(shape.vertices.Nearest((*xy, 0)), *xy, layout)]
+    if inner:
+        coords = np.array([[p[0], p[1]] for p in ngm.Points()])
+        for name, (px, py) in inner:
+            k = int(np.argmin((coords[:, 0] - px) ** 2 + (coords[:, 1] - py) ** 2))
+            ngm.Add(Element0D(k + 1, index=ngm.AddRegion(name, dim=0)))
     return ngsolve.Mesh(ngm)
 
 

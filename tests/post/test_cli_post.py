@@ -239,12 +239,12 @@ def test_design_without_solid_on_the_clamp_exits_2(pa_run, tmp_path, capsys):
     """The final design replaced by a block far from the clamp (the passive block at the clamp
     is smaller than the speck limit and is removed)."""
     from pacto_ng.case import build_problem, get_case
-    from pacto_ng.params import Parameters
 
     run = tmp_path / "floating"
     shutil.copytree(pa_run, run, ignore=shutil.ignore_patterns("analysis"))
     info = json.loads((run / "params.json").read_text())
-    problem = build_problem(get_case(info["case"]), Parameters(**info["params"]))
+    case = get_case(info["case"])
+    problem = build_problem(case, case.parameters(info["params"]))
     c = problem.field.centroids()[problem.field.design_index]
     x = ((c[:, 0] > 0.12) & (c[:, 0] < 0.19) & (c[:, 1] > 0.01) & (c[:, 1] < 0.06)).astype(float)
     with np.load(run / "checkpoint.npz") as d:
