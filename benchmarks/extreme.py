@@ -486,7 +486,7 @@ CROSS_INVERTER = (["inv_f_lin_04", "inv_f_w_002", "inv_f_w_01", "inv_f_w_02", "i
 def cross_force(root: Path, name: str, model: str, load: float) -> dict:
     """The final design of a force-case run analysed with ``model`` at ``load``: Δ and the
     strain concentration of that state (its design.vtu is written to DIR/cross_force/...)."""
-    from pacto_ng.runner import write_vtu
+    from pacto_ng.outputs import write_vtu
     from pacto_ng.threads import compute
 
     run, problem = rebuilt(root / name, model=model, load=load)

@@ -360,6 +360,14 @@ class Problem:
     def values(self) -> dict:
         return self.chain.values
 
+    def design_density(self) -> np.ndarray:
+        """The element densities that show the design: ρ̄, or with two materials ρ̄1 (1 + ρ̄2)
+        / 2 (void 0, the soft material 1/2, the stiff material 1)."""
+        vals = self.values
+        if "rho_bar" in vals:
+            return np.asarray(vals["rho_bar"])
+        return np.asarray(vals["rho_bar1"]) * (1 + np.asarray(vals["rho_bar2"])) / 2.0
+
     def volume_fraction(self) -> float:
         vol = next(b for b in self.chain.blocks if b.output == "volume")
         return vol.fraction(self.values[vol.inputs[0]])

@@ -238,7 +238,7 @@ def _main(argv) -> int:
         return sweep.run_sweep(case, params, models, loads, args.out or f"output/sweep-{case.name}",
                                scheduler=args.scheduler, workers=args.workers, quiet=args.quiet)
     if args.command == "evaluate":
-        from .runner import evaluate_design
+        from .evaluate import evaluate_design
 
         return evaluate_design(case, params, args.density, _default_out(args, case, params),
                                filtered=args.filtered, quiet=args.quiet)

@@ -80,9 +80,7 @@ def density_png(path, problem, field_name: str | None = None, title: str | None 
     import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
 
-    from ..runner import rho_bar_of
-
-    rho = rho_bar_of(problem) if field_name is None else np.asarray(problem.values[field_name])
+    rho = problem.design_density() if field_name is None else np.asarray(problem.values[field_name])
     polys, rho, line = picture_polygons(problem.mesh, rho, mirror)
     allpts = np.concatenate(polys)
     fig, ax = plt.subplots(figsize=_size(allpts))

@@ -1,0 +1,153 @@
+"""``pacto evaluate``: one analysis of a given design (no optimisation)."""
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .case import Case, Problem, build_problem
+from .outputs import summary_dict, write_vtu
+from .params import InputError, Parameters
+from .physics.mechanics import NewtonFailure
+from .runner import prepare_output
+
+
+def read_density(path: str, problem: Problem, *, filtered: bool = False) -> tuple[np.ndarray, bool]:
+    """The design a file holds, and whether it is design variables (to be filtered and
+    projected) rather than physical densities ρ̄.
+
+    Formats (element order: NGSolve's, i.e. ``mesh.Elements()`` and the order of the cells of
+    design.vtu):
+
+    * ``.npy``, ``.csv``, ``.txt``: one value per element of the mesh, or for structured quads a
+      nely x nelx grid whose row 0 is the top row of elements; ρ̄, or design variables with
+      ``--filtered`` (passive elements' values are ignored then);
+    * ``checkpoint.npz`` of a run: its design variables ``x`` (one per *design* element, two
+      fields stacked for two materials), always filtered and projected, as the run did (with
+      the penalty and β of the run's last iteration: :func:`checkpoint_iteration`);
+    * ``design.vtu`` of a run: its element field ``rho_bar`` (``x`` with ``--filtered``).
+    """
+    p = problem.params
+    fp = Path(path)
+    if not fp.is_file():
+        raise InputError(f"--density: file '{path}' does not exist")
+    suffix = fp.suffix.lower()
+    if suffix == ".npz":
+        return _checkpoint_design(fp, problem), True
+    try:
+        if suffix == ".npy":
+            arr = np.load(fp, allow_pickle=False)
+        elif suffix in (".csv", ".txt"):
+            arr = np.loadtxt(fp, delimiter="," if suffix == ".csv" else None, ndmin=1)
+        elif suffix == ".vtu":
+            arr = _vtu_element_field(fp, "x" if filtered else "rho_bar", problem.mesh.ne)
+        else:
+            raise InputError(f"--density: '{path}' must be a .npy, .csv, .txt, .vtu or a "
+                             "checkpoint .npz file")
+    except InputError:
+        raise
+    except (OSError, ValueError, KeyError, EOFError) as err:  # unreadable file content
+        raise InputError(f"--density: cannot read '{path}' ({type(err).__name__}: {err})") from None
+    arr = np.asarray(arr, dtype=float)
+    ne = problem.mesh.ne
+    if arr.ndim == 2 and p.nelx > 0:
+        if arr.shape != (p.nely, p.nelx):
+            raise InputError(f"--density: '{path}' is a {arr.shape[0]} x {arr.shape[1]} grid, "
+                             f"the mesh is nely x nelx = {p.nely} x {p.nelx}")
+        arr = arr[::-1].ravel()
+    else:
+        arr = arr.ravel()
+    if arr.size != ne:
+        raise InputError(f"--density: '{path}' holds {arr.size} values, the mesh has {ne} elements")
+    if not np.all(np.isfinite(arr)) or arr.min() < 0 or arr.max() > 1:
+        raise InputError(f"--density: values in '{path}' must be finite and lie in [0, 1]")
+    if filtered:
+        arr = arr[problem.field.design_index]
+    return arr, filtered
+
+
+def _checkpoint_design(fp: Path, problem: Problem) -> np.ndarray:
+    try:
+        with np.load(fp, allow_pickle=False) as data:
+            x = np.asarray(data["x"], dtype=float).ravel()
+    except (OSError, ValueError, KeyError, EOFError) as err:
+        raise InputError(f"--density: '{fp}' is not a readable checkpoint ({type(err).__name__}: "
+                         f"{err})") from None
+    n = problem.field.n * problem.n_design_fields
+    if x.size != n:
+        raise InputError(f"--density: checkpoint '{fp}' holds {x.size} design variables, this "
+                         f"case and mesh have {n} (another case or mesh)")
+    if not np.all(np.isfinite(x)) or x.min() < 0 or x.max() > 1:
+        raise InputError(f"--density: design variables in '{fp}' must be finite, in [0, 1]")
+    return x
+
+
+def checkpoint_iteration(fp: str | os.PathLike) -> int:
+    """The iteration count ``k`` a checkpoint was written at (its schedule is that of k - 1)."""
+    with np.load(fp, allow_pickle=False) as data:
+        return int(data["k"])
+
+
+def _vtu_element_field(fp: Path, name: str, ne: int) -> np.ndarray:
+    """An element-constant field of a design.vtu: one value per element (NGSolve writes each
+    element's corners as points of their own, and order >= 2 runs as 4 sub-cells each)."""
+    import meshio
+
+    m = meshio.read(fp)
+    if name not in m.point_data:
+        raise InputError(f"--density: '{fp}' has no field '{name}' (fields: "
+                         f"{', '.join(m.point_data) or 'none'})")
+    cells = np.concatenate([c.data for c in m.cells])
+    vals = np.asarray(m.point_data[name], dtype=float).reshape(len(m.points), -1)[:, 0]
+    per_cell = vals[cells[:, 0]]
+    if per_cell.size % ne:
+        raise InputError(f"--density: '{fp}' has {per_cell.size} cells, the mesh has {ne} "
+                         "elements (another mesh)")
+    return per_cell.reshape(ne, -1).mean(axis=1)
+
+
+def evaluate_design(case: Case, params: Parameters, density: str, out, *, filtered: bool,
+                    quiet: bool = False) -> int:
+    """One analysis of a given design (no optimisation); writes summary.json and design.vtu."""
+    path = prepare_output(out)
+    t0 = time.perf_counter()
+    problem = build_problem(case, params)
+    arr, filtered = read_density(density, problem, filtered=filtered)
+    if problem.n_design_fields != 1 and not Path(density).suffix.lower() == ".npz":
+        raise InputError("evaluate: two-material cases need both fields: give the run's "
+                         "checkpoint.npz")
+    sched = params.schedule.schedule()
+    if Path(density).suffix.lower() == ".npz":  # the run's own last penalty and β
+        penal, beta, _ = sched.values(max(checkpoint_iteration(density) - 1, 0))
+        problem.apply_schedule(penal, beta, 1.0)
+    else:
+        problem.apply_schedule(params.penal, sched.beta(10 ** 6), 1.0)
+    x = None
+    try:
+        if filtered:
+            x = arr
+            problem.chain.forward(x=x)
+        else:
+            rho = arr.copy()
+            rho[problem.field.solid] = 1.0
+            rho[problem.field.void] = 0.0
+            problem.chain.forward(rho_bar=rho)
+    except NewtonFailure as err:
+        print(f"evaluate: {err}")
+        return 1
+
+    class _R:
+        converged, stopped, message = True, "evaluated", "single analysis"
+
+    summ = summary_dict(problem, [], _R, time.perf_counter() - t0)
+    summ["evaluated_from"] = str(density)
+    summ["filtered"] = filtered
+    (path / "summary.json").write_text(json.dumps(summ, indent=1))
+    write_vtu(path / "design", problem, x)
+    if not quiet:
+        keys = ("objective", "compliance", "output_displacement", "strain_energy", "volume_fraction")
+        print("  ".join(f"{k} {summ[k]:.6g}" for k in keys if summ[k] is not None))
+    return 0

@@ -1,0 +1,185 @@
+"""What a run writes to its folder: summary.json, history.csv, design.vtu and the pictures.
+
+DIR/summary.json       case, model, parameters, iterations, objective and its history, volume
+                       fraction, output displacement, load reached, converged flag, Newton counts,
+                       wall time, mesh size and element order
+DIR/history.csv        one row per iteration
+DIR/design.vtu         x, rho_bar, u (and p) and the model's strain and stress measures
+DIR/design.png         the physical density (a half-domain case mirrored: the whole mechanism)
+DIR/pressure.png       pressure cases: p / P_in with the ρ̄ = 0.5 contour (leakage in summary.json)
+DIR/materials.png      two-material cases: where the soft and the stiff material are
+DIR/convergence.png    objective and volume against iteration
+"""
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .case import Problem
+
+#: the columns of history.csv (one row per iteration), then the case's reported responses
+HISTORY_COLUMNS = ("iteration", "objective", "volume", "constraint", "change", "penal", "beta",
+                   "load", "newton", "load_steps", "time")
+
+
+def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
+    p = problem.params
+    vals = problem.values
+    mech_res = problem.mech.result
+
+    def val(name):
+        return float(vals[name]) if name in vals else None
+
+    newton_counts = [h["newton"] for h in history]
+    out = {
+        "case": problem.case.name,
+        "model": p.model,
+        "parameters": p.to_dict(),
+        "load": p.load,
+        "load_unit": problem.case.load_unit,
+        "iterations": len(history),
+        "objective": val(problem.objective),
+        "objective_name": problem.objective,
+        "objective_history": [h["objective"] for h in history],
+        "volume_fraction": problem.volume_fraction(),
+        "output_displacement": val("delta"),
+        "compliance": val("compliance"),
+        "strain_energy": val("se"),
+        "load_reached": (mech_res.load_reached * p.load) if mech_res else None,
+        "load_factor_reached": mech_res.load_reached if mech_res else None,
+        "converged": result.converged,
+        "stopped": result.stopped,
+        "message": result.message,
+        "newton_iterations": newton_counts,
+        "newton_iterations_total": int(sum(newton_counts)),
+        "wall_time_s": wall,
+        "mesh": {"elements": problem.mesh.ne, "h": problem.h, "order": p.order,
+                 "displacement_dofs": problem.mech.fes.ndof,
+                 "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely},
+        "element_order": p.order,
+        "model_choice": getattr(problem, "model_choice", None),
+        "darcy_solve": problem.pressure_block is not None,
+        "symmetric_half_domain": any(n == "symmetry" for n in problem.mesh.GetBoundaries()),
+        # the mechanics adjoints of this process: solved, and skipped because the adjoint was
+        # the primal (compliance of design-independent loads on a linear model)
+        "adjoint_solves": {"solved": problem.mech.adjoint_solves,
+                           "skipped_self_adjoint": problem.mech.adjoint_solves_skipped},
+    }
+    out.update(pressure_and_material_summary(problem))
+    return out
+
+
+def pressure_and_material_summary(problem: Problem) -> dict:
+    """Pressure cases: ``leakage`` (fraction of P_in, see :func:`pacto_ng.physics.darcy.leakage`)
+    and its details.  Two materials: the volume fractions of the total solid, of material 1
+    (soft, ``Σ a ρ̄1 (1-ρ̄2)``) and of material 2 (stiff, ``Σ a ρ̄1 ρ̄2``) over the design
+    elements."""
+    out = {}
+    vals = problem.values
+    if problem.pressure_block is not None:
+        from .physics.darcy import leakage
+
+        blk = problem.pressure_block
+        info = leakage(blk, vals[blk.inputs[0]], problem.h)
+        out["leakage"] = info.pop("leakage")
+        out["leakage_detail"] = info
+    if problem.n_design_fields == 2:
+        w = np.where(problem.field.design, problem.field.areas, 0.0)
+        r1, r2 = np.asarray(vals["rho_bar1"]), np.asarray(vals["rho_bar2"])
+        out["material_fractions"] = {"solid": float(w @ r1 / w.sum()),
+                                     "material1_soft": float(w @ (r1 * (1 - r2)) / w.sum()),
+                                     "material2_stiff": float(w @ (r1 * r2) / w.sum())}
+    return out
+
+
+def _finite(name, arr):
+    if not np.all(np.isfinite(arr)):
+        raise RuntimeError(f"{name} has non-finite values: nothing written")
+
+
+def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, result, wall: float):
+    from .post.plots import convergence_png, density_png, materials_png, pressure_png
+
+    summ = summary_dict(problem, history, result, wall)
+    for key in ("objective", "volume_fraction"):
+        if summ[key] is not None and not np.isfinite(summ[key]):
+            raise RuntimeError(f"{key} is not finite: nothing written")
+    (path / "summary.json").write_text(json.dumps(summ, indent=1))
+    # written even when no iteration finished (a Newton failure in the first one): a header only
+    keys = list(history[0].keys()) if history else list(HISTORY_COLUMNS) + list(problem.reports)
+    with open(path / "history.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=keys)
+        w.writeheader()
+        w.writerows(history)
+    write_vtu(path / "design", problem, x)
+    density_png(path / "design.png", problem)
+    if problem.pressure_block is not None:
+        pressure_png(path / "pressure.png", problem, leakage=summ.get("leakage"),
+                     leakage_any=summ["leakage_detail"]["leakage_any"])
+    if problem.n_design_fields == 2:
+        materials_png(path / "materials.png", problem)
+    if history:
+        convergence_png(path / "convergence.png", history, problem.objective)
+
+
+def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
+    from ngsolve import GridFunction, VTKOutput
+
+    mech = problem.mech
+    coefs, names = [], []
+
+    def add_l2(name, arr):
+        _finite(name, arr)
+        gf = GridFunction(mech.l2)
+        gf.vec.FV().NumPy()[:] = arr
+        coefs.append(gf)
+        names.append(name)
+
+    vals = problem.values
+    for key in ("rho_bar", "rho_bar1", "rho_bar2"):
+        if key in vals:
+            add_l2(key, np.asarray(vals[key]))
+    if x is not None and problem.n_design_fields == 1:
+        add_l2("x", problem.field.full(x))
+    _finite("u", mech.gfu.vec.FV().NumPy())
+    coefs.append(mech.gfu)
+    names.append("u")
+    if "p" in vals and problem.pressure_block is not None:
+        pg = problem.pressure_block.gfp
+        _finite("p", pg.vec.FV().NumPy())
+        coefs.append(pg)
+        names.append("p")
+    for name, cf in strain_stress_measures(problem).items():
+        for (i, j), comp in zip(((0, 0), (1, 1), (0, 1)), ("xx", "yy", "xy")):
+            gf = GridFunction(mech.l2)
+            gf.Set(cf[i, j])  # element mean (P0 projection)
+            add_l2(f"{name}_{comp}", gf.vec.FV().NumPy().copy())
+    VTKOutput(problem.mesh, coefs=coefs, names=names, filename=str(stem),
+              subdivision=0 if problem.params.order == 1 else 1, legacy=False).Do()
+
+
+def strain_stress_measures(problem: Problem) -> dict:
+    """In-plane 2x2 strain and stress CFs of the analysed state, by model: ``linear``: ε and
+    σ; ``gnl``/``neohookean``: Green–Lagrange ``E_GL`` and the second Piola–Kirchhoff ``S``
+    (``F⁻¹ ∂φ/∂F`` by automatic differentiation); ``wang``: ``E_W1``, ``E_W2`` (thesis eqs
+    5.4–5.5) and ``S`` (eq. 5.3).  design.vtu holds their xx, yy, xy element means."""
+    from ngsolve import Grad
+
+    from .physics.materials import first_piola_kirchhoff, green_lagrange, second_piola_kirchhoff
+
+    mech = problem.mech
+    G, c = Grad(mech.gfu), mech.coeffs
+    model = problem.params.model
+    if model == "wang":
+        wm = mech.energy  # the WangModel (make_energy passes the model as the energy)
+        return {"E_W1": wm.strain_w1(G, c), "E_W2": wm.strain_w2(G, c), "S": wm.stress(G, c)}
+    phi = lambda A: mech.energy(A, c)  # noqa: E731
+    if model == "linear":
+        return {"strain": 0.5 * (G + G.trans), "stress": first_piola_kirchhoff(phi, G)}
+    return {"E_GL": green_lagrange(G), "S": second_piola_kirchhoff(phi, G)}
+
+
+# ------------------------------------------------------------------------------------------
