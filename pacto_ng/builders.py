@@ -20,6 +20,9 @@ import numpy as np
 from .params import InputError
 from .settings import Settings, setting
 
+#: the objectives a case's set-up may name; :func:`responses` builds each one's blocks
+OBJECTIVES = ("compliance", "energy", "output", "mechanism", "output_se")
+
 
 @dataclass(frozen=True)
 class DesignSettings(Settings):
@@ -46,8 +49,7 @@ class ObjectiveSettings(Settings):
     """Which objective the case's set-up is optimised for."""
 
     objective: str = setting("", "", "case objective variant (empty: the case's default)",
-                             choices=("", "compliance", "energy", "output", "mechanism",
-                                      "output_se"))
+                             choices=("",) + OBJECTIVES)
     se_max: float = setting(0.0, "J", "strain-energy limit of objective output_se (0: the "
                             "case's default)", range="[0, inf)")
 
@@ -189,7 +191,6 @@ def responses(mech, setup, params, pressure: PressureLoad, case_name: str) -> Re
     """The objective's blocks: compliance, strain energy, or an output displacement (alone,
     over the strain energy, or under a strain-energy limit)."""
     from . import responses as R
-    from .case import OBJECTIVES
 
     obj = params.objective or setup.objective
     if obj not in OBJECTIVES:

@@ -24,6 +24,7 @@ from typing import Callable
 
 import numpy as np
 
+from .builders import OBJECTIVES
 from .core import Chain
 from .params import InputError, Parameters
 from .physics.loads import Outputs, PointLoad, Port, Spring
@@ -41,8 +42,6 @@ CASE_MODULES = {
     "soft-finger": "pacto_ng.cases.soft_finger",
     "jaw-gripper": "pacto_ng.cases.jaw_gripper",
 }
-
-OBJECTIVES = ("compliance", "energy", "output", "mechanism", "output_se")
 
 
 @dataclass(frozen=True)
