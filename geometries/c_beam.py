@@ -4,8 +4,18 @@ f2 at the free end of the bottom arm."""
 from pacto_ng.mesh import Layout, Region, Segment
 
 
-def layout(size: float = 10.0, arm: float = 1.0) -> Layout:
-    return Layout(size, size,
-                  segments=(Segment("fixed", (0.0, 0.0), (0.0, size)),),
-                  regions=(Region("void", "void", arm, arm, size, size - arm),),
-                  points=(("f1", (size, size)), ("f2", (size, 0.0))))
+def layout(size: float = 10.0, arm: float = 1.0, loads_on: str = "points") -> Layout:
+    """``fixed`` left edge, material ``void`` inside the C, load regions ``f1`` (top arm's
+    free end) and ``f2`` (bottom arm's free end) as corner points (``loads_on="points"``) or
+    as the arms' end edges (``loads_on="edges"``)."""
+    segs = [Segment("fixed", (0.0, 0.0), (0.0, size))]
+    pts = ()
+    if loads_on == "points":
+        pts = (("f1", (size, size)), ("f2", (size, 0.0)))
+    elif loads_on == "edges":
+        segs += [Segment("f1", (size, size - arm), (size, size)),
+                 Segment("f2", (size, 0.0), (size, arm))]
+    else:
+        raise ValueError("loads_on must be 'points' or 'edges'")
+    return Layout(size, size, segments=tuple(segs),
+                  regions=(Region("void", "void", arm, arm, size, size - arm),), points=pts)

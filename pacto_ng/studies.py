@@ -16,25 +16,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-def c_beam_layout(size: float = 10.0, arm: float = 1.0, loads_on: str = "points"):
-    """The C-beam layout: ``fixed`` left edge, material ``void`` inside the C, load regions
-    ``f1`` (top arm's free end) and ``f2`` (bottom arm's free end) as corner points
-    (``loads_on="points"``) or as the arms' end edges (``loads_on="edges"``)."""
-    from .mesh import Layout, Region, Segment
-
-    segs = [Segment("fixed", (0.0, 0.0), (0.0, size))]
-    pts = ()
-    if loads_on == "points":
-        pts = (("f1", (size, size)), ("f2", (size, 0.0)))
-    elif loads_on == "edges":
-        segs += [Segment("f1", (size, size - arm), (size, size)),
-                 Segment("f2", (size, 0.0), (size, arm))]
-    else:
-        raise ValueError("loads_on must be 'points' or 'edges'")
-    return Layout(size, size, segments=tuple(segs),
-                  regions=(Region("void", "void", arm, arm, size, size - arm),), points=pts)
-
-
 @dataclass
 class CBeamResult:
     """Outcome of :func:`c_beam_limit`.
@@ -116,6 +97,8 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
     from .physics.mechanics import Mechanics, Supports
     from .physics.newton import NewtonSettings, solve_with_continuation
     from .physics.wang import wang_model
+
+    from .geometries.c_beam import layout as c_beam_layout
 
     layout = c_beam_layout(loads_on=loads_on)
     if mesh == "quad":
