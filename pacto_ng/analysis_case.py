@@ -51,7 +51,10 @@ def run_analysis_case(case, params, out, *, quiet: bool = False) -> int:
     path = prepare_output(out)
     t0 = time.perf_counter()
     mesh_kind, h = ("quad", 10.0 / params.nelx) if params.nelx > 0 else ("trig", params.maxh)
+    # the case's own loads: f1 downward at the top arm's end, f2 rightward at the bottom's
+    forces = {ld.region: ld.force for ld in case.make_setup(params).loads}
     res = c_beam_limit(params.model, order=params.order, mesh=mesh_kind, h=h,
+                       f1=-float(forces["f1"][1]), f2=float(forces["f2"][0]),
                        lam_max=params.load, E1=params.E1, E0_ratio=params.E0 / params.E1,
                        nu=params.nu, thickness=params.thickness, wang_beta=params.wang_beta,
                        wang_eta=params.wang_eta)
