@@ -10,9 +10,11 @@ out, and Netgen meshes the result with triangles of size ``maxh``; the material 
 
 **On the domain's own geometry** (``domain``: the netgen.occ shape the source mesh was made
 from; :func:`build_domain_geometry`): the loops' runs along the source's boundary are moved a
-margin off the domain (outward from the solid; a run's ends are first projected onto the
-domain's exact edges), the cuts inside stay splines, and the face is intersected with the
-domain (``*``, OCC's Common) without its void faces.  Wherever the solid reaches the domain's
+margin off the domain (outward from the solid), the cuts inside stay splines but end 0.25 h
+inside the domain and are joined to the moved runs by straight segments (a spline ending on the
+domain's boundary, at a grazing angle or at a vertex of the domain, made OCC's Common empty on
+the soft-finger example), and the face is intersected with the domain (``*``, OCC's Common)
+without its void faces.  Every spline's points are smoothed first (:func:`_smooth`).  Wherever the solid reaches the domain's
 boundary — a curved outline, a hole, a void chamber's wall — the part's boundary is then that
 edge itself with its name, not the source mesh's polyline; a hole of the domain inside the
 solid stays a hole with its own edge.  Measured: a half ring along the arc of a half disc (maxh
@@ -156,6 +158,34 @@ def _breaks(p, lab):
     return out
 
 
+def _smooth(run, iterations: int = 2, lam: float = 0.5, mu: float = -0.53,
+            corner: float = 40.0):
+    """Taubin's λ|μ smoothing of an open polyline (its ends fixed): removes the zig-zag of an
+    iso-line traced through the elements without shrinking it.  Measured on the jaw-gripper
+    and soft-finger designs: thinning the raw zig-zag to every ``0.6 h`` picks a biased subset
+    of its points (the part -2.2 % and +0.5 % of the thresholded area); smoothed first,
+    -0.4 % and +0.3 %."""
+    p = np.array(run, dtype=float)
+    if len(p) < 3:
+        return p
+    # corners stay: a vertex that turns by ``corner`` degrees or more the same way as a
+    # neighbour is pinned (a traced rectangle's corner, cut by one diagonal: two turns of 45
+    # degrees); the zig-zag of an iso-line turns back and forth and is smoothed
+    d = np.diff(p, axis=0)
+    turn = np.arctan2(d[:-1, 0] * d[1:, 1] - d[:-1, 1] * d[1:, 0],
+                      np.einsum("ij,ij->i", d[:-1], d[1:]))
+    sharp = np.abs(turn) >= np.radians(corner)
+    t = np.where(sharp, np.sign(turn), 0.0)
+    same = (np.r_[0.0, t[:-1]] * t > 0) | (np.r_[t[1:], 0.0] * t > 0)
+    free = np.r_[False, ~same, False]
+    for _ in range(iterations):
+        for f in (lam, mu):
+            q = p.copy()
+            q[1:-1] += f * (0.5 * (p[:-2] + p[2:]) - p[1:-1])
+            p = np.where(free[:, None], q, p)
+    return p
+
+
 def _thin(run, spacing):
     """Keep the ends of a run and interior points at least ``spacing`` apart."""
     kept = [run[0]]
@@ -184,7 +214,7 @@ def _loop_edges(loop: Loop, spacing, tol, h):
         if lab[i0] is not None or len(run) == 2:
             edges.append(occ.Segment(P[0], P[-1]))
             continue
-        thin = _thin(run, spacing)
+        thin = _thin(_smooth(run), spacing)
         if len(thin) == 2:
             edges.append(occ.Segment(P[0], P[-1]))
             continue
@@ -284,16 +314,28 @@ def _vertex_normals(P, sign):
     return nv / np.linalg.norm(nv, axis=1)[:, None]
 
 
-def _extended_loop(loop: Loop, h, curves, margin):
+def _extended_loop(loop: Loop, h, curves, margin, inset=None):
     """The point sequence of a loop whose runs along the domain boundary are moved a distance
-    ``margin`` off the domain (outward from the solid): each run's ends are projected onto
-    the exact boundary, left along the normal, and the run's vertices are offset.
+    ``margin`` off the domain (outward from the solid), with the cuts inside the domain ending
+    ``inset`` (default ``0.25 h``) inside it.
 
-    Returns ``(pieces, polygon)``: pieces ``("cut", points)`` (a run inside the domain, its ends
-    on the exact boundary) and ``("out", points)`` (a path outside the domain), and the whole
-    closed polygon for the crossing check; ``None`` for a hole that runs entirely along the
+    A run along the boundary becomes the path of its vertices offset by ``margin`` along the
+    outward normal (its ends projected onto the exact boundary first).  A cut (a run inside the
+    domain) keeps only its points at least ``inset`` from the domain's exact boundary; the wire
+    joins its first and last such point to the neighbouring offset paths by straight segments
+    (:func:`_wire_of`), so that every crossing of the domain's boundary is a straight segment
+    from a point well inside to a point ``margin`` outside.  (A spline ending *on* the
+    boundary, as before, left or re-entered the domain at a grazing angle near its end on the
+    soft-finger design -- the iso-line turns along the skin as it meets it -- and OCC's Common
+    of that face with the domain came out empty.)  A cut with no point that far inside (a
+    notch shallower than ``inset``) is dropped: the offset paths around it are joined.
+
+    Returns ``(pieces, polygon)``: pieces ``("cut", points)`` (inside the domain) and
+    ``("out", points)`` (a path outside the domain), and the whole closed polygon (the pieces'
+    points in order) for the crossing check; ``None`` for a hole that runs entirely along the
     domain boundary (the domain's own hole: the intersection with the domain restores it).
     """
+    inset = 0.25 * h if inset is None else float(inset)
     p, lab = _clean(loop.points, loop.labels, 1e-3 * h)
     on = np.array([lb is not None for lb in lab])
     # the loops are counter-clockwise: outward from the solid is the right-hand normal of an
@@ -309,45 +351,54 @@ def _extended_loop(loop: Loop, h, curves, margin):
         return [("out", np.vstack([out, out[:1]]))], out
     if not on.any():
         return [("inside", None)], p
-    pieces, poly = [], []
+    pieces = []
     for i0, i1, is_on in _runs(on):
         idx = [k % n for k in range(i0, i1 + 1)]
         run = p[idx]
         if not is_on:
-            run = run.copy()
-            run[0] = curves.project(run[0])[0]
-            run[-1] = curves.project(run[-1])[0]
-            pieces.append(("cut", run))
-            poly.append(run[:-1])
+            deep = np.flatnonzero(curves.distance(run) >= inset)
+            if len(deep):
+                pieces.append(("cut", run[deep[0]:deep[-1] + 1]))
             continue
         nv = _vertex_normals(run, sign)
         a, b = curves.project(run[0])[0], curves.project(run[-1])[0]
-        path = np.vstack([a, a + margin * nv[0], run[1:-1] + margin * nv[1:-1],
-                          b + margin * nv[-1], b])
-        pieces.append(("out", path))
-        poly.append(path[:-1])
-    return pieces, np.vstack(poly)
+        pieces.append(("out", np.vstack([a + margin * nv[0], run[1:-1] + margin * nv[1:-1],
+                                         b + margin * nv[-1]])))
+    poly = np.vstack([pts for _, pts in pieces])
+    keep = np.r_[True, np.linalg.norm(np.diff(poly, axis=0), axis=1) > 0.0]
+    return pieces, poly[keep]
 
 
 def _wire_of(pieces, spacing, tol):
+    """The closed wire of :func:`_extended_loop`'s pieces: a cut of more than one point as a
+    spline, an offset path as straight segments, consecutive pieces joined by straight
+    segments."""
     from netgen import occ
 
-    edges = []
+    def seg(a, b):
+        return occ.Segment(occ.Pnt(float(a[0]), float(a[1]), 0.0),
+                           occ.Pnt(float(b[0]), float(b[1]), 0.0))
+
+    edges, last = [], None
     for kind, pts in pieces:
-        if kind == "cut":
+        if last is not None and np.linalg.norm(pts[0] - last) > 0.0:
+            edges.append(seg(last, pts[0]))
+        if kind == "cut" and len(pts) > 1:
             edges.append(_spline(pts, spacing, tol))
-            continue
-        for a, b in zip(pts[:-1], pts[1:]):
-            if np.linalg.norm(b - a) > 0.0:
-                edges.append(occ.Segment(occ.Pnt(float(a[0]), float(a[1]), 0.0),
-                                         occ.Pnt(float(b[0]), float(b[1]), 0.0)))
+        elif kind != "cut":
+            edges.extend(seg(a, b) for a, b in zip(pts[:-1], pts[1:])
+                         if np.linalg.norm(b - a) > 0.0)
+        last = pts[-1]
+    first = pieces[0][1][0]
+    if np.linalg.norm(first - last) > 0.0:
+        edges.append(seg(last, first))
     return occ.Wire(edges)
 
 
 def _spline(run, spacing, tol):
     from netgen import occ
 
-    thin = _thin(run, spacing)
+    thin = _thin(_smooth(run), spacing)
     P = [occ.Pnt(float(x), float(y), 0.0) for x, y in thin]
     if len(P) == 2:
         return occ.Segment(P[0], P[1])
