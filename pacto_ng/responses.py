@@ -62,7 +62,7 @@ class StrainEnergy:
     def __init__(self, mech, output="se"):
         from ngsolve import BilinearForm, GridFunction, Grad, Integrate, Variation
 
-        from .physics.mechanics import FieldGradient
+        from .physics.sensitivities import FieldGradient
 
         self.mech = mech
         self.inputs = ("u",) + mech.inputs

@@ -59,6 +59,8 @@ from .body_coupling import BodyCoupling
 from .energy import EnergyTraits, traits_of
 from .linear_system import LinearSystem
 from .newton import NewtonResult, NewtonSettings, solve_with_continuation
+from .quadrature import guard_rules, integration_rules  # noqa: F401 (integration_rules: API)
+from .sensitivities import FieldGradient, FieldSensitivities  # noqa: F401 (FieldGradient: API)
 
 _UNDECLARED = object()  # a body without the attribute linear_in
 
@@ -79,57 +81,6 @@ class Supports:
     clamp: tuple[str, ...] = ()
     fix_x: tuple[str, ...] = ()
     fix_y: tuple[str, ...] = ()
-
-
-def integration_rules(order: int):
-    """The one quadrature rule used by every form of an order-``order`` displacement."""
-    from ngsolve import QUAD, TRIG, IntegrationRule
-
-    return {TRIG: IntegrationRule(TRIG, order), QUAD: IntegrationRule(QUAD, order)}
-
-
-#: reference-element points where ``det F`` is checked besides the quadrature points:
-#: vertices, edge midpoints and centroid ("J <= 0 anywhere is rejected", SPEC §3) — an
-#: element can fold at a corner while every Gauss point still sees J > 0
-_EXTRA_GUARD_POINTS = {
-    "TRIG": [(0, 0), (1, 0), (0, 1), (0.5, 0), (0.5, 0.5), (0, 0.5), (1 / 3, 1 / 3)],
-    "QUAD": [(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0), (1, 0.5), (0.5, 1), (0, 0.5), (0.5, 0.5)],
-}
-
-
-def guard_rules(rules):
-    """The quadrature points of ``rules`` plus vertices, edge midpoints and centroid."""
-    from ngsolve import QUAD, TRIG, IntegrationRule
-
-    out = {}
-    for et, key in ((TRIG, "TRIG"), (QUAD, "QUAD")):
-        pts = [tuple(p[:2]) for p in rules[et].points] + _EXTRA_GUARD_POINTS[key]
-        out[et] = IntegrationRule(pts, [0.0] * len(pts))
-    return out
-
-
-class FieldGradient:
-    """``∫ ∂L/∂field [q] dΩ`` for every test function ``q`` of a field's space, by automatic
-    differentiation: ``L(coeffs)`` (a CF) with the field replaced by its trial function is the
-    integrand of a ``Variation`` form, whose ``Apply`` at the field's values is the gradient.
-
-    Symbolic ``.Diff(field)`` of an already differentiated density blows the CF up: measured,
-    Wang, 2906 triangles, λᵀ∂R/∂ρ 4.8 s per assembly as a LinearForm of ``.Diff``, 0.07 s this
-    way, equal to 6e-16.  Used like a LinearForm: ``Assemble()``, then ``vec``.
-    """
-
-    def __init__(self, field, make_integrand, coeffs, DX):
-        from ngsolve import BilinearForm, Variation
-
-        c = dict(coeffs)
-        c[field.name] = field.space.TrialFunction()
-        self.field = field
-        self.form = BilinearForm(field.space)
-        self.form += Variation(make_integrand(c).Compile() * DX)
-        self.vec = field.gf.vec.CreateVector()
-
-    def Assemble(self):
-        self.form.Apply(self.field.gf.vec, self.vec)
 
 
 @dataclass
@@ -306,28 +257,13 @@ class Mechanics:
         self._adjoint_ready = False  # the tangent at the current state is factorised
         self._gtrial = GridFunction(self.fes)
         if guard is not None:
-            from ngsolve import QUAD, TRIG, VOL, IntegrationRule
+            from ngsolve import VOL
             self._guard_cf = guard(Grad(self._gtrial), self.coeffs).Compile()
             self._guard_pts = mesh.MapToAllElements(guard_rules(self.rules), VOL)
         # adjoint state and sensitivity forms (built once)
         self.lam = GridFunction(self.fes)
-        # λᵀ ∂R/∂field by automatic differentiation of L(field) = λᵀ R(u; field) (FieldGradient)
-        self._sens = {}
-        for f in self.fields:
-            if (self._coupling is not None and f is self._coupling.field
-                    and residual_density is None):
-                # only the body load depends on this field: λᵀ∂R/∂p = -s Bᵀλ
-                self._sens[f.name] = self._coupling
-            elif self._lin is not None and f.name in self._lin.field_names:
-                # λᵀ ∂R/∂ρ = ∫ (∂C/∂ρ ∇u) : ∇λ - s t ∂(b·λ)/∂ρ (quadratic energy, b·u linear)
-                extra = None
-                if body is not None and self._coupling is None:
-                    extra = (-self.load * self.thickness * body(self.lam, self.coeffs)).Diff(
-                        f.gf, self.one)
-                self._sens[f.name] = self._lin.field_form(f.name, self.gfu, self.lam, 1.0, extra)
-            else:
-                self._sens[f.name] = FieldGradient(f, self.adjoint_lagrangian, self.coeffs,
-                                                   self.DX)
+        # λᵀ ∂R/∂field, each field by its route (sensitivities.py)
+        self._sens = FieldSensitivities(self, self._coupling, self._lin)
         self._rhs = self.gfu.vec.CreateVector()
         self._ext = self.gfu.vec.CreateVector()
         # with only design-independent loads the load vector is fixed: its norm is computed once
@@ -654,32 +590,12 @@ class Mechanics:
         self.adjoint_solves += 1
         return lam
 
-    def _minus_sensitivity(self, f):
-        """``-λᵀ ∂R/∂field`` for the current ``u``, ``λ`` and design (the backward pass's term):
-        a numpy array for an element-wise field, else a vector of the field's space."""
-        lf = self._sens[f.name]  # a LinearForm, a FieldGradient or a BodyCoupling
-        if isinstance(lf, BodyCoupling):
-            v = f.gf.vec.CreateVector()
-            lf.adjoint_term(self.lam.vec, self.load.Get(), v)
-            return v
-        lf.Assemble()
-        if f.space is self.l2:
-            return -lf.vec.FV().NumPy().copy()
-        v = lf.vec.CreateVector()
-        v.data = -1.0 * lf.vec
-        return v
-
     def field_sensitivity(self, name) -> np.ndarray:
         """``λᵀ ∂R/∂field`` (numpy) for the current ``u`` (``gfu``), ``λ`` (``lam``) and design."""
-        if self._lin is not None:
-            self._lin.prepare_fields()
-        f = self.fields[self.inputs.index(name)]
-        g = self._minus_sensitivity(f)
+        g = self._sens.minus(self.fields[self.inputs.index(name)])
         return -(g if isinstance(g, np.ndarray) else g.FV().NumPy())
 
     def backward(self, dJdu):
         lam = self.adjoint(dJdu)
         self.lam.vec.data = lam
-        if self._lin is not None:
-            self._lin.prepare_fields()
-        return tuple(self._minus_sensitivity(f) for f in self.fields)
+        return tuple(self._sens.minus(f) for f in self.fields)
