@@ -237,7 +237,7 @@ def rebuilt(folder: Path, **changes):
     parameters (no load ramp, no machine-code forms: one analysis)."""
     import dataclasses
 
-    from pacto_ng.post.cli_commands import load_run, rebuild
+    from pacto_ng.post.runs import load_run, rebuild
     from pacto_ng.threads import compute
 
     run = load_run(folder, "extreme")

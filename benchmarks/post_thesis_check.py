@@ -46,7 +46,7 @@ def _run(model, load, maxh, out, reuse):
 
 def _reaches_output(folder, thr):
     from pacto_ng.params import InputError
-    from pacto_ng.post.cli_commands import load_run, part_of_run
+    from pacto_ng.post.runs import load_run, part_of_run
 
     run = load_run(folder, "check")
     try:
@@ -67,7 +67,7 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="write the figures here (default OUT/check.json)")
     args = ap.parse_args(argv)
     from pacto_ng.cli import main as pacto
-    from pacto_ng.post.cli_commands import compare_runs
+    from pacto_ng.post.compare import compare_runs
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -165,7 +165,7 @@ def load_result(folder: str | os.PathLike, *, case: Case | None = None,
     InputError
         The folder holds no finished run, or its case (file) is not found.
     """
-    from .post.cli_commands import load_run, rebuild
+    from .post.runs import load_run, rebuild
     from .threads import compute
 
     folder = Path(folder)

@@ -92,7 +92,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _post_parsers(sub):
-    """analyse, export, compare: from a finished run to a part (pacto_ng.post.cli_commands)."""
+    """analyse, export, compare: from a finished run to a part (pacto_ng.post.cli_commands,
+    pacto_ng.post.compare)."""
     a = sub.add_parser("analyse", help="threshold, remesh and re-analyse a finished run "
                        "(pressure cases)", description="Threshold the final design of a finished "
                        "run, remesh it with named boundaries and run Neo-Hookean analyses over a "
@@ -145,7 +146,9 @@ def _post_command(args) -> int:
     if args.command == "export":
         return pc.export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
                              maxh=args.maxh, quiet=args.quiet)
-    return pc.compare_runs(args.dirs, out=args.out, quiet=args.quiet)
+    from .post.compare import compare_runs
+
+    return compare_runs(args.dirs, out=args.out, quiet=args.quiet)
 
 
 def params_from_args(case, args) -> Parameters:

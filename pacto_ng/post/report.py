@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -189,3 +190,222 @@ def _jsonable(row: dict) -> dict:
         else:
             out[k] = v
     return out
+
+
+# -- analysis.json and report.md of 'pacto analyse' ----------------------------
+EXPECTED_DEFINITION = (
+    "the optimised density design (final x, last penalty and beta) re-analysed with the "
+    "optimisation's own model, Darcy load and output spring at inlet pressure P (load factor "
+    "P/load, Newton with load stepping, warm-started along the sweep); for a linear model this "
+    "equals the run's output displacement scaled linearly with P")
+
+
+DARCY_DEFINITION = (
+    "Darcy pressure of the thresholded design (element rho = 1 where at least half of the "
+    "element lies inside the thresholded solid, else 0) as the deformation-independent body "
+    "force -grad p, interpolated onto the remeshed solid")
+
+
+def num_or_none(v):
+    if v is None:
+        return None
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, order, choice, maxh,
+                   output, supports, p_shown, rho_thr, wall, path_note=None) -> dict:
+    rm, th = res.remeshed, res.thresholded
+    p = run.params
+    kept = th.polygon_area - rm.dropped_area
+    rows = []
+    for i, P in enumerate(pressures):
+        row = {"pressure": P, "expected": num_or_none(expected[i]["delta"]),
+               "expected_converged": expected[i]["converged"],
+               "expected_newton_iterations": expected[i]["newton_iterations"]}
+        for k in kinds:
+            pt = res.sweeps[k].points[i]
+            row[k] = {"delta": num_or_none(pt.delta), "max_u": num_or_none(pt.max_u), "min_J": num_or_none(pt.min_j),
+                      "newton_iterations": int(pt.iterations), "converged": bool(pt.converged)}
+        rows.append(row)
+    def gap(row):
+        out = {}
+        for k in kinds:
+            a, e = row[k]["delta"], row["expected"]
+            out[k] = None if a is None or e in (None, 0.0) else (a - e) / abs(e)
+        return out
+
+    gaps, gaps0 = gap(rows[-1]), gap(rows[0])
+    port_new = rm.ports.get(output.region)
+    shift = None if port_new is None else float(np.hypot(*np.subtract(port_new[1], port_new[0])))
+    return {
+        "run": {"dir": str(run.path), "case": run.case.name, "model": p.model, "load": run.load,
+                "load_unit": run.case.load_unit, "iterations": run.k, "design": run.design,
+                "stopped": run.summary.get("stopped"),
+                "output_displacement_summary": run.summary.get("output_displacement"),
+                "output_displacement_rebuilt": delta_run, "mesh_h": problem.h,
+                "load_path_note": path_note},
+        "settings": {"threshold": choice["used"],
+                     "threshold_choice": dict(choice), "maxh": maxh,
+                     "order": order, "kinds": list(kinds), "E": p.E1, "nu": p.nu,
+                     "thickness": p.thickness, "material": "Neo-Hookean, plane strain",
+                     "supports": {"clamp": list(supports.clamp), "fix_x": list(supports.fix_x),
+                                  "fix_y": list(supports.fix_y)},
+                     "supports_used": res.summary.get("supports"),
+                     "output": {"region": output.region, "direction": list(output.direction),
+                                "spring": output.stiffness},
+                     "newton_rtol": p.newton_rtol},
+        "definitions": {
+            "expected": EXPECTED_DEFINITION, "darcy": DARCY_DEFINITION,
+            "fixed": "pressure P on the wetted boundary, deformation independent",
+            "follower": "pressure P on the wetted boundary, following the deformation "
+                        "(J F^-T N0)",
+            "wetting": f"a boundary segment of the remeshed solid is wetted where it lies on the "
+                       f"inlet boundary ({'|'.join(res.summary.get('wet_boundaries', []) or [])}) "
+                       f"or where the run's final Darcy pressure one source element size "
+                       f"outside it is at least 0.5 P_in",
+            "gap": "(analysed - expected) / |expected|, at the largest and at the smallest "
+                   "pressure (there: the effect of thresholding and remeshing alone)"},
+        "areas": {"thresholded": th.area, "polygons": th.polygon_area,
+                  "removed_specks": th.removed_area, "dropped_floating": rm.dropped_area,
+                  "kept": kept, "remeshed": rm.area,
+                  "remeshed_vs_kept": (rm.area - kept) / kept if kept else None,
+                  "darcy_elements_solid": float(np.sum(rho_thr * problem.field.areas)
+                                                if hasattr(problem.field, "areas") else np.nan)},
+        "remesh": {"elements": rm.mesh.ne, "geometry": rm.geometry,
+                   "wetted_length": rm.wetted_length, "p_in": rm.p_in,
+                   "ports": {k: {"source": list(map(float, a)), "new": list(map(float, b))}
+                             for k, (a, b) in rm.ports.items()},
+                   "output_port_shift": shift},
+        "deformed_state": {"kind": res.summary.get("deformed_state"), "pressure": p_shown},
+        "pressures": rows,
+        "gap_at_largest_pressure": gaps,
+        "gap_at_smallest_pressure": gaps0,
+        "wall_time_s": wall,
+    }
+
+
+def fmt_value(v, spec=".4g"):
+    return "—" if v is None else format(v, spec)
+
+
+def short_table(data) -> str:
+    kinds = data["settings"]["kinds"]
+    head = "  P (Pa)      expected    " + "".join(f"{k:12s}" for k in kinds)
+    lines = [head]
+    for r in data["pressures"]:
+        lines.append(f"  {r['pressure']:<11.4g} {fmt_value(r['expected']):11s} " + "".join(
+            f"{fmt_value(r[k]['delta']):12s}" for k in kinds))
+    return "\n".join(lines)
+
+
+def report_md(d) -> str:
+    run, s, a, rm = d["run"], d["settings"], d["areas"], d["remesh"]
+    kinds = s["kinds"]
+    L = []
+    L.append(f"# Post-analysis of {run['case']} — {run['model']} design, optimised at "
+             f"{run['load']:.4g} {run['load_unit']}")
+    L.append("")
+    L.append(f"Run folder `{run['dir']}`; design `{run['design']}` after {run['iterations']} "
+             f"iterations (stopped: {run['stopped']}).  Rebuilt output displacement "
+             f"Δ = {fmt_value(run['output_displacement_rebuilt'], '.6g')} m "
+             f"(summary.json: {fmt_value(run['output_displacement_summary'], '.6g')} m).")
+    if run.get("load_path_note"):
+        L.append("")
+        L.append(f"**Warning**: {run['load_path_note']}.")
+    L.append("")
+    L.append("| run design ρ̄ | run Darcy pressure |")
+    L.append("|---|---|")
+    L.append("| ![design](../design.png) | ![pressure](../pressure.png) |")
+    L.append("")
+    L.append("## The part")
+    L.append("")
+    L.append(f"ρ̄ thresholded at {s['threshold']:g} (iso-line of the area-weighted nodal density) "
+             f"and remeshed with Netgen triangles of {s['maxh']:.4g} m ({rm['elements']} "
+             f"elements).")
+    geo = rm.get("geometry", "traced")
+    if geo == "domain":
+        L.append("The part runs along the case's own geometry (its curved edges, holes and "
+                 "chamber walls, with their names) wherever the solid reaches the domain's "
+                 "boundary; inside, its boundary is the traced iso-line.")
+    elif geo != "traced":
+        L.append(f"The part's boundary is traced from the thresholded polygons: {geo[8:-1]}.")
+    ch = s.get("threshold_choice")
+    if ch:
+        L.append(f"The threshold: {ch['note']}.  Material volume of the design "
+                 f"{ch['design_volume']:.6g} m², area of the part at the threshold used "
+                 f"{ch['part_area']:.6g} m².")
+    L.append("")
+    L.append("| area (m²) | value |")
+    L.append("|---|---|")
+    L.append(f"| thresholded (clipped mesh) | {a['thresholded']:.6g} |")
+    L.append(f"| polygons (specks removed: {a['removed_specks']:.3g}) | {a['polygons']:.6g} |")
+    L.append(f"| kept (floating pieces dropped: {a['dropped_floating']:.3g}) | {a['kept']:.6g} |")
+    L.append(f"| remeshed | {a['remeshed']:.6g} ({100 * a['remeshed_vs_kept']:+.2f} % of kept) |")
+    L.append("")
+    L.append(f"Wetted (`pressure`) boundary: {rm['wetted_length']:.4g} m.  Rule: "
+             f"{d['definitions']['wetting']}.")
+    sh = rm["output_port_shift"]
+    if sh is not None:
+        warn = "" if sh <= 2 * run["mesh_h"] else \
+            " **The output point moved more than two element sizes: the solid does not reach it.**"
+        L.append(f"The output point `{s['output']['region']}` sits on the nearest vertex of the "
+                 f"new mesh, {sh:.3g} m from its place in the run.{warn}")
+    L.append(f"Supports on the new mesh: {s['supports_used']}.  Output spring "
+             f"{s['output']['spring']:g} N/m along {s['output']['direction']}.")
+    L.append("")
+    L.append("## Re-analysis (Neo-Hookean, plane strain)")
+    L.append("")
+    L.append(f"E = {s['E']:g} Pa, ν = {s['nu']:g}, t = {s['thickness']:g} m, displacement order "
+             f"{s['order']}.")
+    L.append("")
+    L.append(f"* **expected** — {d['definitions']['expected']};")
+    if "darcy" in kinds:
+        L.append(f"* **darcy** (thesis §6.1.1, deformation-independent load) — "
+                 f"{d['definitions']['darcy']};")
+    if "fixed" in kinds:
+        L.append(f"* **fixed** — {d['definitions']['fixed']};")
+    if "follower" in kinds:
+        L.append(f"* **follower** (thesis §6.1.2) — {d['definitions']['follower']}.")
+    L.append("")
+    L.append("![analysis](analysis.png)")
+    L.append("")
+    head = "| P (Pa) | expected Δ (m) | " + " | ".join(f"Δ {k} (m)" for k in kinds) + \
+        " | max \\|u\\| (m) | min J | Newton its |"
+    L.append(head)
+    L.append("|" + "---|" * (4 + len(kinds)))
+    ref = "follower" if "follower" in kinds else kinds[-1]
+    for r in d["pressures"]:
+        its = "/".join(str(r[k]["newton_iterations"]) for k in kinds)
+        L.append(f"| {r['pressure']:.4g} | {fmt_value(r['expected'])} | " +
+                 " | ".join(fmt_value(r[k]["delta"]) for k in kinds) +
+                 f" | {fmt_value(r[ref]['max_u'])} | {fmt_value(r[ref]['min_J'])} | {its} |")
+    L.append("")
+    L.append(f"max |u| and min J of the {ref} analysis; Newton iterations "
+             f"{'/'.join(kinds)}; — : not converged.")
+    L.append("")
+    pct = lambda gaps: ", ".join(f"{k} {fmt_value(None if g is None else 100 * g, '+.1f')} %"
+                                 for k, g in gaps.items())
+    P = [r["pressure"] for r in d["pressures"]]
+    L.append(f"Gap to the expected Δ, (analysed − expected)/|expected|: at {P[-1]:.4g} Pa "
+             f"{pct(d['gap_at_largest_pressure'])}; at {P[0]:.4g} Pa "
+             f"{pct(d['gap_at_smallest_pressure'])} (at a small pressure the gap is what "
+             f"thresholding and remeshing change; its growth with the pressure is the "
+             f"nonlinearity the optimisation's model missed).")
+    L.append("")
+    ds = d["deformed_state"]
+    if ds["kind"] is not None:
+        L.append("## Deformed")
+        L.append("")
+        L.append(f"The {ds['kind']} analysis at {ds['pressure']:.4g} Pa, true scale, over the "
+                 f"undeformed outline:")
+        L.append("")
+        L.append("![deformed](deformed.png)")
+        L.append("")
+    L.append("## Files")
+    L.append("")
+    L.append("`analysis.json` (every number above), `analysis.csv`, `post.json`, `design.stl` "
+             "(the part, extruded by t), `remeshed.vtu` / `deformed.vtu` (u, p, J, stress, "
+             "von_mises; reference / deformed configuration), `analysis.png`, `deformed.png`.")
+    L.append("")
+    return "\n".join(L)

@@ -200,7 +200,8 @@ def test_the_part_is_built_on_the_case_geometry(pa_run, analysed):
     """The rebuilt problem's shape reaches remesh: the analysed part runs along the case's own
     edges (geometry "domain"), with their names; the half domain's symmetry line (y = 0) is
     found for the whole-mechanism pictures."""
-    from pacto_ng.post.cli_commands import load_run, run_symmetry
+    from pacto_ng.post.compare import run_symmetry
+    from pacto_ng.post.runs import load_run
 
     _, data = analysed
     assert data["remesh"]["geometry"] == "domain"

@@ -1,0 +1,217 @@
+"""``pacto compare``: designs of several runs side by side, and their analysis curves."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..params import InputError
+from .report import fmt_value
+from .runs import load_run
+
+
+# ------------------------------------------------------------------------------------------
+# pacto compare
+def _design_triangles(vtu):
+    """Points (n, 2), triangles (m, 3) with merged duplicate vertices, and the per-triangle
+    ρ̄ of a run's design.vtu (NGSolve writes every element with its own vertices)."""
+    import pyvista as pv
+
+    g = pv.read(str(vtu))
+    if "rho_bar" in g.point_data:
+        key = "rho_bar"
+    elif "rho_bar1" in g.point_data:
+        key = "rho_bar1"
+    else:
+        raise InputError(f"compare: '{vtu}' has no rho_bar field")
+    val = np.asarray(g.point_data[key], dtype=float)
+    pts = np.asarray(g.points)[:, :2]
+    scale = float(np.ptp(pts, axis=0).max()) or 1.0
+    _, first, inv = np.unique(np.round(pts / scale, 9), axis=0, return_index=True,
+                              return_inverse=True)
+    inv = inv.ravel()
+    tris, rho = [], []
+    for ctype, conn in g.cells_dict.items():
+        conn = np.asarray(conn)
+        if conn.shape[1] == 3:
+            t = conn
+        elif conn.shape[1] == 4:
+            t = np.r_[conn[:, [0, 1, 2]], conn[:, [0, 2, 3]]]
+        else:
+            continue
+        tris.append(inv[t])
+        rho.append(val[t].mean(axis=1))
+    return pts[first], np.vstack(tris), np.concatenate(rho)
+
+
+def _boundary_segments(vtu):
+    import pyvista as pv
+
+    g = pv.read(str(vtu))
+    e = g.extract_feature_edges(boundary_edges=True, non_manifold_edges=False,
+                                feature_edges=False, manifold_edges=False)
+    lines = np.asarray(e.lines).reshape(-1, 3)[:, 1:]
+    return np.asarray(e.points)[:, :2][lines]
+
+
+def run_symmetry(run):
+    """The symmetry line of a run's mesh (:func:`~pacto_ng.post.domain.symmetry_line`), from
+    the case's mesh rebuilt; None when it has none or cannot be rebuilt."""
+    from .domain import symmetry_line
+
+    try:
+        from ..case import mesh_for
+
+        meshed = mesh_for(run.case, run.params)
+        mesh = meshed.mesh if hasattr(meshed, "mesh") else meshed[0]
+        return symmetry_line(mesh)
+    except Exception:  # noqa: BLE001 - a picture without its mirror image, not an error
+        return None
+
+
+def _mirrored_design(pts, tri, rho, line):
+    """The design triangles with their mirror image about ``line`` appended."""
+    if line is None:
+        return pts, tri, rho
+    n = len(pts)
+    return (np.vstack([pts, line.reflect(pts)]), np.vstack([tri, tri[:, ::-1] + n]),
+            np.concatenate([rho, rho]))
+
+
+def _labels(runs) -> list[str]:
+    """``case model load`` per run, with the folder name where two would read the same."""
+    base = [f"{r.case.name} {r.params.model} {r.load:.3g} {r.case.load_unit}" for r, _ in runs]
+    return [b + (f" ({r.path.name})" if base.count(b) > 1 else "")
+            for b, (r, _) in zip(base, runs)]
+
+
+def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True) -> int:
+    """``pacto compare``: the designs side by side, their thresholded outlines over each other
+    (thesis Fig. 6.7) and, where ``analysis/analysis.json`` exists, their analysis curves in
+    one picture (thesis Figs 6.10/6.12).  A run solved on a symmetric half is drawn whole
+    (mirrored about its mesh's straight ``symmetry`` boundary) unless ``mirror`` is False."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.tri import Triangulation
+
+    from .export import _figure
+
+    if len(folders) < 1:
+        raise InputError("compare: give at least one run folder")
+    runs = []
+    for f in folders:
+        run = load_run(f, "compare")
+        if not (run.path / "design.vtu").exists():
+            raise InputError(f"compare: '{f}' has no design.vtu")
+        ana = run.path / "analysis" / "analysis.json"
+        runs.append((run, json.loads(ana.read_text()) if ana.exists() else None))
+    dst = Path(out) if out else Path("compare.png")
+    if dst.suffix.lower() != ".png":
+        raise InputError(f"--out: '{dst}' must end in .png")
+    try:
+        dst.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError(f"--out: cannot create '{dst.parent}' ({err.strerror})") from None
+
+    n = len(runs)
+    has_curves = any(a is not None for _, a in runs)
+    colours = ["tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown",
+               "tab:pink", "tab:gray", "tab:olive", "tab:cyan"]
+    lines = [run_symmetry(r) if mirror else None for r, _ in runs]
+    designs = [_mirrored_design(*_design_triangles(r.path / "design.vtu"), ln)
+               for (r, _), ln in zip(runs, lines)]
+    allp = np.vstack([d[0] for d in designs])
+    w, h = np.ptp(allp, axis=0)
+    aspect = h / max(w, 1e-300)
+    labels = _labels(runs)
+    ncol = min(n, 3)
+    nrow = -(-n // ncol)
+    top_h = nrow * (4.2 * aspect + 0.7)
+    bottom_h = 4.6
+    fig = _figure((12.0, top_h + bottom_h))
+    top, bottom = fig.subfigures(2, 1, height_ratios=[top_h, bottom_h])
+    for i, ((run, ana), (pts, tri, rho)) in enumerate(zip(runs, designs)):
+        ax = top.add_subplot(nrow, ncol, i + 1)
+        ax.tripcolor(Triangulation(pts[:, 0], pts[:, 1], tri), facecolors=rho, cmap="gray_r",
+                     vmin=0.0, vmax=1.0)
+        ax.set_aspect("equal")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        s = run.summary
+        delta = s.get("output_displacement")
+        extra = "" if delta is None else \
+            f"\nΔ = {delta:.3g} m, volume {s.get('volume_fraction', float('nan')):.3f}"
+        ax.set_title(labels[i] + extra, fontsize=9, color=colours[i % 10])
+    # outlines over each other (thesis Fig. 6.7)
+    ax = bottom.add_subplot(1, 2, 1) if has_curves else bottom.add_subplot(1, 1, 1)
+    for i, ((run, ana), (pts, tri, rho)) in enumerate(zip(runs, designs)):
+        c = colours[i % 10]
+        rem = run.path / "analysis" / "remeshed.vtu"
+        if rem.exists():
+            segs = _boundary_segments(rem)
+            if lines[i] is not None:
+                segs = np.concatenate([segs, lines[i].reflect(segs)])
+            ax.add_collection(LineCollection(segs, colors=c, linewidths=1.2))
+        else:
+            t = Triangulation(pts[:, 0], pts[:, 1], tri)
+            nod = np.zeros(len(pts))
+            cnt = np.zeros(len(pts))
+            e1, e2 = pts[tri[:, 1]] - pts[tri[:, 0]], pts[tri[:, 2]] - pts[tri[:, 0]]
+            area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+            for k in range(3):
+                np.add.at(nod, tri[:, k], area * rho)
+                np.add.at(cnt, tri[:, k], area)
+            ax.tricontour(t, nod / np.maximum(cnt, 1e-300), levels=[0.5], colors=[c],
+                          linewidths=1.2)
+        ax.plot([], [], color=c, label=labels[i])
+    ax.set_xlim(allp[:, 0].min(), allp[:, 0].max())
+    ax.set_ylim(allp[:, 1].min(), allp[:, 1].max())
+    ax.set_aspect("equal")
+    ax.set_title("thresholded designs (remeshed outline, else ρ̄ = 0.5)", fontsize=9)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08), frameon=False)
+    if has_curves:
+        ax = bottom.add_subplot(1, 2, 2)
+        style = {"expected": ("o", "--"), "darcy": ("s", "-"), "fixed": ("x", ":"),
+                 "follower": ("^", "-.")}
+        allpos = True
+        for i, (run, ana) in enumerate(runs):
+            if ana is None:
+                continue
+            c = colours[i % 10]
+            P = np.array([r["pressure"] for r in ana["pressures"]])
+            series = {"expected": [r["expected"] for r in ana["pressures"]]}
+            for k in ana["settings"]["kinds"]:
+                series[k] = [r[k]["delta"] for r in ana["pressures"]]
+            for k, vals in series.items():
+                v = np.array([np.nan if x is None else x for x in vals], dtype=float)
+                ok = np.isfinite(v)
+                if not ok.any():
+                    continue
+                allpos &= bool(np.all(v[ok] > 0))
+                m, ls = style.get(k, ("+", "-"))
+                ax.plot(P[ok], v[ok], marker=m, ls=ls, color=c,
+                        mfc="none" if k == "expected" else c)
+        for k, (m, ls) in style.items():
+            ax.plot([], [], marker=m, ls=ls, color="k", mfc="none" if k == "expected" else "k",
+                    label=k)
+        ax.set_xscale("log")
+        if allpos:
+            ax.set_yscale("log")
+        ax.set_xlabel("pressure (Pa)")
+        ax.set_ylabel("output displacement Δ (m)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, title="colour: run", title_fontsize=8)
+        ax.set_title("expected (optimisation) and the Neo-Hookean re-analyses", fontsize=9)
+    fig.savefig(str(dst), dpi=130)
+    if not quiet:
+        print(f"{'run':40s} {'case':12s} {'model':11s} {'load':>9s} {'Δ (m)':>11s} "
+              f"{'gap darcy':>10s} {'gap follower':>13s}")
+        for (run, ana), lab in zip(runs, labels):
+            gaps = (ana or {}).get("gap_at_largest_pressure", {})
+            g = lambda k: "—" if gaps.get(k) is None else f"{100 * gaps[k]:+.1f} %"
+            d = run.summary.get("output_displacement")
+            print(f"{str(run.path)[-40:]:40s} {run.case.name:12s} {run.params.model:11s} "
+                  f"{run.load:9.3g} {fmt_value(d, '11.4g'):>11s} {g('darcy'):>10s} "
+                  f"{g('follower'):>13s}")
+        print(f"picture: {dst}")
+    return 0

@@ -1,0 +1,169 @@
+"""A finished run folder read back: its case, parameters, summary and final design
+(:func:`load_run`), its problem rebuilt with that design analysed (:func:`rebuild`), and the
+thresholded, remeshed part of it (:func:`part_of_run`)."""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..params import InputError, Parameters
+from ..threads import compute
+
+
+# ------------------------------------------------------------------------------------------
+# a finished run
+@dataclass
+class Run:
+    """A finished run folder: its case, parameters, summary and final design."""
+
+    path: Path
+    case: object
+    params: Parameters
+    summary: dict
+    x: np.ndarray
+    design: str  # "x" or "last_good"
+    k: int  # optimisation iterations done
+
+    @property
+    def load(self) -> float:
+        return float(self.params.load)
+
+
+def load_run(folder, command: str, case=None) -> Run:
+    """Read ``params.json``, ``summary.json`` and ``checkpoint.npz``; InputError if anything
+    that a finished run holds is missing."""
+    from ..case import case_of_run
+
+    path = Path(folder)
+    if not path.is_dir():
+        raise InputError(f"{command}: '{folder}' is not a folder")
+    try:
+        info = json.loads((path / "params.json").read_text())
+        if not isinstance(info, dict) or "case" not in info:
+            raise ValueError("no case named")
+    except (OSError, ValueError):
+        raise InputError(f"{command}: '{folder}' holds no run (params.json missing or "
+                         f"unreadable)") from None
+    if case is None:  # an error in a user's case file is shown as itself
+        case = case_of_run(info, command)
+    elif case.name != info["case"]:
+        raise InputError(f"{command}: '{folder}' is a run of '{info['case']}', not of "
+                         f"'{case.name}'")
+    try:
+        params = case.parameters(info["params"])
+    except (KeyError, TypeError) as err:
+        raise InputError(f"{command}: '{path / 'params.json'}' has no valid parameters "
+                         f"({err})") from None
+    if case.analysis_only:
+        raise InputError(f"{command}: '{folder}' is an analysis case ({case.name}), not an "
+                         f"optimised design")
+    try:
+        summary = json.loads((path / "summary.json").read_text())
+    except (OSError, ValueError):
+        raise InputError(f"{command}: '{folder}' holds no finished run (summary.json missing: "
+                         f"still running, or stopped before its first result)") from None
+    try:
+        with np.load(path / "checkpoint.npz", allow_pickle=False) as data:
+            use_last_good = summary.get("stopped") == "newton" and "last_good" in data.files
+            design = "last_good" if use_last_good else "x"
+            x = np.asarray(data[design], dtype=float).copy()
+            k = int(data["k"])
+    except (OSError, ValueError, KeyError):
+        raise InputError(f"{command}: '{folder}' has no readable checkpoint.npz (the final "
+                         f"design)") from None
+    return Run(path, case, params, summary, x, design, k)
+
+
+def rebuild(run: Run):
+    """The run's problem with its final design analysed at the run's load (as ``run.py`` does
+    for summary.json).  Returns the problem; ``problem.values`` hold ρ̄, p and Δ."""
+    from ..case import build_problem
+    from ..physics.mechanics import NewtonFailure
+
+    problem = build_problem(run.case, run.params)
+    if run.x.size != problem.field.n * problem.n_design_fields:
+        raise InputError(f"the design in '{run.path}' has {run.x.size} values, the rebuilt "
+                         f"problem {problem.field.n * problem.n_design_fields} (mesh changed?)")
+    problem.apply_schedule(*run.params.schedule.schedule().values(max(run.k - 1, 0)))
+    problem.failure = None
+    try:
+        problem.chain.forward(x=run.x)
+    except NewtonFailure as err:
+        # a run stopped by a Newton failure: ρ̄ and the Darcy field are computed before the
+        # mechanics (the chain keeps its values as they fill); Δ at the full load is not
+        problem.failure = str(err)
+        if "rho_bar" not in problem.values and "rho_bar1" not in problem.values:
+            raise InputError(f"the final design of '{run.path}' cannot be analysed ({err})") \
+                from None
+    return problem
+
+
+def domain_of(problem, setup):
+    """``(shape, exclude)``: the netgen.occ shape the problem's mesh was made from (None for a
+    mesh file or structured quads) and, with a shape, the passive void faces to leave out of
+    the thresholding (the part is built on the shape's own edges; see
+    :func:`~pacto_ng.post.remesh.remesh`)."""
+    shape = getattr(problem, "shape", None)
+    if shape is None:
+        return None, ()
+    faces = {f.name for f in shape.faces}
+    return shape, tuple(n for n in getattr(setup, "void", ()) if n in faces)
+
+
+def thresholded_elements(th) -> np.ndarray:
+    """Element ρ in {0, 1} of the thresholded design: 1 where at least half of the element's
+    area lies inside the clipped solid of :func:`~pacto_ng.post.threshold.threshold` (0 in the
+    materials it left out)."""
+    from .threshold import _cell_areas, element_materials, mesh_to_pyvista
+
+    grid = mesh_to_pyvista(th.source)
+    grid.point_data["rho"] = th.nodal
+    grid.cell_data["cid"] = np.arange(grid.n_cells)
+    solid = grid.clip_scalar(scalars="rho", value=th.threshold, invert=False)
+    inside = np.bincount(np.asarray(solid.cell_data["cid"]), weights=_cell_areas(solid),
+                         minlength=grid.n_cells)
+    out = (inside >= 0.5 * _cell_areas(grid)).astype(float)
+    if th.excluded:
+        out[np.isin(element_materials(th.source), list(th.excluded))] = 0.0
+    return out
+
+
+def copy_gridfunction(gf):
+    from ngsolve import GridFunction
+
+    out = GridFunction(gf.space)
+    out.vec.data = gf.vec
+    return out
+
+
+def _design_density(problem) -> np.ndarray:
+    """ρ̄ of the design; for two materials the total solid ρ̄1."""
+    vals = problem.values
+    return np.asarray(vals["rho_bar"] if "rho_bar" in vals else vals["rho_bar1"], dtype=float)
+
+
+def part_of_run(run: Run, threshold_value: float, maxh: float | None):
+    """Threshold and remesh the final design of a run (the wetting rule for pressure cases).
+    Returns ``(Thresholded, Remeshed, problem)``; InputError when there is no part."""
+    from .remesh import remesh
+    from .threshold import threshold
+
+    setup = run.case.make_setup(run.params)
+    with compute():
+        problem = rebuild(run)
+    rho = _design_density(problem)
+    shape, exclude = domain_of(problem, setup)
+    kw = {}
+    if setup.pressure is not None and problem.pressure_block is not None:
+        kw = dict(pressure=copy_gridfunction(problem.pressure_block.gfp), p_in=run.load,
+                  wet_boundaries=setup.pressure.inlet)
+    h = 0.5 * problem.h if maxh is None else maxh
+    try:
+        th = threshold(problem.mesh, rho, threshold_value, exclude=exclude)
+        rm = remesh(th, h, clamp=setup.supports.clamp, domain=shape, **kw)
+    except ValueError as err:
+        raise InputError(f"{err}") from None
+    return th, rm, problem
