@@ -76,8 +76,7 @@ def _progress(row: dict, total: int) -> str:
 def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
     arrays = dict(k=state.k, x=state.x, scale=np.nan if state.scale is None else state.scale,
                   stable=state.stable, history=json.dumps(state.history),
-                  u=problem.mech.gfu.vec.FV().NumPy().copy(),
-                  warm=bool(problem.mech.result is not None and problem.mech.result.converged),
+                  u=problem.mech.state, warm=problem.mech.state_converged,
                   load_cap=state.load_cap)
     if state.last_good is not None:
         arrays["last_good"] = state.last_good
@@ -90,8 +89,6 @@ def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
 
 
 def load_checkpoint(path: Path, problem: Problem) -> LoopState:
-    from .physics.newton import NewtonResult
-
     with np.load(path, allow_pickle=False) as data:
         opt = {key[4:]: (data[key] if data[key].ndim else float(data[key]))
                for key in data.files if key.startswith("opt_")}
@@ -103,8 +100,7 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
                           load_cap=float(data["load_cap"]) if "load_cap" in data.files else 1.0)
         u = data["u"]
         if u.size == problem.mech.gfu.vec.size and bool(data["warm"]):
-            problem.mech.gfu.vec.FV().NumPy()[:] = u
-            problem.mech.result = NewtonResult(True, load_reached=1.0)
+            problem.mech.set_state(u, converged=True)
     return state
 
 
@@ -173,8 +169,8 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
     # final analysis of the design that is reported (the schedule's last values)
     k_last = max(state.k - 1, 0)
     problem.apply_schedule(*params.schedule.schedule().values(k_last))
-    u_last, res_last = problem.mech.gfu.vec.CreateVector(), problem.mech.result
-    u_last.data = problem.mech.gfu.vec  # the last iteration's equilibrium (a warm start)
+    # the last iteration's equilibrium (a warm start)
+    u_last, res_last = problem.mech.state, problem.mech.result
     try:
         problem.evaluate(final_x, gradients=False)
     except NewtonFailure as err:
@@ -182,8 +178,8 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         result.message += f"; the final analysis at the full load failed ({err})"
         last = state.history[-1]["load"] if state.history else 1.0
         if params.load_adapt and last < 1.0:  # report the design at the load it carried
-            problem.mech.gfu.vec.data = u_last
-            problem.mech.result = res_last
+            problem.mech.set_state(u_last, converged=res_last is not None and res_last.converged,
+                                   result=res_last)
             problem.mech.target = last
             final_x = state.last_good if state.last_good is not None else final_x
             try:

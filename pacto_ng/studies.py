@@ -88,17 +88,17 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
     wang_beta, wang_eta : float
         ``β1``, ``η1`` of eq. 5.2 (γ is 1 in the C and 0 in the void to round-off for any of them).
     """
-    from ngsolve import Grad
-
-    from .interpolation import simp_cf
-    from .mesh import netgen_mesh, structured_mesh
-    from .physics.loads import PointLoad
-    from .physics.materials import get_material, jacobian
-    from .physics.mechanics import Mechanics, Supports
-    from .physics.newton import NewtonSettings, solve_with_continuation
-    from .physics.wang import wang_model
+    from ngsolve import QUAD, TRIG, VOL, Grad, Parameter
 
     from .geometries.c_beam import layout as c_beam_layout
+    from .mesh import netgen_mesh, structured_mesh
+    from .params import Parameters
+    from .physics.energy import make_energy
+    from .physics.loads import PointLoad
+    from .physics.materials import jacobian
+    from .physics.mechanics import Mechanics, Supports
+    from .physics.newton import NewtonSettings, solve_with_continuation
+    from .physics.quadrature import guard_rules
 
     layout = c_beam_layout(loads_on=loads_on)
     if mesh == "quad":
@@ -108,17 +108,9 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
         msh = netgen_mesh(layout, h)
     else:
         raise ValueError("mesh must be 'quad' or 'trig'")
-    E0 = E0_ratio * E1
-    modulus = lambda c: simp_cf(c["rho_bar"], E0, E1, 3.0)
-    if model == "wang":
-        energy, guard = wang_model(modulus, nu, "strain", "rho_bar", 3.0, beta=wang_beta,
-                                   eta=wang_eta)
-        linear = False
-    else:
-        mat = get_material(model)
-        energy = lambda G, c: mat.energy(G, modulus(c), nu, "strain")
-        guard = (lambda G, c: jacobian(G)) if mat.needs_positive_J else None
-        linear = mat.linear
+    material = Parameters(model=model, E1=E1, E0=E0_ratio * E1, nu=nu, plane="strain",
+                          wang_beta=wang_beta, wang_eta=wang_eta)
+    energy, guard, linear = make_energy(material, Parameter(3.0))
     settings = NewtonSettings(rtol=1e-10, max_iter=30, initial_increment=first_step / lam_max,
                               min_increment=resolution / lam_max, max_steps=2000,
                               line_search=line_search)
@@ -129,15 +121,7 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
     mech.set_fields(solid.astype(float))
 
     # det F sampled densely: integration points, vertices, edge midpoints and centroid
-    from ngsolve import QUAD, TRIG, VOL, IntegrationRule
-
-    extra = {TRIG: [(0, 0), (1, 0), (0, 1), (0.5, 0), (0.5, 0.5), (0, 0.5), (1 / 3, 1 / 3)],
-             QUAD: [(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0), (1, 0.5), (0.5, 1), (0, 0.5),
-                    (0.5, 0.5)]}
-    rules = {}
-    for et, ir in mech.rules.items():
-        pts_ = [tuple(p[:2]) for p in ir.points] + extra[et]
-        rules[et] = IntegrationRule(pts_, [0.0] * len(pts_))
+    rules = guard_rules(mech.rules)
     Jcf = jacobian(Grad(mech.gfu))
     pts = msh.MapToAllElements(rules, VOL)
     per_el = len(rules[QUAD if mesh == "quad" else TRIG].points)

@@ -347,6 +347,7 @@ def darcy_body(p_name: str = "p"):
                              f"(fields: {', '.join(coeffs)})")
         return InnerProduct(-grad(coeffs[p_name]), u)
 
+    body.linear_in = p_name  # declared: the load is linear in the pressure field (B p)
     return body
 
 

@@ -102,8 +102,7 @@ def expected_sweep(problem, x, pressures, load) -> list[dict]:
     from ..physics.mechanics import NewtonFailure
 
     mech = problem.mech
-    mech.gfu.vec[:] = 0.0
-    mech.result = None
+    mech.set_state(np.zeros_like(mech.state), converged=False)
     rows, failed = [], False
     with compute():
         for P in pressures:

@@ -31,6 +31,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..physics.energy import declare
 from ..physics.materials import jacobian, neohookean_energy
 from ..physics.mechanics import Mechanics, NewtonFailure, Supports
 from ..physics.newton import NewtonSettings
@@ -266,7 +267,8 @@ class Reanalysis:
             b = body(mesh)
             self.body_pressure = float(body_pressure)
             bodyf = lambda u, coeffs: (self.P / self.body_pressure) * InnerProduct(b, u)
-        energy = lambda G, coeffs: neohookean_energy(G, self.E, self.nu, "strain")
+        energy = declare(lambda G, coeffs: neohookean_energy(G, self.E, self.nu, "strain"),
+                         reads=(), stress_free=True)
         self.mech = Mechanics(mesh, order=order, energy=energy, fields=(), supports=supports,
                               loads=loads, springs=springs, body=bodyf, thickness=thickness,
                               guard=lambda G, coeffs: jacobian(G), newton=newton,
