@@ -239,8 +239,10 @@ def check_setup_names(mesh, setup, *, extra_boundaries=()) -> None:
     if "design" in set(setup.solid) | set(setup.void):
         raise InputError("setup: 'design' is the design domain; it cannot be passive")
     sup = setup.supports
+    if sup.fix_z and mesh.dim < 3:
+        raise InputError(f"setup: fix_z support on a {mesh.dim}D geometry")
     for role, names in (("clamp", sup.clamp), ("fix_x support", sup.fix_x),
-                        ("fix_y support", sup.fix_y)):
+                        ("fix_y support", sup.fix_y), ("fix_z support", sup.fix_z)):
         for name in names:
             need("boundary or point", role, name)
     for ld in setup.loads:

@@ -46,7 +46,8 @@ from dataclasses import dataclass
 from ..interpolation import heaviside_deriv_np, heaviside_np
 from ..params import InputError
 from ..settings import Settings, setting
-from .mechanics import Field, integration_rules
+from .mechanics import Field
+from .quadrature import integration_rules
 
 __all__ = ["DarcySettings", "DarcyPressure", "darcy_body", "darcy_follower", "pressure_field", "Compliance",
            "DarcyCompliance", "for_case"]

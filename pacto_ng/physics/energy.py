@@ -5,10 +5,13 @@ assembly."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from ..params import InputError
 from ..settings import Settings, setting
+
+if TYPE_CHECKING:
+    from ..params import Parameters
 
 
 class DeclarationError(ValueError):

@@ -59,8 +59,8 @@ from .body_coupling import BodyCoupling
 from .energy import EnergyTraits, traits_of
 from .linear_system import LinearSystem
 from .newton import NewtonResult, NewtonSettings, solve_with_continuation
-from .quadrature import guard_rules, integration_rules  # noqa: F401 (integration_rules: API)
-from .sensitivities import FieldGradient, FieldSensitivities  # noqa: F401 (FieldGradient: API)
+from .quadrature import guard_rules, integration_rules
+from .sensitivities import FieldSensitivities
 
 _UNDECLARED = object()  # a body without the attribute linear_in
 
@@ -76,11 +76,24 @@ class NewtonFailure(RuntimeError):
 
 @dataclass(frozen=True)
 class Supports:
-    """Dirichlet conditions by region name (boundaries or named points)."""
+    """Dirichlet conditions by region name (boundaries or named points): ``clamp`` fixes
+    every displacement component (as many as the mesh has dimensions), ``fix_x``, ``fix_y``,
+    ``fix_z`` one component each (``fix_z``: 3D meshes only)."""
 
     clamp: tuple[str, ...] = ()
     fix_x: tuple[str, ...] = ()
     fix_y: tuple[str, ...] = ()
+    fix_z: tuple[str, ...] = ()
+
+    def names(self) -> tuple[str, ...]:
+        """Every region the supports name."""
+        return self.clamp + self.fix_x + self.fix_y + self.fix_z
+
+    def per_component(self, dim: int) -> list[tuple[str, ...]]:
+        """The regions fixed in each of the ``dim`` displacement components."""
+        if dim < 3 and self.fix_z:
+            raise ValueError(f"fix_z: the mesh is {dim}D (regions {', '.join(self.fix_z)})")
+        return [self.clamp + fix for fix in (self.fix_x, self.fix_y, self.fix_z)[:dim]]
 
 
 @dataclass
@@ -113,7 +126,8 @@ class Mechanics:
     body : callable ``(u, coeffs) -> CF`` or None
         Body-force potential density ``b·u`` per unit volume (scaled by the load factor),
         linear in ``u``.  Its attribute ``linear_in`` (a field name, or None) declares the one
-        field it reads, linearly (the load vector is then ``B p``, see
+        field it reads, linearly (the load vector is then ``B p`` when the energy declares it
+        does not read that field too, see
         :class:`~pacto_ng.physics.body_coupling.BodyCoupling`); without the attribute that
         field is the one field on its own space (not element-wise) that the energy declares it
         does not read, if there is exactly one.  Verified when the block is built
@@ -183,19 +197,17 @@ class Mechanics:
         self.fields = [f if isinstance(f, Field) else Field(f) for f in fields]
         self.inputs = tuple(f.name for f in self.fields)
         self.output = output
-        for name in supports.clamp + supports.fix_x + supports.fix_y:
+        for name in supports.names():
             if name not in mesh.GetBoundaries() and name not in mesh.GetBBoundaries():
                 raise ValueError(f"support region '{name}' is not a boundary or point of the mesh")
-        join = lambda names: "|".join(names)
         kw = {}
-        bx = [n for n in supports.clamp + supports.fix_x if n in mesh.GetBoundaries()]
-        by = [n for n in supports.clamp + supports.fix_y if n in mesh.GetBoundaries()]
-        px = [n for n in supports.clamp + supports.fix_x if n in mesh.GetBBoundaries()]
-        py = [n for n in supports.clamp + supports.fix_y if n in mesh.GetBBoundaries()]
-        if bx: kw["dirichletx"] = join(bx)
-        if by: kw["dirichlety"] = join(by)
-        if px: kw["dirichletx_bbnd"] = join(px)
-        if py: kw["dirichlety_bbnd"] = join(py)
+        for axis, names in zip("xyz", supports.per_component(mesh.dim)):
+            on_bnd = [n for n in names if n in mesh.GetBoundaries()]
+            on_bbnd = [n for n in names if n in mesh.GetBBoundaries()]
+            if on_bnd:
+                kw[f"dirichlet{axis}"] = "|".join(on_bnd)
+            if on_bbnd:
+                kw[f"dirichlet{axis}_bbnd"] = "|".join(on_bbnd)
         self.fes = VectorH1(mesh, order=order, **kw)
         self.free = np.array(list(self.fes.FreeDofs()), dtype=bool)
         if self.free.all():
@@ -295,7 +307,9 @@ class Mechanics:
         if declared is not _UNDECLARED:
             for f in self.fields:
                 if f.name == declared:
-                    return f
+                    # B p is the whole of the field's part of the residual only if the energy
+                    # does not read the field too (an undeclared energy may)
+                    return None if self._reads[f.name] else f
             raise ValueError(f"body.linear_in: '{declared}' is not a field of the block "
                              f"(fields: {', '.join(self.inputs)})")
         candidates = [f for f in self.fields

@@ -20,6 +20,7 @@ kind that converged somewhere).
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
@@ -156,8 +157,7 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         "ports": {k: {"source": list(map(float, a)), "new": list(map(float, b))}
                   for k, (a, b) in rm.ports.items()},
         "elements": rm.mesh.ne, "geometry": rm.geometry, "order": order, "E": E, "nu": nu, "thickness": thickness,
-        "supports": {"clamp": list(supports.clamp), "fix_x": list(supports.fix_x),
-                     "fix_y": list(supports.fix_y)},
+        "supports": dataclasses.asdict(supports),
         "wet_boundaries": list(wet_boundaries),
         "output": {"region": output.region, "direction": list(output.direction),
                    "stiffness": output.stiffness},
@@ -175,8 +175,7 @@ def _present(supports: Supports, mesh) -> Supports:
     guaranteed by :func:`~.remesh.remesh`."""
     names = set(mesh.GetBoundaries()) | set(mesh.GetBBoundaries())
     keep = lambda group: tuple(n for n in group if n in names)
-    return Supports(clamp=keep(supports.clamp), fix_x=keep(supports.fix_x),
-                    fix_y=keep(supports.fix_y))
+    return Supports(**{k: keep(v) for k, v in dataclasses.asdict(supports).items()})
 
 
 def _jsonable(row: dict) -> dict:
@@ -249,8 +248,7 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
                      "threshold_choice": dict(choice), "maxh": maxh,
                      "order": order, "kinds": list(kinds), "E": p.E1, "nu": p.nu,
                      "thickness": p.thickness, "material": "Neo-Hookean, plane strain",
-                     "supports": {"clamp": list(supports.clamp), "fix_x": list(supports.fix_x),
-                                  "fix_y": list(supports.fix_y)},
+                     "supports": dataclasses.asdict(supports),
                      "supports_used": res.summary.get("supports"),
                      "output": {"region": output.region, "direction": list(output.direction),
                                 "spring": output.stiffness},
