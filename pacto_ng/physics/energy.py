@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Callable
 
 from ..params import InputError
 from ..settings import Settings, setting
+from .materials import MODELS
 
 if TYPE_CHECKING:
     from ..params import Parameters
@@ -135,8 +136,8 @@ class MaterialSettings(Settings):
     """The mechanics model and the material: moduli, Poisson's ratio, plane model, thickness,
     and the Wang interpolation's parameters."""
 
-    model: str = setting("linear", "", "mechanics: linear | gnl | neohookean | wang | auto",
-                         choices=("linear", "gnl", "neohookean", "wang", "auto"))
+    model: str = setting("linear", "", "mechanics: " + " | ".join(MODELS + ("auto",)),
+                         choices=MODELS + ("auto",))
     plane: str = setting("strain", "", "strain | stress", choices=("strain", "stress"))
     thickness: float = setting(1e-3, "m", "out-of-plane thickness t", range="(0, inf)")
     E1: float = setting(3e9, "Pa", "Young's modulus of the solid (soft material with two "

@@ -26,9 +26,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-MODELS = ("linear", "gnl", "neohookean", "wang")
-
-
 def lame(E, nu, plane: str = "strain"):
     """Lamé constants (μ, λ); plane stress returns the reduced λ*."""
     mu = E / (2.0 * (1.0 + nu))
@@ -206,6 +203,10 @@ MATERIALS = {
     "neohookean": Material("neohookean", neohookean_energy, needs_positive_J=True, linear=False,
                            stress_free=True, proportional_to_E=True),
 }
+
+#: the mechanics models: every material, and the Wang interpolation of the hyperelastic one
+#: with the linear one (physics/wang.py)
+MODELS = tuple(MATERIALS) + ("wang",)
 
 
 def get_material(name: str) -> Material:
