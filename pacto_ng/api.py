@@ -120,8 +120,8 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
     Returns
     -------
     Result
-        The finished run, its final design analysed again (``exit_code`` 1 when a Newton
-        failure stopped it: the last good design).
+        The finished run, its reported design analysed (``exit_code`` 1 when a Newton failure
+        stopped it: the last good design).
 
     Raises
     ------
@@ -134,14 +134,14 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
     >>> result = run("my_case.py", out="output/mine", iterations=10)   # doctest: +SKIP
     >>> result.objective, result.summary["volume_fraction"]             # doctest: +SKIP
     """
-    from .runner import run_case
+    from .runner import optimise_case
 
     if not isinstance(case, Case):
         case = get_case(os.fspath(case))
     params = case_parameters(case, settings)
     folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=f"pacto-{case.name}-"))
-    code = run_case(case, params, folder, quiet=quiet)
-    return load_result(folder, case=case, exit_code=code)
+    done = optimise_case(case, params, folder, quiet=quiet)
+    return Result(folder, done.exit_code, done.summary, done.history, done.x, done.problem)
 
 
 def load_result(folder: str | os.PathLike, *, case: Case | None = None,

@@ -100,7 +100,9 @@ def _finite(name, arr):
         raise RuntimeError(f"{name} has non-finite values: nothing written")
 
 
-def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, result, wall: float):
+def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, result,
+                  wall: float) -> dict:
+    """Write the run's results into ``path``; returns the summary (summary.json)."""
     from .post.plots import convergence_png, density_png, materials_png, pressure_png
 
     summ = summary_dict(problem, history, result, wall)
@@ -123,6 +125,7 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
         materials_png(path / "materials.png", problem)
     if history:
         convergence_png(path / "convergence.png", history, problem.objective)
+    return summ
 
 
 def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):

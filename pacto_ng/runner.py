@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -105,11 +106,29 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
 
 
 # ------------------------------------------------------------------------------------------
+@dataclass
+class Finished:
+    """A finished run: its exit code, the problem with the reported design analysed, that
+    design, the history and the summary (as written to the run's folder)."""
+
+    exit_code: int
+    problem: Problem
+    x: np.ndarray
+    history: list
+    summary: dict
+
+
 def run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
              resume: bool = False) -> int:
     """Optimise ``case`` with ``params``, writing the output folder.  Returns the exit code:
-    0 finished (converged or iteration limit), 1 stopped by a Newton failure.  Runs inside
-    NGSolve's task manager (:func:`pacto_ng.threads.compute`)."""
+    0 finished (converged or iteration limit), 1 stopped by a Newton failure."""
+    return optimise_case(case, params, out, quiet=quiet, resume=resume).exit_code
+
+
+def optimise_case(case: Case, params: Parameters, out: str | os.PathLike, *,
+                  quiet: bool = False, resume: bool = False) -> Finished:
+    """:func:`run_case`, returning the :class:`Finished` run.  Runs inside NGSolve's task
+    manager (:func:`pacto_ng.threads.compute`)."""
     from .threads import compute
 
     with compute():
@@ -117,7 +136,7 @@ def run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: b
 
 
 def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
-              resume: bool = False) -> int:
+              resume: bool = False) -> Finished:
     path = prepare_output(out)
     t_start = time.perf_counter()
     if resume and (path / "summary.json").exists():  # a finished run continued: add its time
@@ -189,10 +208,10 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
             except NewtonFailure:
                 pass
     wall = time.perf_counter() - t_start
-    write_outputs(path, problem, final_x, state.history, result, wall)
+    summary = write_outputs(path, problem, final_x, state.history, result, wall)
     if not quiet or failed:
         print(("run stopped: " if failed else "") + result.message + f" — output in {path}")
-    return 1 if failed else 0
+    return Finished(1 if failed else 0, problem, final_x, state.history, summary)
 
 
 def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int | None = None) -> int:
