@@ -66,7 +66,7 @@ CASE = pn.Case(
         E1=1e8, E0=1e2, nu=0.4, volfrac=0.35, filter_radius=0.004,
         penal_start=1.0, penal_step=0.04, beta=1.0, beta_max=16.0, beta_every=15,
         eta_k=0.2, eta_h=0.3, delta_s=0.002, load=1e5, k_out=1e4,
-        iterations=100, move=0.05),
+        iterations=160, move=0.05),
     geometry=geometry,
     setup=setup,
     load_unit="Pa",

@@ -60,7 +60,7 @@ CASE = pn.Case(
         model="linear", maxh=0.0035, plane="strain", thickness=1e-3, E1=1e8, E0=1e2, nu=0.4,
         volfrac=0.25, filter="helmholtz", filter_radius=0.008, penal=3.0, penal_start=1.0,
         penal_step=0.04, beta=1.0, beta_max=16.0, beta_every=15, eta_k=0.2, eta_h=0.3,
-        delta_s=0.002, load=1e5, k_out=1e4, iterations=100, move=0.05, tol=0.01),
+        delta_s=0.002, load=1e5, k_out=1e4, iterations=160, move=0.05, tol=0.01),
     geometry=geometry,
     setup=setup,
     load_unit="Pa",
