@@ -73,7 +73,7 @@ def parse_pressures(text: str) -> list[float]:
 
 def check_threshold(value, *, allow_volume: bool = False):
     """A threshold in (0, 1), or (with ``allow_volume``) the word ``volume``: the
-    volume-preserving threshold of :func:`~pacto_ng.post.threshold.volume_threshold`."""
+    volume-preserving threshold of :func:`~pacto_ng.post.threshold_choice.volume_threshold`."""
     if isinstance(value, str):
         if value.strip().lower() == "volume":
             if not allow_volume:
@@ -169,58 +169,13 @@ def load_path_note(rebuilt, summary, rtol: float = 1e-4):
             f"more than one equilibrium at this load, and Δ below is read on the path from rest")
 
 
-def choose_threshold(mesh, rho, requested, output_region: str, clamp, *,
-                     connect: bool = True, exclude=()):
-    """The threshold ``pacto analyse`` uses, and why: ``(record, Thresholded at it)``.
-
-    ``requested`` is a number in (0, 1) or ``"volume"`` (the volume-preserving threshold).
-    With ``connect``, when the part kept on the clamp at that threshold does not contain the
-    output point, the threshold is lowered to the largest value (down to 0.1, to within 0.005)
-    at which it does: a joint to the output that is still grey is kept, at the price of the
-    grey material around it.  The record says what was asked, what was used, the design's
-    material volume and the area of the part at the threshold used.  ``exclude``: materials
-    left out of the thresholding (:func:`~pacto_ng.post.threshold.threshold`).
-    """
-    from .remesh import _source_points
-    from .threshold import (connecting_threshold, design_volume, part_contains, threshold,
-                            volume_threshold)
-
-    start = volume_threshold(mesh, rho) if requested == "volume" else float(requested)
-    port = _source_points(mesh).get(output_region)
-    rec = {"requested": requested, "start": start, "used": start, "lowered": False,
-           "missed": False, "connect": bool(connect), "design_volume": design_volume(mesh, rho)}
-    what = (f"threshold {start:.4g} (volume-preserving)" if requested == "volume"
-            else f"threshold {start:g}")
-    if port is None or not connect:
-        th = threshold(mesh, rho, start, exclude=exclude)
-        rec["reaches_output"] = None if port is None else part_contains(th, port, clamp)
-        rec["note"] = what + ("" if port is None else
-                              (": the part on the clamp contains the output point"
-                               if rec["reaches_output"] else
-                               ": the part on the clamp does not contain the output point "
-                               "(not lowered: --keep-threshold)"))
-    else:
-        used, th = connecting_threshold(mesh, rho, start, port, clamp, exclude=exclude)
-        if used is None:
-            rec.update(missed=True, reaches_output=False)
-            rec["note"] = (f"{what}: the part on the clamp does not contain the output point, "
-                           f"nor at threshold 0.1; analysed at {start:.4g}")
-        else:
-            rec.update(used=used, lowered=used < start, reaches_output=True)
-            rec["note"] = (what + ": the part on the clamp contains the output point"
-                           if used == start else
-                           f"{what} lowered to {used:.4g}: above it the part on the clamp "
-                           f"does not contain the output point (a grey joint)")
-    rec["part_area"] = th.area
-    return rec, th
-
-
 def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
                 order: int = 2, kinds=KINDS, quiet: bool = False, connect: bool = True) -> int:
     """``pacto analyse``: see the module docstring.  Returns the exit code (0)."""
     from .remesh import pressure_sampler
     from .report import post_analyse
     from .threshold import threshold
+    from .threshold_choice import choose_threshold
 
     threshold_value = check_threshold(threshold_value, allow_volume=True)
     if maxh is not None and not maxh > 0:
@@ -276,7 +231,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
 
     supports = setup.supports
     shape, exclude = domain_of(problem, setup)
-    choice, th = choose_threshold(problem.mesh, rho, threshold_value, output.region,
+    choice, th = choose_threshold(problem.mesh, rho, threshold_value, [output.region],
                                   supports.clamp, connect=connect, exclude=exclude)
     threshold_value = choice["used"]
     # (a part that still misses the output is reported once the part is built: the warning on

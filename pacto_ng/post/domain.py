@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .boundary import segment_distance
+
 SYMMETRY = "symmetry"
 
 
@@ -54,13 +56,6 @@ def material_domain(shape, void=()):
 
 
 # ---------------------------------------------------------------------------------------
-def _segment_distance(p, a, b):
-    d = b - a
-    dd = np.einsum("...k,...k->...", d, d)
-    lam = np.clip(np.einsum("...k,...k->...", p - a, d) / np.where(dd > 0, dd, 1.0), 0.0, 1.0)
-    return np.linalg.norm(a + lam[..., None] * d - p, axis=-1)
-
-
 class BoundaryCurves:
     """The boundary edges of a 2D netgen.occ region, sampled at spacing about ``spacing``.
 
@@ -153,7 +148,7 @@ class BoundaryCurves:
         k = min(8, len(seg))
         _, idx = cKDTree(seg.mean(axis=1)).query(self.points, k=k)
         idx = idx.reshape(len(self.points), k)
-        d = _segment_distance(self.points[:, None, :], seg[idx, 0], seg[idx, 1]).min(axis=1)
+        d = segment_distance(self.points[:, None, :], seg[idx, 0], seg[idx, 1]).min(axis=1)
         return float(d.max())
 
 

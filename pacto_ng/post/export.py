@@ -42,7 +42,7 @@ def solid_surface(source):
         surf = source.extract_surface(algorithm="dataset_surface") \
             if not isinstance(source, pv.PolyData) else source
     else:
-        from .threshold import mesh_to_pyvista
+        from .grid import mesh_to_pyvista
 
         surf = mesh_to_pyvista(source).extract_surface(algorithm="dataset_surface")
     surf = surf.triangulate().clean()

@@ -117,15 +117,15 @@ def thresholded_elements(th) -> np.ndarray:
     """Element ρ in {0, 1} of the thresholded design: 1 where at least half of the element's
     area lies inside the clipped solid of :func:`~pacto_ng.post.threshold.threshold` (0 in the
     materials it left out)."""
-    from .threshold import _cell_areas, element_materials, mesh_to_pyvista
+    from .grid import cell_areas, element_materials, mesh_to_pyvista
 
     grid = mesh_to_pyvista(th.source)
     grid.point_data["rho"] = th.nodal
     grid.cell_data["cid"] = np.arange(grid.n_cells)
     solid = grid.clip_scalar(scalars="rho", value=th.threshold, invert=False)
-    inside = np.bincount(np.asarray(solid.cell_data["cid"]), weights=_cell_areas(solid),
+    inside = np.bincount(np.asarray(solid.cell_data["cid"]), weights=cell_areas(solid),
                          minlength=grid.n_cells)
-    out = (inside >= 0.5 * _cell_areas(grid)).astype(float)
+    out = (inside >= 0.5 * cell_areas(grid)).astype(float)
     if th.excluded:
         out[np.isin(element_materials(th.source), list(th.excluded))] = 0.0
     return out

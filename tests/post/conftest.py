@@ -30,7 +30,7 @@ def chamber_layout():
 def box_density(mesh, boxes_in, boxes_out=()):
     """Element densities: 1 where the centroid is in a box of ``boxes_in`` and in none of
     ``boxes_out``, else 0."""
-    from pacto_ng.post.threshold import mesh_to_pyvista
+    from pacto_ng.post.grid import mesh_to_pyvista
 
     c = np.asarray(mesh_to_pyvista(mesh).cell_centers().points)[:, :2]
 
@@ -154,6 +154,6 @@ def ring_quarter_shape(a=1.0, b=2.0):
 
 
 def centroids(mesh):
-    from pacto_ng.post.threshold import mesh_to_pyvista
+    from pacto_ng.post.grid import mesh_to_pyvista
 
     return np.asarray(mesh_to_pyvista(mesh).cell_centers().points)[:, :2]

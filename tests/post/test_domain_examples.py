@@ -14,8 +14,10 @@ import numpy as np
 import pytest
 
 from pacto_ng.post.domain import material_domain
-from pacto_ng.post.remesh import _generate, build_domain_geometry, remesh
-from pacto_ng.post.threshold import Component, Loop, mesh_to_pyvista, threshold
+from pacto_ng.post.domain_part import build_domain_geometry
+from pacto_ng.post.grid import mesh_to_pyvista
+from pacto_ng.post.remesh import _generate, remesh
+from pacto_ng.post.threshold import Component, Loop, threshold
 
 L, B, T = 0.10, 0.026, 0.012            # the finger: length, base and tip height
 CH = (0.032, 0.011, 0.006)              # its chamber: centre and radius

@@ -185,29 +185,28 @@ def test_rectangle_chamber_on_its_domain(chamber_trigs):
 
 
 def test_domain_failure_falls_back_to_the_traced_part(half_disc, monkeypatch):
-    import sys
+    from pacto_ng.post import domain_part
 
-    R = sys.modules["pacto_ng.post.remesh"]  # (the package's name remesh is the function)
     shape, th = half_disc
 
     def boom(*a, **k):
         raise RuntimeError("BRep_API: command not done\nmore")
 
-    monkeypatch.setattr(R, "build_domain_geometry", boom)
+    monkeypatch.setattr(domain_part, "build_domain_geometry", boom)
     rm = remesh(th, 0.05, clamp=("fixed",), domain=shape)
     assert rm.geometry.startswith("traced (") and "command not done" in rm.geometry
     assert abs(rm.area / th.area - 1.0) < 0.01
 
 
 def test_excluded_faces_must_be_in_the_domain(half_disc):
-    from pacto_ng.post.remesh import _domain_shape
+    from pacto_ng.post.domain_part import domain_shape
     from pacto_ng.post.threshold import Thresholded
 
     shape, th = half_disc
     bad = Thresholded(th.components, th.area, th.threshold, th.nodal, th.solid, th.h,
                       th.source, 0.0, frozenset({"chamber"}))
     with pytest.raises(ValueError, match="chamber are not faces of the domain"):
-        _domain_shape(bad, list(th.components), shape, None, None)
+        domain_shape(bad, list(th.components), shape, None, None)
 
 
 def test_material_domain_keeps_split_edge_names():

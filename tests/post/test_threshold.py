@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from conftest import CAVITY, FRAME, box_density, chamber_density
-from pacto_ng.post.threshold import nodal_density, threshold
+from pacto_ng.post.grid import nodal_density
+from pacto_ng.post.threshold import threshold
 
 h = 0.001  # element size of the 100 x 50 structured chamber mesh
 

@@ -1,4 +1,4 @@
-"""Choosing the threshold (pacto_ng.post.threshold): volume-preserving, and lowered until the part
+"""Choosing the threshold (pacto_ng.post.threshold_choice): volume-preserving, and lowered until the part
 kept on the clamp contains the output point.
 
 Closed forms on the 100 x 50 structured chamber mesh (h = 1 mm, domain 0.1 x 0.05 m):
@@ -13,12 +13,13 @@ import numpy as np
 import pytest
 
 from conftest import CAVITY, FRAME, H, W, box_density, chamber_density
-from pacto_ng.post.threshold import (connecting_threshold, design_volume, part_contains,
-                                     threshold, volume_threshold)
+from pacto_ng.post.threshold import threshold
+from pacto_ng.post.threshold_choice import (choose_threshold, connecting_threshold, design_volume,
+                                            part_contains, volume_threshold)
 
 
 def _centroids(mesh):
-    from pacto_ng.post.threshold import mesh_to_pyvista
+    from pacto_ng.post.grid import mesh_to_pyvista
 
     return np.asarray(mesh_to_pyvista(mesh).cell_centers().points)[:, :2]
 
@@ -92,20 +93,19 @@ def test_connecting_threshold_gives_up_below_the_floor(chamber_quads):
 def test_choose_threshold_lowers_to_the_output_and_records_why(chamber_quads):
     """What ``pacto analyse`` uses: the chamber layout's named point 'output' is POINT."""
     from conftest import OUTPUT
-    from pacto_ng.post.cli_commands import choose_threshold
 
     assert OUTPUT == POINT
     rho = _grey_bar(chamber_quads)
-    ch, th = choose_threshold(chamber_quads, rho, 0.5, "output", ("fixed",))
+    ch, th = choose_threshold(chamber_quads, rho, 0.5, ["output"], ("fixed",))
     assert th.threshold == ch["used"]
     assert ch["lowered"] and ch["reaches_output"] and not ch["missed"]
     assert ch["start"] == 0.5 and 0.295 <= ch["used"] <= 0.3
     assert "lowered to" in ch["note"]
     assert ch["design_volume"] == pytest.approx(0.03 * 0.05 + 0.3 * 0.03 * 0.012, rel=1e-9)
     assert ch["part_area"] == pytest.approx(threshold(chamber_quads, rho, ch["used"]).area)
-    kept, _ = choose_threshold(chamber_quads, rho, 0.5, "output", ("fixed",), connect=False)
+    kept, _ = choose_threshold(chamber_quads, rho, 0.5, ["output"], ("fixed",), connect=False)
     assert kept["used"] == 0.5 and not kept["lowered"] and kept["reaches_output"] is False
-    vol, _ = choose_threshold(chamber_quads, chamber_density(chamber_quads), "volume", "output",
+    vol, _ = choose_threshold(chamber_quads, chamber_density(chamber_quads), "volume", ["output"],
                               ("fixed",))
     # the volume-preserving cut lies just above 0.5 (see above), and the output point on the
     # wall's outer face has the nodal density 1/2: the threshold comes down to it
