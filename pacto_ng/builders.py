@@ -144,7 +144,7 @@ def pressure_load(meshed, setup, params, energy, names, case_name: str) -> Press
         raise InputError(f"inlet: case '{case_name}' has no pressure load")
     if setup.pressure is None:
         return PressureLoad()
-    from .physics import darcy
+    from .physics import darcy_load
 
     h = meshed.h
     if params.delta_s < 0.1 * h:
@@ -157,8 +157,9 @@ def pressure_load(meshed, setup, params, energy, names, case_name: str) -> Press
         # Wang: the follower load sees the deformation I + γ∇u of the energy's large-strain
         # part (void: the fixed load), unless follower_wang=0
         gamma = energy.gamma if params.model == "wang" and params.follower_wang else None
-        block, pfield, body = darcy.for_case(meshed.mesh, params.darcy, params.load, pressure,
-                                             names[0], order=params.order, gamma=gamma)
+        block, pfield, body = darcy_load.for_case(meshed.mesh, params.darcy, params.load,
+                                                  pressure, names[0], order=params.order,
+                                                  gamma=gamma)
     except ValueError as err:
         raise InputError(str(err)) from None
     if params.load_type == "follower":
@@ -200,9 +201,9 @@ def responses(mech, setup, params, pressure: PressureLoad, case_name: str) -> Re
             raise InputError("objective: compliance is not defined for a follower load (the load "
                              "vector depends on u); use energy, mechanism, output or output_se")
         if pressure.body is not None:
-            from .physics import darcy
+            from .physics import darcy_load
 
-            return Responses([darcy.Compliance(mech, pressure.block)], "compliance")
+            return Responses([darcy_load.Compliance(mech, pressure.block)], "compliance")
         return Responses([R.compliance(mech)], "compliance")
     if obj == "energy":
         return Responses([R.StrainEnergy(mech)], "se")

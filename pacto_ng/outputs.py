@@ -73,14 +73,14 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
 
 
 def pressure_and_material_summary(problem: Problem) -> dict:
-    """Pressure cases: ``leakage`` (fraction of P_in, see :func:`pacto_ng.physics.darcy.leakage`)
+    """Pressure cases: ``leakage`` (fraction of P_in, see :func:`pacto_ng.physics.darcy_leakage.leakage`)
     and its details.  Two materials: the volume fractions of the total solid, of material 1
     (soft, ``Σ a ρ̄1 (1-ρ̄2)``) and of material 2 (stiff, ``Σ a ρ̄1 ρ̄2``) over the design
     elements."""
     out = {}
     vals = problem.values
     if problem.pressure_block is not None:
-        from .physics.darcy import leakage
+        from .physics.darcy_leakage import leakage
 
         blk = problem.pressure_block
         info = leakage(blk, vals[blk.inputs[0]], problem.h)

@@ -5,7 +5,7 @@ Forces are *totals* in newtons (they are not multiplied by the thickness): a
 spread uniformly over a named boundary (so that a "point" load does not invert the elements
 under it), a :class:`Spring` resists the displacement component along ``direction`` at a named
 point (``k/2 (d·u)²``) or, on a named boundary, its mean over that boundary.  The
-Darcy pressure loads live in :mod:`pacto_ng.physics.darcy`.
+Darcy pressure loads live in :mod:`pacto_ng.physics.darcy_load`.
 """
 from __future__ import annotations
 

@@ -153,7 +153,7 @@ class Mechanics:
         which ``r`` must include itself; ``coeffs`` maps field names to GridFunctions and ``r``
         may depend on them: its ``∂R/∂field`` is part of the backward pass.  ``u`` and ``v`` are
         trial/test functions for the residual and tangent, GridFunctions ``(u, λ)`` for the
-        sensitivity.  Example: :func:`pacto_ng.physics.darcy.darcy_follower`.
+        sensitivity.  Example: :func:`pacto_ng.physics.darcy_load.darcy_follower`.
     symmetric : bool or None
         Whether the tangent is symmetric; default: neither ``residual_terms`` nor
         ``residual_density`` given.

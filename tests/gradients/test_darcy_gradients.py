@@ -15,7 +15,8 @@ from pacto_ng.design import DesignField, Embed, FixPassive
 from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
 from pacto_ng.interpolation import simp2_cf, simp_cf
 from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
-from pacto_ng.physics.darcy import Compliance, DarcyPressure, darcy_body
+from pacto_ng.physics.darcy import DarcyPressure
+from pacto_ng.physics.darcy_load import Compliance, darcy_body
 from pacto_ng.physics.loads import Port, Spring
 from pacto_ng.physics.materials import linear_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports

@@ -19,7 +19,8 @@ from pacto_ng.design import DesignField, Embed, FixPassive
 from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
-from pacto_ng.physics.darcy import DarcyPressure, darcy_follower
+from pacto_ng.physics.darcy import DarcyPressure
+from pacto_ng.physics.darcy_load import darcy_follower
 from pacto_ng.physics.loads import PointLoad, Port, Spring
 from pacto_ng.physics.materials import jacobian, neohookean_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports

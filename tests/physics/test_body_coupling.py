@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from pacto_ng.interpolation import simp_cf
-from pacto_ng.physics.darcy import DarcyPressure, darcy_body, darcy_follower
+from pacto_ng.physics.darcy import DarcyPressure
+from pacto_ng.physics.darcy_load import darcy_body, darcy_follower
 from pacto_ng.physics.energy import DeclarationError, declare
 from pacto_ng.physics.loads import Spring
 from pacto_ng.physics.materials import linear_energy, neohookean_energy

@@ -14,7 +14,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spl
 
 from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
-from pacto_ng.physics.darcy import Compliance, DarcyPressure, darcy_body
+from pacto_ng.physics.darcy import DarcyPressure
+from pacto_ng.physics.darcy_load import Compliance, darcy_body
 
 DS = 0.002  # thesis Table 6.1 penetration depth Δs
 R_RATIO = 0.1  # thesis Table 6.1 r

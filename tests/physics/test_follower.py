@@ -13,7 +13,8 @@ import pytest
 from small_cases import PA_H, PA_L, small_pa_layout, small_pa_mesh
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
-from pacto_ng.physics.darcy import DarcyPressure, darcy_body, darcy_follower
+from pacto_ng.physics.darcy import DarcyPressure
+from pacto_ng.physics.darcy_load import darcy_body, darcy_follower
 from pacto_ng.physics.materials import jacobian, linear_energy, neohookean_energy
 from pacto_ng.physics.mechanics import Field, Mechanics, Supports
 from pacto_ng.physics.newton import NewtonSettings

@@ -7,7 +7,8 @@ import pytest
 import scipy.sparse as sp
 
 from pacto_ng.interpolation import simp_cf
-from pacto_ng.physics.darcy import DarcyPressure, darcy_body
+from pacto_ng.physics.darcy import DarcyPressure
+from pacto_ng.physics.darcy_load import darcy_body
 from pacto_ng.physics.energy import DeclarationError, declare
 from pacto_ng.physics.loads import PointLoad, Spring
 from pacto_ng.physics.materials import linear_energy
