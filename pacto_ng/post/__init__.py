@@ -11,8 +11,9 @@ from .boundary import outer_boundary
 from .export import (convert, deformation_fields, extrude_solid, plot_deformed, plot_sweeps,
                      write_stl, write_vtu)
 from .grid import mesh_to_pyvista, nodal_density
-from .reanalysis import (FixedBoundaryPressure, Output, Reanalysis, Sweep, SweepPoint, analyse,
-                         follower_pressure_terms, outward_sign, pressure_body_force)
+from .reanalysis import (FixedBoundaryPressure, Reanalysis, Sweep, SweepPoint, analyse,
+                         follower_pressure_terms, output_ports, outward_sign,
+                         pressure_body_force)
 from .remesh import Remeshed, pressure_sampler, remesh
 from .report import PostResult, post_analyse
 from .threshold import Component, Loop, Thresholded, threshold
@@ -20,7 +21,7 @@ from .traced import build_geometry
 
 __all__ = ["threshold", "nodal_density", "mesh_to_pyvista", "outer_boundary", "Thresholded",
            "Component", "Loop", "remesh", "Remeshed", "build_geometry", "pressure_sampler",
-           "Reanalysis", "analyse", "Output", "Sweep", "SweepPoint", "FixedBoundaryPressure",
+           "Reanalysis", "analyse", "output_ports", "Sweep", "SweepPoint", "FixedBoundaryPressure",
            "follower_pressure_terms", "outward_sign", "pressure_body_force", "write_stl",
            "extrude_solid", "write_vtu", "deformation_fields", "convert", "plot_deformed",
            "plot_sweeps", "post_analyse", "PostResult"]

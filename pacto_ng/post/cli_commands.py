@@ -3,12 +3,14 @@
 
 ``analyse DIR`` rebuilds the problem of a run folder (``params.json``), takes its final design
 (``checkpoint.npz``: ``x``, or ``last_good`` when the run stopped on a Newton failure), and
-calls :func:`~pacto_ng.post.report.post_analyse` with the case's supports, output port and
-spring, wetting rule and Darcy pressure.  It writes into ``DIR/analysis/``:
+calls :func:`~pacto_ng.post.report.post_analyse` with the case's supports, output ports and
+springs, wetting rule and Darcy pressure.  Δ is the output as the optimisation defines it,
+``Σ_k w_k d_k·u(x_k)`` over the case's output ports (one, or several: a gripper's jaws), and
+every port's own ``d_k·u(x_k)`` is recorded beside it.  It writes into ``DIR/analysis/``:
 
 =================  ====================================================================
-``analysis.json``  per pressure: expected Δ, Δ of the three analyses, max |u|, min J, Newton
-                   iterations; areas, wetting, ports, every setting used
+``analysis.json``  per pressure: expected Δ, Δ and every port's d·u of the three analyses,
+                   max |u|, min J, Newton iterations; areas, wetting, ports, every setting used
 ``analysis.png``   Δ against pressure: expected, Darcy, fixed and follower pressure
 ``deformed.png``   undeformed outline over the deformed solid (follower, largest pressure)
 ``report.md``      the pictures and the numbers together
@@ -122,26 +124,24 @@ def expected_sweep(problem, x, pressures, load) -> list[dict]:
     return rows
 
 
-def _output_of(setup):
-    """The re-analysis Output: the case's port, and the springs on the port's region along
-    its direction."""
-    from .reanalysis import Output
+def case_ports(setup):
+    """The re-analysis's output ports: the case's ports (region, direction, weight: Δ = Σ
+    weight · direction · u, as the optimisation reads it), each with the springs of the case
+    on its point along its direction as its spring."""
+    from ..physics.loads import Port
 
-    ports = setup.ports
-    if len(ports) != 1:
-        raise InputError(f"analyse: the re-analysis follows one output port; this case has "
-                         f"{len(ports)} ({', '.join(p.region for p in ports)}): 'pacto export' "
-                         "writes its part")
-    port = ports[0]
-    d = np.asarray(port.direction, dtype=float)
-    d = d / np.linalg.norm(d)
-    k = 0.0
-    for s in setup.all_springs:
-        sd = np.asarray(s.direction, dtype=float)
-        sd = sd / np.linalg.norm(sd)
-        if s.region == port.region and abs(abs(sd @ d) - 1.0) < 1e-12:
-            k += float(s.stiffness)
-    return Output(port.region, tuple(map(float, d)), k)
+    out = []
+    for port in setup.ports:
+        d = np.asarray(port.direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        k = 0.0
+        for s in setup.all_springs:
+            sd = np.asarray(s.direction, dtype=float)
+            sd = sd / np.linalg.norm(sd)
+            if s.region == port.region and abs(abs(sd @ d) - 1.0) < 1e-12:
+                k += float(s.stiffness)
+        out.append(Port(port.region, tuple(map(float, port.direction)), k, float(port.weight)))
+    return tuple(out)
 
 
 def _say(quiet, msg):
@@ -195,7 +195,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
                          f"handles one material only ('pacto export {folder}' writes its part)")
     if setup.port is None:
         raise InputError(f"analyse: case '{run.case.name}' has no output port")
-    output = _output_of(setup)
+    ports = case_ports(setup)
     pressures = default_pressures(run.load) if pressures is None else list(pressures)
     t0 = time.perf_counter()
     _say(quiet, f"analyse {run.path}: {run.case.name}, model {run.params.model}, load "
@@ -231,7 +231,8 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
 
     supports = setup.supports
     shape, exclude = domain_of(problem, setup)
-    choice, th = choose_threshold(problem.mesh, rho, threshold_value, [output.region],
+    choice, th = choose_threshold(problem.mesh, rho, threshold_value,
+                                  [port.region for port in ports],
                                   supports.clamp, connect=connect, exclude=exclude)
     threshold_value = choice["used"]
     # (a part that still misses the output is reported once the part is built: the warning on
@@ -260,7 +261,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
                     f"Neo-Hookean sweeps {', '.join(kinds)} at {len(pressures)} pressures ...")
         try:
             res = post_analyse(problem.mesh, rho, out_dir, pressures=pressures, E=p.E1, nu=p.nu,
-                               thickness=p.thickness, output=output, clamp=supports.clamp,
+                               thickness=p.thickness, output=ports, clamp=supports.clamp,
                                supports=supports, threshold_value=thr, thresholded=th,
                                maxh=maxh,
                                pressure=p_final, p_in=run.load,
@@ -300,17 +301,18 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
                         (p_shown or run.load) / run.load)
 
     data = analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, order,
-                          choice, maxh, output, supports, p_shown, rho_thr,
+                          choice, maxh, ports, supports, p_shown, rho_thr,
                           time.perf_counter() - t0, path_note)
     (out_dir / "analysis.json").write_text(json.dumps(data, indent=1))
-    shift = data["remesh"]["output_port_shift"]
     import sys
 
     if path_note:
         print(f"pacto: warning: {path_note}", file=sys.stderr)
-    if shift is not None and shift > 2.0 * problem.h:
-        print(f"pacto: warning: the thresholded part does not reach the output point: its nearest "
-              f"vertex is {shift:.3g} m away (Δ is read there; see report.md)", file=sys.stderr)
+    for region, shift in data["remesh"]["port_shifts"].items():
+        if shift > 2.0 * problem.h:
+            print(f"pacto: warning: the thresholded part does not reach the output point "
+                  f"'{region}': its nearest vertex is {shift:.3g} m away (Δ is read there; see "
+                  f"report.md)", file=sys.stderr)
     from .export import plot_sweeps
 
     plot_sweeps(out_dir / "analysis.png", [res.sweeps[k] for k in kinds if k in res.sweeps],

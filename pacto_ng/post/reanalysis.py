@@ -21,8 +21,10 @@ configuration Ω0, boundary ``pressure`` with outward unit normal N0 and unit ta
 With ``N0`` the outward normal of the solid, ``+P N0`` in the residual is the traction
 ``-P N0``: the pressure pushes into the solid.  Each pressure of a sweep is solved by Newton with
 adaptive load steps (:mod:`pacto_ng.physics.newton`), warm-started from the previous pressure's
-equilibrium; an output spring ``k`` along ``direction`` acts at the output point, where the
-output displacement ``Δ = direction · u`` is read.
+equilibrium.  The output is read at one or several output ports (named points), as the
+optimisation defines it (:class:`~pacto_ng.physics.loads.Port`): ``Δ = Σ_k w_k d_k · u(x_k)``,
+each port with its output spring ``k_k/2 (d̂_k · u)²``; every port's own ``d_k · u(x_k)`` is
+recorded beside Δ.
 """
 from __future__ import annotations
 
@@ -32,30 +34,27 @@ from typing import Callable
 import numpy as np
 
 from ..physics.energy import declare
+from ..physics.loads import Port
 from ..physics.materials import jacobian, neohookean_energy
 from ..physics.mechanics import Mechanics, NewtonFailure, Supports
 from ..physics.newton import NewtonSettings
+from .boundary import named_points
 
 KINDS = ("fixed", "follower", "darcy")
 
 
-@dataclass(frozen=True)
-class Output:
-    """Where and along which direction the output displacement Δ is read, and its spring.
-
-    Parameters
-    ----------
-    region : str
-        A named point (co-dimension 2) of the mesh.
-    direction : tuple of float
-        Δ = direction · u (normalised).
-    stiffness : float
-        Output spring ``k/2 (direction · u)²`` in N/m (0: none).
-    """
-
-    region: str = "output"
-    direction: tuple[float, float] = (1.0, 0.0)
-    stiffness: float = 0.0
+def output_ports(output) -> tuple[Port, ...]:
+    """The output ports of ``output``: one :class:`~pacto_ng.physics.loads.Port` or several (the
+    forms ``Setup(port=...)`` takes), each on a point of its own; ValueError otherwise."""
+    ports = (output,) if isinstance(output, Port) else tuple(output)
+    if not ports or not all(isinstance(p, Port) for p in ports):
+        raise ValueError("output: give a Port or a non-empty tuple of Ports")
+    regions = [p.region for p in ports]
+    twice = sorted({r for r in regions if regions.count(r) > 1})
+    if twice:
+        raise ValueError(f"two output ports on '{twice[0]}': the re-analysis records every "
+                         f"port's value by its point, one port to a point")
+    return ports
 
 
 @dataclass(frozen=True)
@@ -63,12 +62,13 @@ class SweepPoint:
     """The result at one pressure."""
 
     pressure: float
-    delta: float  # output displacement Δ (m)
+    delta: float  # output displacement Δ = Σ_k w_k d_k·u(x_k) (m)
     max_u: float  # largest |u| over the mesh vertices (m)
     min_j: float  # smallest det F over the integration points
     iterations: int  # Newton iterations, summed over the load steps
     converged: bool
     load_reached: float = 1.0  # fraction of the pressure at which equilibrium was found
+    ports: tuple = ()  # d_k·u(x_k) of every output port, in the order of the analysis's ports
 
 
 @dataclass
@@ -95,6 +95,12 @@ class Sweep:
     def converged(self) -> np.ndarray:
         return self._arr("converged")
 
+    @property
+    def port_values(self) -> dict:
+        """``{region: d·u at the port, one value per pressure}`` (NaN where not converged)."""
+        vals = np.array([p.ports for p in self.points], dtype=float).reshape(len(self.points), -1)
+        return {port.region: vals[:, k] for k, port in enumerate(self.analysis.ports)}
+
     def displacement(self, i: int | None = None):
         """The displacement GridFunction at sweep point ``i`` (default: the last converged)."""
         from ngsolve import GridFunction
@@ -111,8 +117,13 @@ class Sweep:
         return gf
 
     def table(self) -> list[dict]:
-        """One dict per pressure (for CSV/JSON)."""
-        return [dict(kind=self.kind, **p.__dict__) for p in self.points]
+        """One dict per pressure (for CSV/JSON); every port's ``d·u`` as ``port_<region>``."""
+        rows = []
+        for p in self.points:
+            row = {k: v for k, v in p.__dict__.items() if k != "ports"}
+            row.update({f"port_{port.region}": v for port, v in zip(self.analysis.ports, p.ports)})
+            rows.append(dict(kind=self.kind, **row))
+        return rows
 
 
 # ---------------------------------------------------------------------------------------
@@ -198,15 +209,6 @@ def pressure_body_force(p, order: int = 1) -> Callable:
     return body
 
 
-def _point(mesh, region):
-    from ngsolve import BBND
-
-    for el in mesh.Elements(BBND):
-        if el.mat == region:
-            return tuple(mesh[el.vertices[0]].point)
-    raise ValueError(f"the mesh has no named point '{region}'")
-
-
 class Reanalysis:
     """One Neo-Hookean plane-strain analysis of a remeshed solid under one kind of pressure.
 
@@ -221,8 +223,9 @@ class Reanalysis:
         Out-of-plane thickness (m).
     supports : Supports
         Dirichlet conditions by boundary / point name.
-    output : Output
-        Output point, direction and spring.
+    output : Port or tuple of Port
+        The output port(s) at named points of ``mesh``: Δ = Σ weight · direction · u, each
+        port with its spring.
     order : int
         Order of the displacement space.
     boundary : str
@@ -235,12 +238,10 @@ class Reanalysis:
     """
 
     def __init__(self, mesh, kind: str, *, E: float, nu: float, thickness: float,
-                 supports: Supports, output: Output = Output(), order: int = 2,
+                 supports: Supports, output: Port | tuple[Port, ...], order: int = 2,
                  boundary: str = "pressure", body: Callable | None = None,
                  body_pressure: float = 1.0, newton: NewtonSettings = NewtonSettings()):
         from ngsolve import QUAD, TRIG, VOL, Grad, InnerProduct, IntegrationRule, Parameter
-
-        from ..physics.loads import Spring
 
         if kind not in KINDS:
             raise ValueError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
@@ -249,15 +250,18 @@ class Reanalysis:
         if kind == "darcy" and body is None:
             raise ValueError("the darcy analysis needs a body-force callable "
                              "(see pressure_body_force)")
-        self.mesh, self.kind, self.output = mesh, kind, output
+        self.mesh, self.kind, self.ports = mesh, kind, output_ports(output)
         self.E, self.nu, self.thickness = float(E), float(nu), float(thickness)
         self.P = Parameter(0.0)
-        self.out_xy = _point(mesh, output.region)
-        d = np.asarray(output.direction, dtype=float)
-        self.direction = d / np.linalg.norm(d)
-        springs = ()
-        if output.stiffness > 0:
-            springs = (Spring(output.region, output.stiffness, tuple(self.direction)),)
+        points = named_points(mesh)
+        for port in self.ports:
+            if port.region not in points:
+                raise ValueError(f"the mesh has no named point '{port.region}'")
+        xy = np.array([points[port.region][:2] for port in self.ports], dtype=float)
+        self._port_points = mesh(xy[:, 0].copy(), xy[:, 1].copy())
+        self._directions = np.array([port.direction for port in self.ports], dtype=float)
+        self._weights = np.array([port.weight for port in self.ports], dtype=float)
+        springs = tuple(sp for port in self.ports for sp in port.springs())
         loads, terms, bodyf = (), None, None
         if kind == "fixed":
             loads = (FixedBoundaryPressure(boundary, self.P, thickness),)
@@ -295,14 +299,19 @@ class Reanalysis:
             ok = False
         res = self.mech.result
         if not ok:
-            return SweepPoint(float(pressure), np.nan, np.nan, np.nan, res.iterations, False,
-                              float(res.load_reached))
+            return self._failed(pressure, res.iterations, float(res.load_reached))
         gfu = self.mech.gfu
-        u_out = np.asarray(gfu(self.mesh(*self.out_xy))).ravel()
+        u_ports = np.asarray(gfu(self._port_points)).reshape(len(self.ports), -1)
+        along = np.einsum("ij,ij->i", self._directions, u_ports)
         u_v = np.asarray(gfu(self._vertices)).reshape(-1, 2)
-        return SweepPoint(float(pressure), float(self.direction @ u_out),
+        return SweepPoint(float(pressure), float(self._weights @ along),
                           float(np.max(np.linalg.norm(u_v, axis=1))),
-                          float(np.min(self._J(self._pts))), int(res.iterations), True, 1.0)
+                          float(np.min(self._J(self._pts))), int(res.iterations), True, 1.0,
+                          tuple(map(float, along)))
+
+    def _failed(self, pressure, iterations, load_reached) -> SweepPoint:
+        return SweepPoint(float(pressure), np.nan, np.nan, np.nan, int(iterations), False,
+                          load_reached, (np.nan,) * len(self.ports))
 
     def sweep(self, pressures, *, stop_on_failure: bool = True) -> Sweep:
         """Solve at every pressure in turn (give them in increasing order).
@@ -317,7 +326,7 @@ class Reanalysis:
         with compute():
             for P in pressures:
                 if failed and stop_on_failure:
-                    out.points.append(SweepPoint(float(P), np.nan, np.nan, np.nan, 0, False, 0.0))
+                    out.points.append(self._failed(P, 0, 0.0))
                     out.states.append(None)
                     continue
                 pt = self.solve(P)

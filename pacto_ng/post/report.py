@@ -10,7 +10,8 @@ sweeps of :mod:`.reanalysis` and the writers of :mod:`.export`, and writes into 
 ``deformed.png``   deformed solid over the undeformed outline, true scale (the whole part:
                    mirrored about a straight ``symmetry`` boundary of the source mesh)
 ``analysis.png``   Δ against pressure: expected, and every analysis kind
-``analysis.csv``   one row per (kind, pressure): Δ, max |u|, min J, iterations, converged
+``analysis.csv``   one row per (kind, pressure): Δ, every port's d·u, max |u|, min J,
+                   iterations, converged
 ``post.json``      threshold, areas, wetted length, ports, parameters and the sweeps
 =================  ====================================================================
 
@@ -28,11 +29,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..physics.loads import Port
 from ..physics.mechanics import Supports
 from ..physics.newton import NewtonSettings
 from .export import plot_deformed, plot_sweeps, write_stl, write_vtu
 from .plots import mirror_line
-from .reanalysis import Output, Reanalysis, pressure_body_force
+from .reanalysis import Reanalysis, output_ports, pressure_body_force
 from .remesh import remesh
 from .threshold import threshold
 
@@ -49,7 +51,8 @@ class PostResult:
 
 
 def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thickness: float,
-                 output: Output, clamp=("fixed",), supports: Supports | None = None,
+                 output: Port | tuple[Port, ...], clamp=("fixed",),
+                 supports: Supports | None = None,
                  threshold_value: float = 0.5, thresholded=None,
                  maxh: float | None = None, pressure=None,
                  p_in: float | None = None, wet_fraction: float = 0.5,
@@ -71,8 +74,9 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         The sweep, increasing (Pa).
     E, nu, thickness : float
         Neo-Hookean solid and out-of-plane thickness.
-    output : Output
-        Output point, direction and spring.
+    output : Port or tuple of Port
+        The output port(s): Δ = Σ weight · direction · u at named points, each port with its
+        spring (:class:`~.reanalysis.Reanalysis`).
     clamp : sequence of str
         Clamp boundaries (pieces not touching them are dropped).
     supports : Supports, optional
@@ -159,14 +163,19 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         "elements": rm.mesh.ne, "geometry": rm.geometry, "order": order, "E": E, "nu": nu, "thickness": thickness,
         "supports": dataclasses.asdict(supports),
         "wet_boundaries": list(wet_boundaries),
-        "output": {"region": output.region, "direction": list(output.direction),
-                   "stiffness": output.stiffness},
+        "output_ports": ports_json(output_ports(output)),
         "deformed_state": shown,
         "expected": None if expected is None else [list(map(float, a)) for a in expected],
         "sweeps": {k: [_jsonable(r) for r in sw.table()] for k, sw in sweeps.items()},
     }
     files["json"].write_text(json.dumps(summary, indent=2))
     return PostResult(th, rm, sweeps, files, summary)
+
+
+def ports_json(ports) -> list[dict]:
+    """The output ports as JSON: region, direction, spring (N/m) and weight of each."""
+    return [{"region": p.region, "direction": list(map(float, p.direction)),
+             "spring": float(p.spring), "weight": float(p.weight)} for p in ports]
 
 
 def _present(supports: Supports, mesh) -> Supports:
@@ -199,6 +208,12 @@ EXPECTED_DEFINITION = (
     "equals the run's output displacement scaled linearly with P")
 
 
+OUTPUT_DEFINITION = (
+    "Delta = sum_k w_k d_k . u(x_k) over the output ports (x_k the port's vertex of the remeshed "
+    "part, d_k its direction, w_k its weight), each port against its output spring k_k, as the "
+    "optimisation defines it; 'ports' holds every port's own d_k . u(x_k)")
+
+
 DARCY_DEFINITION = (
     "Darcy pressure of the thresholded design (element rho = 1 where at least half of the "
     "element lies inside the thresholded solid, else 0) as the deformation-independent body "
@@ -213,7 +228,9 @@ def num_or_none(v):
 
 
 def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, order, choice, maxh,
-                   output, supports, p_shown, rho_thr, wall, path_note=None) -> dict:
+                  ports, supports, p_shown, rho_thr, wall, path_note=None) -> dict:
+    """The content of ``analysis.json`` (see :mod:`~pacto_ng.post.cli_commands`); ``ports``: the
+    output ports analysed."""
     rm, th = res.remeshed, res.thresholded
     p = run.params
     kept = th.polygon_area - rm.dropped_area
@@ -224,7 +241,9 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
                "expected_newton_iterations": expected[i]["newton_iterations"]}
         for k in kinds:
             pt = res.sweeps[k].points[i]
-            row[k] = {"delta": num_or_none(pt.delta), "max_u": num_or_none(pt.max_u), "min_J": num_or_none(pt.min_j),
+            row[k] = {"delta": num_or_none(pt.delta),
+                      "ports": {p.region: num_or_none(v) for p, v in zip(ports, pt.ports)},
+                      "max_u": num_or_none(pt.max_u), "min_J": num_or_none(pt.min_j),
                       "newton_iterations": int(pt.iterations), "converged": bool(pt.converged)}
         rows.append(row)
     def gap(row):
@@ -235,8 +254,9 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
         return out
 
     gaps, gaps0 = gap(rows[-1]), gap(rows[0])
-    port_new = rm.ports.get(output.region)
-    shift = None if port_new is None else float(np.hypot(*np.subtract(port_new[1], port_new[0])))
+    shifts = {p.region: float(np.hypot(*np.subtract(rm.ports[p.region][1],
+                                                    rm.ports[p.region][0])))
+              for p in ports if p.region in rm.ports}
     return {
         "run": {"dir": str(run.path), "case": run.case.name, "model": p.model, "load": run.load,
                 "load_unit": run.case.load_unit, "iterations": run.k, "design": run.design,
@@ -250,11 +270,11 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
                      "thickness": p.thickness, "material": "Neo-Hookean, plane strain",
                      "supports": dataclasses.asdict(supports),
                      "supports_used": res.summary.get("supports"),
-                     "output": {"region": output.region, "direction": list(output.direction),
-                                "spring": output.stiffness},
+                     "output_ports": ports_json(ports),
                      "newton_rtol": p.newton_rtol},
         "definitions": {
-            "expected": EXPECTED_DEFINITION, "darcy": DARCY_DEFINITION,
+            "output": OUTPUT_DEFINITION, "expected": EXPECTED_DEFINITION,
+            "darcy": DARCY_DEFINITION,
             "fixed": "pressure P on the wetted boundary, deformation independent",
             "follower": "pressure P on the wetted boundary, following the deformation "
                         "(J F^-T N0)",
@@ -274,7 +294,8 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
                    "wetted_length": rm.wetted_length, "p_in": rm.p_in,
                    "ports": {k: {"source": list(map(float, a)), "new": list(map(float, b))}
                              for k, (a, b) in rm.ports.items()},
-                   "output_port_shift": shift},
+                   "port_shifts": shifts,
+                   "output_port_shift": max(shifts.values()) if shifts else None},
         "deformed_state": {"kind": res.summary.get("deformed_state"), "pressure": p_shown},
         "pressures": rows,
         "gap_at_largest_pressure": gaps,
@@ -295,6 +316,19 @@ def short_table(data) -> str:
         lines.append(f"  {r['pressure']:<11.4g} {fmt_value(r['expected']):11s} " + "".join(
             f"{fmt_value(r[k]['delta']):12s}" for k in kinds))
     return "\n".join(lines)
+
+
+def _ports_table(d, kinds, regions) -> list[str]:
+    """report.md's table of every port's own displacement d·u per pressure and analysis."""
+    cols = [(k, r) for k in kinds for r in regions]
+    L = ["Every port's own displacement d·u (m), Δ = Σ w·d·u:", "",
+         "| P (Pa) | " + " | ".join(f"{k} `{r}`" for k, r in cols) + " |",
+         "|" + "---|" * (1 + len(cols))]
+    for row in d["pressures"]:
+        L.append(f"| {row['pressure']:.4g} | " +
+                 " | ".join(fmt_value(row[k]["ports"][r]) for k, r in cols) + " |")
+    L.append("")
+    return L
 
 
 def report_md(d) -> str:
@@ -343,14 +377,20 @@ def report_md(d) -> str:
     L.append("")
     L.append(f"Wetted (`pressure`) boundary: {rm['wetted_length']:.4g} m.  Rule: "
              f"{d['definitions']['wetting']}.")
-    sh = rm["output_port_shift"]
-    if sh is not None:
+    for region, sh in rm["port_shifts"].items():
         warn = "" if sh <= 2 * run["mesh_h"] else \
             " **The output point moved more than two element sizes: the solid does not reach it.**"
-        L.append(f"The output point `{s['output']['region']}` sits on the nearest vertex of the "
+        L.append(f"The output point `{region}` sits on the nearest vertex of the "
                  f"new mesh, {sh:.3g} m from its place in the run.{warn}")
-    L.append(f"Supports on the new mesh: {s['supports_used']}.  Output spring "
-             f"{s['output']['spring']:g} N/m along {s['output']['direction']}.")
+    ports = s["output_ports"]
+    if len(ports) == 1:
+        L.append(f"Supports on the new mesh: {s['supports_used']}.  Output spring "
+                 f"{ports[0]['spring']:g} N/m along {ports[0]['direction']}.")
+    else:
+        L.append(f"Supports on the new mesh: {s['supports_used']}.  Output Δ = Σ w·d·u over "
+                 f"{len(ports)} ports: " + "; ".join(
+                     f"`{q['region']}` d = {q['direction']}, w = {q['weight']:g}, spring "
+                     f"{q['spring']:g} N/m" for q in ports) + ".")
     L.append("")
     L.append("## Re-analysis (Neo-Hookean, plane strain)")
     L.append("")
@@ -382,6 +422,8 @@ def report_md(d) -> str:
     L.append(f"max |u| and min J of the {ref} analysis; Newton iterations "
              f"{'/'.join(kinds)}; — : not converged.")
     L.append("")
+    if len(ports) > 1:
+        L.extend(_ports_table(d, kinds, [q["region"] for q in ports]))
     pct = lambda gaps: ", ".join(f"{k} {fmt_value(None if g is None else 100 * g, '+.1f')} %"
                                  for k, g in gaps.items())
     P = [r["pressure"] for r in d["pressures"]]

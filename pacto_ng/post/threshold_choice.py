@@ -127,6 +127,14 @@ def connecting_threshold(mesh, rho, start: float, points, clamp=("fixed",), *,
     return lo, low
 
 
+def _named(names, total) -> str:
+    """``the output point`` of a one-port case; else which of the points ``names`` are."""
+    if total == 1:
+        return "the output point"
+    return (f"the output point {names[0]}" if len(names) == 1 else
+            f"the output points {', '.join(names)}")
+
+
 def choose_threshold(mesh, rho, requested, ports, clamp, *, connect: bool = True, exclude=()):
     """The threshold ``pacto analyse`` uses, and why: ``(record, Thresholded at it)``.
 
@@ -137,8 +145,9 @@ def choose_threshold(mesh, rho, requested, ports, clamp, *, connect: bool = True
     it does: a joint to an output that is still grey is kept, at the price of the grey material
     around it.  The record says what was asked, what was used, the design's material volume,
     the area of the part at the threshold used and, per output point, whether the part holds it
-    (``ports``).  A port that is no named point of ``mesh`` is not checked.  ``exclude``:
-    materials left out of the thresholding (:func:`~pacto_ng.post.threshold.threshold`).
+    there (``ports``); its note names the points the part at the requested threshold misses.  A
+    port that is no named point of ``mesh`` is not checked.  ``exclude``: materials left out of
+    the thresholding (:func:`~pacto_ng.post.threshold.threshold`).
     """
     start = volume_threshold(mesh, rho) if requested == "volume" else float(requested)
     known = named_points(mesh)
@@ -147,29 +156,31 @@ def choose_threshold(mesh, rho, requested, ports, clamp, *, connect: bool = True
            "missed": False, "connect": bool(connect), "design_volume": design_volume(mesh, rho)}
     what = (f"threshold {start:.4g} (volume-preserving)" if requested == "volume"
             else f"threshold {start:g}")
-    them = ("the output point" if len(points) == 1 else
-            f"the output points ({', '.join(points)})")
-    xy = list(points.values())
-    if not points or not connect:
-        th = threshold(mesh, rho, start, exclude=exclude)
-        rec["reaches_output"] = None if not points else part_contains(th, xy, clamp)
-        rec["note"] = what + ("" if not points else
-                              (f": the part on the clamp contains {them}"
-                               if rec["reaches_output"] else
-                               f": the part on the clamp does not contain {them} "
-                               "(not lowered: --keep-threshold)"))
+    th = threshold(mesh, rho, start, exclude=exclude)
+    missing = [name for name, p in points.items() if not part_contains(th, p, clamp)]
+    them = _named(missing or list(points), len(points))
+    if not points:
+        rec["reaches_output"] = None
+        rec["note"] = what
+    elif not missing:
+        rec["reaches_output"] = True
+        rec["note"] = f"{what}: the part on the clamp contains {them}"
+    elif not connect:
+        rec["reaches_output"] = False
+        rec["note"] = (f"{what}: the part on the clamp does not contain {them} (not lowered: "
+                       f"--keep-threshold)")
     else:
-        used, th = connecting_threshold(mesh, rho, start, xy, clamp, exclude=exclude)
+        used, low = connecting_threshold(mesh, rho, start, list(points.values()), clamp,
+                                         exclude=exclude)
         if used is None:
             rec.update(missed=True, reaches_output=False)
-            rec["note"] = (f"{what}: the part on the clamp does not contain {them}, "
-                           f"nor at threshold 0.1; analysed at {start:.4g}")
+            rec["note"] = (f"{what}: the part on the clamp does not contain {them}, nor at "
+                           f"threshold 0.1; analysed at {start:.4g}")
         else:
-            rec.update(used=used, lowered=used < start, reaches_output=True)
-            rec["note"] = (what + f": the part on the clamp contains {them}"
-                           if used == start else
-                           f"{what} lowered to {used:.4g}: above it the part on the clamp "
-                           f"does not contain {them} (a grey joint)")
+            th = low
+            rec.update(used=used, lowered=True, reaches_output=True)
+            rec["note"] = (f"{what} lowered to {used:.4g}: above it the part on the clamp does "
+                           f"not contain {them} (a grey joint)")
     rec["ports"] = {name: part_contains(th, p, clamp) for name, p in points.items()}
     rec["part_area"] = th.area
     return rec, th

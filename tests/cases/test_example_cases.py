@@ -68,16 +68,3 @@ def test_cad_example_without_step_file_says_so(tmp_path, capsys):
     assert main(["run", str(tmp_path / "cad_actuator.py"), "--iterations", "1",
                  "--out", str(tmp_path / "run"), "--quiet"]) == 2
     assert "make_step.py" in capsys.readouterr().err
-
-
-def test_analyse_of_a_two_port_run_is_one_line(tmp_path, capsys):
-    """The re-analysis follows one output port: a two-jaw run gets a one-line error, before
-    any analysis, and export writes its part."""
-    out = tmp_path / "jaw"
-    assert main(["run", "jaw-gripper", "--iterations", "1", "--maxh", "0.01", "--out", str(out),
-                 "--quiet"]) == 0
-    capsys.readouterr()
-    assert main(["analyse", str(out), "--quiet"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0
-    assert "re-analysis follows one output port; this case has 2 (top_jaw, bottom_jaw)" in err

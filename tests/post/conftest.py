@@ -83,12 +83,13 @@ def chamber_sweeps(chamber_remeshed):
     """Fixed and follower sweeps of the remeshed chamber at 1e3, 1e4 and 1e5 Pa (E = 1e8,
     ν = 0.4, t = 1 mm, output spring 1e4 N/m, order 2)."""
     from pacto_ng.physics.mechanics import Supports
-    from pacto_ng.post.reanalysis import Output, analyse
+    from pacto_ng.physics.loads import Port
+    from pacto_ng.post.reanalysis import analyse
 
     th, rm = chamber_remeshed
     return analyse(rm.mesh, [1e3, 1e4, 1e5], E=1e8, nu=0.4, thickness=1e-3,
                    supports=Supports(clamp=("fixed",)),
-                   output=Output("output", (0.0, -1.0), 1e4), order=2)
+                   output=Port("output", (0.0, -1.0), 1e4), order=2)
 
 
 def ring_quarter_mesh(maxh, a=1.0, b=2.0, curve=3):

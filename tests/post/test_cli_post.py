@@ -95,7 +95,7 @@ def test_analyse_writes_every_file(analysed):
     # the deformed state is the follower's at the largest pressure: Δ read back from the file
     port = np.array(data["remesh"]["ports"]["output"]["new"])
     k = int(np.argmin(np.linalg.norm(ref.points[:, :2] - port, axis=1)))
-    d = np.array(data["settings"]["output"]["direction"])
+    d = np.array(data["settings"]["output_ports"][0]["direction"])
     assert d @ ref.point_data["u"][k, :2] == pytest.approx(
         data["pressures"][-1]["follower"]["delta"], rel=1e-10)
     # the Darcy pressure on the part: the inlet pressure where the part touches the inlet, and

@@ -10,13 +10,14 @@ follows from ``(λ+2μ) d/dr((1/r) d(r u)/dr) = -f_r``:
 import numpy as np
 import pytest
 
+from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
 from pacto_ng.physics.newton import NewtonSettings
-from pacto_ng.post.reanalysis import Output, Reanalysis, outward_sign, pressure_body_force
+from pacto_ng.post.reanalysis import Reanalysis, outward_sign, pressure_body_force
 
 E, NU, A, B = 1e6, 0.3, 1.0, 2.0
 RING = dict(E=E, nu=NU, thickness=1.0, supports=Supports(fix_x=("left",), fix_y=("bottom",)),
-            output=Output("output", (1.0, 0.0)))
+            output=Port("output", (1.0, 0.0)))
 
 
 def lame_inner(P):
@@ -55,6 +56,32 @@ def test_fixed_pressure_matches_lame(ring_quarter):
     assert sw.delta[0] > 0  # the pressure pushes the inner wall outwards
     assert sw.delta[0] == pytest.approx(lame_inner(P), rel=1e-5)
     assert sw.points[0].max_u == pytest.approx(sw.delta[0], rel=1e-6)  # |u| peaks at r = a
+
+
+def test_several_ports_add_up_with_their_weights():
+    """Ports at (a, 0) along x and at (0, a) along y, Δ = 2 u_x(a, 0) - 0.5 u_y(0, a): both are
+    Lamé's u_r(a), so Δ = 1.5 u_r(a); every port's own d·u is recorded."""
+    import ngsolve as ng
+    from netgen import occ
+
+    from conftest import ring_quarter_shape
+
+    shape = ring_quarter_shape(A, B)
+    shape.vertices.Nearest((A, 0, 0)).name = "output"
+    shape.vertices.Nearest((0, A, 0)).name = "top"
+    mesh = ng.Mesh(occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=0.1))
+    mesh.Curve(3)
+    P = 1e-5 * E
+    ports = (Port("output", (1.0, 0.0), weight=2.0), Port("top", (0.0, 1.0), weight=-0.5))
+    sw = Reanalysis(mesh, "fixed", order=3, **{**RING, "output": ports}).sweep([P])
+    assert sw.points[0].converged
+    assert sw.points[0].ports == pytest.approx((lame_inner(P), lame_inner(P)), rel=1e-5)
+    assert sw.delta[0] == pytest.approx(1.5 * lame_inner(P), rel=1e-5)
+    row = sw.table()[0]
+    assert (row["port_output"], row["port_top"]) == sw.points[0].ports
+    with pytest.raises(ValueError, match="two output ports on 'output'"):
+        Reanalysis(mesh, "fixed", **{**RING, "output": (Port("output", (1.0, 0.0)),
+                                                        Port("output", (0.0, 1.0)))})
 
 
 def test_follower_equals_fixed_as_pressure_vanishes(ring_quarter_straight):
@@ -160,7 +187,7 @@ def test_darcy_pressure_block_tends_to_the_boundary_pressure():
     rho = chamber_density(mesh)
     rm = remesh(threshold(mesh, rho), 0.0005, pressure=chamber_pressure)
     kw = dict(E=1e8, nu=0.4, thickness=1e-3, supports=Supports(clamp=("fixed",)),
-              output=Output("output", (0.0, -1.0), 1e4))
+              output=Port("output", (0.0, -1.0), 1e4))
     fixed = Reanalysis(rm.mesh, "fixed", **kw).sweep([P_IN]).delta[0]
     rel = []
     for ds in (0.004, 0.001):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import chamber_density, chamber_pressure
-from pacto_ng.post.reanalysis import Output
+from pacto_ng.physics.loads import Port
 from pacto_ng.post.report import post_analyse
 
 
@@ -24,7 +24,7 @@ def test_post_analyse_writes_a_consistent_folder(chamber_quads, tmp_path):
 
     res = post_analyse(chamber_quads, chamber_density(chamber_quads), tmp_path / "post",
                        pressures=[3e4, 1e5], E=1e8, nu=0.4, thickness=1e-3,
-                       output=Output("output", (0.0, -1.0), 1e4), maxh=0.003,
+                       output=Port("output", (0.0, -1.0), 1e4), maxh=0.003,
                        pressure=chamber_pressure, expected=([1e5], [4e-5]))
     for path in res.files.values():
         assert path.exists() and path.stat().st_size > 0
