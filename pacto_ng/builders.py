@@ -43,6 +43,11 @@ class DesignSettings(Settings):
                                "checkpoint.npz; the same case and mesh), e.g. a run at a "
                                "lower load")
 
+    def check(self):
+        if self.volfrac2 > self.volfrac:
+            raise InputError(f"volfrac2: the stiff material's fraction must not exceed volfrac "
+                             f"(got {self.volfrac2:g} > {self.volfrac:g})")
+
 
 @dataclass(frozen=True)
 class ObjectiveSettings(Settings):

@@ -402,8 +402,11 @@ def build_problem(case: Case, params: Parameters) -> Problem:
     if params.model == "auto":
         raise InputError("model: 'auto' is chosen by 'pacto run' (pacto_ng.auto.choose_model), "
                          "not by build_problem")
-    meshed = mesh_for(case, params)
     setup = case.make_setup(params)
+    if params.volfrac2 > 0 and setup.materials == 1:
+        raise InputError(f"volfrac2: case '{case.name}' has one material (volfrac2 limits the "
+                         "stiff material of a two-material case)")
+    meshed = mesh_for(case, params)
     check_setup_names(meshed.mesh, setup)
     check_vectors(meshed.mesh, setup)
     if setup.pressure is not None:

@@ -22,6 +22,7 @@ exits with 1 after saving the last good design.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from .params import InputError, Parameters
@@ -193,6 +194,11 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("pacto: interrupted (the checkpoint of the last iteration is kept)", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader of the output went away (e.g. '| head'): stop quietly, as the
+        # Python documentation advises, so that the interpreter's final flush cannot fail
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
 
 
 def _main(argv) -> int:

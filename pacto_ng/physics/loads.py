@@ -20,15 +20,10 @@ from ..settings import Settings, setting
 class LoadSettings(Settings):
     """The load's magnitude and the output spring of the cases."""
 
-    load: float = setting(1.0, "N", "load magnitude (force in N, or inlet pressure in Pa)",
-                          range="[-1e30, 1e30]")
+    load: float = setting(1.0, "N", "load magnitude (force in N, or inlet pressure in Pa); "
+                          "positive: the case's force directions and inlet set the sign",
+                          range="(0, 1e30]")
     k_out: float = setting(0.0, "N/m", "output spring stiffness", range="[0, 1e30]")
-
-    def check(self):
-        from ..params import InputError
-
-        if self.load == 0:
-            raise InputError("load: must not be zero")
 
 
 def _region(mesh, name):

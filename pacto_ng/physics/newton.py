@@ -58,8 +58,10 @@ class NewtonSettings:
 class NewtonParameters(Settings):
     """The run's settings of Newton's method (:class:`NewtonSettings` holds the rest)."""
 
-    newton_rtol: float = setting(1e-10, "", "Newton residual tolerance (relative to the load)",
-                                 range="(0, 1)")
+    newton_rtol: float = setting(1e-10, "", "Newton residual tolerance (relative to the load); "
+                                 "Newton also stops at the round-off floor: residual below "
+                                 "1e-7 of the load and no longer halving",
+                                 range="[1e-13, 0.1]")
     newton_max_iter: int = setting(30, "", "Newton iterations per load step",
                                    range="[1, 100000]")
     newton_increment: float = setting(1.0, "", "first load increment of Newton continuation "
