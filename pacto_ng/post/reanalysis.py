@@ -95,12 +95,6 @@ class Sweep:
     def converged(self) -> np.ndarray:
         return self._arr("converged")
 
-    @property
-    def port_values(self) -> dict:
-        """``{region: d·u at the port, one value per pressure}`` (NaN where not converged)."""
-        vals = np.array([p.ports for p in self.points], dtype=float).reshape(len(self.points), -1)
-        return {port.region: vals[:, k] for k, port in enumerate(self.analysis.ports)}
-
     def displacement(self, i: int | None = None):
         """The displacement GridFunction at sweep point ``i`` (default: the last converged)."""
         from ngsolve import GridFunction
