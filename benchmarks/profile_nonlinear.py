@@ -30,14 +30,14 @@ CATEGORIES = [
     ("Darcy: assembly + factorisation + solve", "darcy.py", "forward"),
     ("Darcy: adjoint + sensitivity", "darcy.py", "backward"),
     ("Newton: residual (Apply)", "newton.py", "residual"),
-    ("load norm (Apply at u = 0)", "mechanics.py", "load_norm"),
+    ("load norm (Apply at u = 0)", "equilibrium.py", "load_norm"),
     ("Newton: tangent assembly + factorisation", "newton.py", "assemble_tangent"),
-    ("adjoint: tangent at the converged state (assembly + factorisation)", "mechanics.py",
+    ("adjoint: tangent at the converged state (assembly + factorisation)", "adjoint.py",
      "_ensure_tangent"),
-    ("Newton: det F guard", "mechanics.py", "admissible"),
-    ("Newton: linear solves", "mechanics.py", "solve_tangent"),
-    ("mechanics adjoint solve", "mechanics.py", "adjoint"),
-    ("mechanics sensitivity forms (λᵀ∂R/∂ρ)", "mechanics.py", "backward"),
+    ("Newton: det F guard", "equilibrium.py", "admissible"),
+    ("Newton: linear solves", "equilibrium.py", "solve_tangent"),
+    ("mechanics adjoint solve", "adjoint.py", "adjoint"),
+    ("mechanics sensitivity forms (λᵀ∂R/∂ρ)", "adjoint.py", "backward"),
     ("strain energy: value", "responses.py", "forward"),
     ("strain energy: ∂SE/∂u, ∂SE/∂ρ", "responses.py", "backward"),
     ("filter (Helmholtz)", "filters.py", ""),
@@ -55,7 +55,7 @@ def _inclusive(stats, frag, name):
     ``residual`` and ``assemble_tangent`` only the calls made from the file ``frag``."""
     tot = 0.0
     for (fn, _line, func), (_cc, _nc, _tt, ct, callers) in stats.stats.items():
-        if name in ("residual", "assemble_tangent") and fn.endswith("mechanics.py") \
+        if name in ("residual", "assemble_tangent") and fn.endswith("equilibrium.py") \
                 and func == name:
             tot += sum(v[3] for (cf, _l, _f), v in callers.items() if frag in cf)
         elif name not in ("residual", "assemble_tangent") and frag in fn \

@@ -89,7 +89,7 @@ def sweep(overrides, design, loads=LOADS):
     from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
-    from pacto_ng.physics.mechanics import NewtonFailure
+    from pacto_ng.physics.equilibrium import NewtonFailure
     from benchmarks.trade import sample
 
     case = get_case("pa-inverter")

@@ -151,7 +151,7 @@ def run_point(case_name, model, maxh, order, design, repeat=3, extra=None):
 
 def study(quick=False, repeat=3, log=print, cases=None, models=None):
     from pacto_ng.case import get_case
-    from pacto_ng.physics.mechanics import NewtonFailure
+    from pacto_ng.physics.equilibrium import NewtonFailure
 
     plan = QUICK if quick else STUDIES
     if cases:

@@ -255,7 +255,7 @@ def _main(argv) -> int:
         from .gradcheck import check_case
 
         explicit = args.maxh is not None or args.nelx is not None
-        from .physics.mechanics import NewtonFailure
+        from .physics.equilibrium import NewtonFailure
 
         try:
             worst = check_case(case, params, seed=args.seed, quiet=args.quiet,

@@ -11,7 +11,7 @@ import numpy as np
 from .case import Case, Problem, build_problem
 from .outputs import summary_dict, write_vtu
 from .params import InputError, Parameters
-from .physics.mechanics import NewtonFailure
+from .physics.equilibrium import NewtonFailure
 from .runner import prepare_output
 
 

@@ -19,7 +19,7 @@ import numpy as np
 from .case import Case, Problem, build_problem, case_of_run
 from .optimize.driver import LoopState, optimize
 from .params import InputError, Parameters
-from .physics.mechanics import NewtonFailure
+from .physics.equilibrium import NewtonFailure
 from .outputs import write_outputs
 
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..params import InputError
-from ..physics.mechanics import NewtonFailure
+from ..physics.equilibrium import NewtonFailure
 from ..settings import Settings, setting
 from .mma import Optimizer
 from .schedules import Schedule

@@ -17,19 +17,6 @@ and ``residual_terms`` a sum of integrals (e.g. on a boundary).  The tangent of 
 from ``AssembleLinearization`` and is unsymmetric in general; the adjoint then solves
 ``Kᵀ λ = ∂J/∂u``.
 
-Backward pass (discrete adjoint): with ``Kᵀ λ = ∂J/∂u`` (K the tangent at the converged state,
-factorised once and reused for every response),
-
-    dJ/dρ = ∂J/∂ρ - λᵀ ∂R/∂ρ,
-    λᵀ ∂R/∂ρ = ∂/∂ρ [ t ∫ ∂φ/∂u[λ] - s b·λ + r(u, λ; fields, s) dΩ ],
-
-the gradient of ``L(ρ) = ∫ density(u; ρ).Diff(u, λ) + t r(u, λ; ρ)`` with ``u`` and ``λ`` held
-fixed: ``Apply`` of a ``Variation`` form of ``L`` on the field's own space (automatic
-differentiation in ρ).  The residual density is built once with the
-trial/test functions (residual, tangent) and once with ``(u, λ)`` as GridFunctions
-(sensitivity), so its field dependence is differentiated by NGSolve too.  ``residual_terms``
-must not depend on the fields (they are left out of ``∂R/∂ρ``).
-
 The assembly is chosen from what the energy *declares*
 (:class:`~pacto_ng.physics.energy.EnergyTraits`, its ``traits`` attribute; an energy that
 declares nothing gets the general route above), never from probes:
@@ -47,6 +34,11 @@ The declarations that a fast route relies on are verified once when the block is
 wrong one raises :class:`~pacto_ng.physics.energy.DeclarationError`.  :attr:`Mechanics.assembly`
 says which routes are in use.  The same quadrature rule is pinned in the residual, tangent and
 sensitivity forms (see docs: a mismatch gives 1e-2 adjoint errors at order 2).
+
+The block's methods are in three modules: this one builds it (supports, fields, the energy's
+forms and the routes), :class:`~pacto_ng.physics.equilibrium.Equilibrium` solves for
+equilibrium (the problem Newton drives, the warm start, the forward pass) and
+:class:`~pacto_ng.physics.adjoint.Adjoint` runs the backward pass.
 """
 from __future__ import annotations
 
@@ -55,23 +47,15 @@ from typing import Callable
 
 import numpy as np
 
+from .adjoint import Adjoint
 from .body_coupling import BodyCoupling
 from .energy import EnergyTraits, traits_of
+from .equilibrium import Equilibrium
 from .linear_system import LinearSystem
-from .newton import NewtonResult, NewtonSettings, solve_with_continuation
-from .quadrature import guard_rules, integration_rules
-from .sensitivities import FieldSensitivities
+from .newton import NewtonSettings
+from .quadrature import integration_rules
 
 _UNDECLARED = object()  # a body without the attribute linear_in
-
-
-class NewtonFailure(RuntimeError):
-    """Raised by a forward pass whose equilibrium could not be reached."""
-
-    def __init__(self, result: NewtonResult):
-        super().__init__(f"Newton failed: reached load factor {result.load_reached:.4g} of 1 "
-                         f"({result.reason})")
-        self.result = result
 
 
 @dataclass(frozen=True)
@@ -105,7 +89,7 @@ class Field:
     gf: object = None
 
 
-class Mechanics:
+class Mechanics(Equilibrium, Adjoint):
     """Finite-strain (or linear) elasticity as a block.
 
     Parameters
@@ -180,8 +164,8 @@ class Mechanics:
                  inverse: str | None = None, intorder: int | None = None,
                  residual_terms: Callable | None = None, symmetric: bool | None = None,
                  residual_density: Callable | None = None, realcompile: bool = False):
-        from ngsolve import (L2, BilinearForm, GridFunction, Grad, LinearForm, Parameter,
-                             VectorH1, Variation, dx)
+        from ngsolve import (L2, BilinearForm, GridFunction, LinearForm, Parameter, VectorH1,
+                             Variation, dx)
 
         if order not in (1, 2, 3, 4):
             raise ValueError(f"element order must be 1, 2 or 3 (got {order})")
@@ -223,7 +207,7 @@ class Mechanics:
         self.target = 1.0  # load factor of the next forward pass (continuation over iterations)
         self.rules = integration_rules(intorder or 2 * order)
         self.DX = dx(intrules=self.rules)
-        self._energy, self._body, self._guard = energy, body, guard
+        self._energy, self._body = energy, body
         self._traits = traits_of(energy)
         reads = self._traits.reads
         if reads is not None and not set(reads) <= set(self.inputs):
@@ -262,41 +246,11 @@ class Mechanics:
         self._lin = None
         if linear and conservative and self._traits.quadratic:
             self._lin = LinearSystem(self, self._coupling)
-        # vector of the external load at unit load factor (for norms)
-        self._inv = None
-        self._tangent_at = None  # id of the state the factorisation belongs to
-        self.result: NewtonResult | None = None
-        self._adjoint_ready = False  # the tangent at the current state is factorised
-        self._gtrial = GridFunction(self.fes)
-        if guard is not None:
-            from ngsolve import VOL
-            self._guard_cf = guard(Grad(self._gtrial), self.coeffs).Compile()
-            self._guard_pts = mesh.MapToAllElements(guard_rules(self.rules), VOL)
-        # adjoint state and sensitivity forms (built once)
-        self.lam = GridFunction(self.fes)
-        # λᵀ ∂R/∂field, each field by its route (sensitivities.py)
-        self._sens = FieldSensitivities(self, self._coupling, self._lin)
-        self._rhs = self.gfu.vec.CreateVector()
-        self._ext = self.gfu.vec.CreateVector()
-        # with only design-independent loads the load vector is fixed: its norm is computed once
-        self._fixed_loads = body is None and conservative
-        self._unit_load_norm = None
-        self._f_unit = None  # the unit external load vector (the self-adjoint shortcut's)
-        self.self_adjoint_shortcut = True  # compliance: λ = u / s without a solve
-        self.adjoint_solves_skipped = 0  # adjoints that were the primal (compliance)
-        self.adjoint_solves = 0  # adjoints solved with the factorised tangent
-        self._ramp_first = None  # first increment of the last successful ramp from zero
-        # a design-dependent load on a stress-free energy (∂φ/∂G = 0 at G = 0, declared):
-        # R(0) = -s f, so the load norm is that of f = (point/edge loads) + (body load) -- no
-        # Apply of the energy at u = 0.  The point loads are design independent: assembled
-        # here, once; the body load is the residual's own LinearForm (_fbody)
-        self._load_form = None
-        if conservative and body is not None and self._lin is None and self._traits.stress_free:
-            v = self.fes.TestFunction()
-            self._load_form = LinearForm(self.fes)
-            for ld in self.loads:
-                self._load_form += ld.work(mesh, v)
-            self._load_form.Assemble()
+        self._start_equilibrium(
+            guard, fixed_loads=body is None and conservative,
+            load_vectors=(conservative and body is not None and self._lin is None
+                          and self._traits.stress_free))
+        self._start_adjoint()
 
     def _coupled_field(self, body):
         """The field a body load is linear in, alone (see ``body`` in the class docstring), or
@@ -362,18 +316,10 @@ class Mechanics:
           ``"residual"`` (the residual at ``u = 0``).
         """
         lin = self._lin
-        if self._fixed_loads:
-            norm = "fixed"
-        elif lin is not None:
-            norm = "linear_system"
-        elif self._load_form is not None:
-            norm = "load_vectors"
-        else:
-            norm = "residual"
         return {"linear_system": None if lin is None else lin.route,
                 "modulus": "numpy" if lin is not None and lin.uses_modulus else None,
                 "body_coupling": () if self._coupling is None else (self._coupling.field.name,),
-                "load_norm": norm}
+                "load_norm": self.load_norm_route}
 
     def hot(self, cf):
         """``cf`` compiled for a form that Newton assembles in every iteration."""
@@ -392,13 +338,6 @@ class Mechanics:
             dens = dens - self.load * self.thickness * self._body(u, coeffs)
         return dens
 
-    def adjoint_lagrangian(self, coeffs):
-        """``λᵀ R(u)`` per unit area with the fields ``coeffs`` (u, λ: the block's states)."""
-        lag = self.volume_density(self.gfu, coeffs).Diff(self.gfu, self.lam)
-        if self._rdens is not None:
-            lag = lag + self.residual_density(self.gfu, self.lam, coeffs)  # linear in λ
-        return lag
-
     def residual_density(self, u, v, coeffs=None):
         """The non-conservative volume term ``t r(u, v; fields, s)`` (a CF, per unit area)."""
         return self.thickness * self._rdens(u, v, self.coeffs if coeffs is None else coeffs,
@@ -416,200 +355,3 @@ class Mechanics:
         for sp in self.springs:
             total = total + sp.energy(self.mesh, u)
         return total
-
-    # -- the problem interface used by Newton --------------------------------------------------
-    def residual(self, vec, out, load):
-        self.load.Set(load)
-        if self._lin is not None:
-            self._lin.residual(vec, out, load)
-            return
-        self.a.Apply(vec, out)
-        if self._fbody is not None:
-            out.data -= load * self._body_load()
-
-    def predictor_residual(self, vec, out, load):
-        """``K u - s f`` with the assembled ``K`` (linear systems; one sparse product): Newton's
-        first residual, from which the correction is computed.  Its round-off (products with
-        K cancel where the structure moves rigidly) is corrected by the next iteration, whose
-        convergence test uses :meth:`residual` (element by element)."""
-        if self._lin is None:
-            self.residual(vec, out, load)
-            return
-        self.load.Set(load)
-        self._lin.assemble()
-        out.data = self._lin.a.mat * vec
-        out.data -= load * self._lin.f.vec
-
-    def _body_load(self):
-        """The body-load vector ``t ∫ b·v dΩ`` of the current fields (assembled once per design)."""
-        if self._coupling is not None:
-            if self._fbody_stale:
-                self._coupling.load()
-                self._fbody_stale = False
-            return self._coupling.vec
-        if self._fbody_stale:
-            self._fbody.Assemble()
-            self._fbody_stale = False
-        return self._fbody.vec
-
-    @property
-    def matrix(self):
-        """The tangent matrix last assembled by :meth:`assemble_tangent`."""
-        return self._lin.a.mat if self._lin is not None else self.a.mat
-
-    def assemble_tangent(self, vec, load):
-        self.load.Set(load)
-        if self._lin is not None:
-            if self._tangent_at is not None:
-                return  # u- and load-independent: this design's matrix is factorised already
-            self._lin.assemble()
-        else:
-            self.a.AssembleLinearization(vec)
-        if self._inv is None:
-            self._inv = self.matrix.Inverse(self.fes.FreeDofs(), inverse=self.inverse_type)
-        else:
-            self._inv.Update()
-        self._tangent_at = (load, vec.FV().NumPy().copy()) if not self.linear else ("linear",)
-
-    def solve_tangent(self, rhs, out):
-        out.data = self._inv * rhs
-
-    def admissible(self, vec) -> bool:
-        if self._guard is None:
-            return bool(np.all(np.isfinite(vec.FV().NumPy())))
-        self._gtrial.vec.data = vec
-        vals = self._guard_cf(self._guard_pts)
-        return bool(np.all(np.isfinite(vals)) and np.min(vals) > 0.0)
-
-    def load_norm(self, load):
-        """Norm of the external load vector (the residual at u = 0) at load factor ``load``."""
-        if self._fixed_loads and self._unit_load_norm is not None:
-            return abs(load) * self._unit_load_norm
-        if self._lin is not None and not self._fixed_loads:
-            # R(0) = -s f: the norm of the (design-dependent) load vector, no residual needed
-            return abs(load) * self._lin.load_norm()
-        if self._load_form is not None:
-            f = self._load_form.vec.FV().NumPy() + self._body_load().FV().NumPy()
-            return abs(load) * float(np.linalg.norm(f[self.free]))
-        if self._fixed_loads:
-            self._ext[:] = 0.0
-            self.residual(self._ext, self._rhs, 1.0)
-            self._unit_load_norm = float(np.linalg.norm(self._rhs.FV().NumPy()[self.free]))
-            # the unit external load vector f (R(0) = -f), kept for the self-adjoint shortcut
-            self._f_unit = self._rhs.FV().NumPy().copy()
-            self._f_unit[~self.free] = 0.0
-            self._f_unit *= -1.0
-            return abs(load) * self._unit_load_norm
-        self._ext[:] = 0.0
-        self.residual(self._ext, self._rhs, load)
-        return float(np.linalg.norm(self._rhs.FV().NumPy()[self.free]))
-
-    def load_changed(self):
-        """Say that the loads changed outside the load factor (e.g. a pressure Parameter inside
-        a load): the unit load vector and its norm, kept for design-independent loads, are
-        recomputed at the next use."""
-        self._unit_load_norm = None
-        self._f_unit = None
-
-    # -- the warm state ---------------------------------------------------------------------
-    @property
-    def state(self) -> np.ndarray:
-        """A copy of the current displacement vector (the next forward pass's warm start)."""
-        return self.gfu.vec.FV().NumPy().copy()
-
-    @property
-    def state_converged(self) -> bool:
-        """Whether the current displacement is a converged equilibrium."""
-        return bool(self.result is not None and self.result.converged)
-
-    def set_state(self, u=None, *, converged: bool, result: NewtonResult | None = None):
-        """Set the displacement (a numpy array or vector; None keeps it) and whether it is an
-        equilibrium: the next forward pass starts from it if so, else ramps from zero.
-        ``result`` (a :class:`NewtonResult`) replaces the default record of a converged state
-        at the full load."""
-        if u is not None:
-            if isinstance(u, np.ndarray):
-                self.gfu.vec.FV().NumPy()[:] = u
-            else:
-                self.gfu.vec.data = u
-        if result is not None:
-            self.result = result
-        else:
-            self.result = NewtonResult(True, load_reached=1.0) if converged else None
-
-    # -- block interface ------------------------------------------------------------------------
-    def set_fields(self, *values):
-        for f, v in zip(self.fields, values):
-            if isinstance(v, np.ndarray):
-                # densities live in [0, 1]; round-off below 0 (or -0.0) would make ρ^p NaN
-                f.gf.vec.FV().NumPy()[:] = np.where(v > 0.0, v, 0.0)
-            else:
-                f.gf.vec.data = v
-        self._tangent_at = None  # a new design: any factorisation is stale
-        self._fbody_stale = True  # ... and so is the body load (it depends on the fields)
-        if self._lin is not None:
-            self._lin.stale = True
-
-    def forward(self, *values):
-        self.set_fields(*values)
-        # warm start from the last equilibrium (also one a failed solve reached on its way)
-        warm = self.result is not None and (self.result.converged or self.result.load_reached > 0)
-        if self.linear:
-            warm = True  # one Newton step from any state solves a linear problem
-        res = solve_with_continuation(self, self.gfu.vec, self.target, self.settings, warm=warm,
-                                      linear=self.linear, first_increment=self._ramp_first)
-        if res.ramp_first is not None:
-            self._ramp_first = res.ramp_first  # where the next ramp from zero starts
-        self.result = res
-        if not res.converged:
-            raise NewtonFailure(res)
-        out = self.gfu.vec.CreateVector()
-        out.data = self.gfu.vec
-        self._adjoint_ready = False
-        return out
-
-    def _ensure_tangent(self):
-        """Factorise the tangent at the converged state (once per forward pass)."""
-        if self._adjoint_ready:
-            return
-        # a linear problem's tangent does not depend on u: the one Newton factorised is exact
-        if not (self.linear and self._tangent_at is not None):
-            self.assemble_tangent(self.gfu.vec, self.target)
-        self._adjoint_ready = True
-
-    def adjoint(self, dJdu):
-        """Solve ``Kᵀ λ = dJ/du`` with the tangent at the solution; returns λ (a vector).
-
-        Self-adjoint shortcut: for a linear problem with design-independent loads, when
-        ``dJ/du = c f`` (compliance) the adjoint is ``λ = (c / s) u`` with no solve at all
-        (``K u = s f``).  ``adjoint_solves_skipped`` counts the shortcuts, ``adjoint_solves``
-        the solves.
-        """
-        lam = self.gfu.vec.CreateVector()
-        f = self._f_unit
-        if (self.self_adjoint_shortcut and self.linear and self._fixed_loads and self.symmetric
-                and f is not None and self.target != 0):
-            g = dJdu.FV().NumPy()
-            ff = float(f @ f)
-            c = float(g[self.free] @ f[self.free]) / ff if ff > 0 else 0.0
-            resid = g.copy()
-            resid[self.free] -= c * f[self.free]
-            resid[~self.free] = 0.0
-            if ff > 0 and float(resid @ resid) <= 1e-24 * max(float(g[self.free] @ g[self.free]), 1e-300):
-                lam.data = (c / self.target) * self.gfu.vec
-                self.adjoint_solves_skipped += 1
-                return lam
-        self._ensure_tangent()
-        lam.data = (self._inv if self.symmetric else self._inv.T) * dJdu
-        self.adjoint_solves += 1
-        return lam
-
-    def field_sensitivity(self, name) -> np.ndarray:
-        """``λᵀ ∂R/∂field`` (numpy) for the current ``u`` (``gfu``), ``λ`` (``lam``) and design."""
-        g = self._sens.minus(self.fields[self.inputs.index(name)])
-        return -(g if isinstance(g, np.ndarray) else g.FV().NumPy())
-
-    def backward(self, dJdu):
-        lam = self.adjoint(dJdu)
-        self.lam.vec.data = lam
-        return tuple(self._sens.minus(f) for f in self.fields)

@@ -101,7 +101,7 @@ def default_pressures(load: float, n: int = 5, span: float = 100.0) -> list[floa
 def expected_sweep(problem, x, pressures, load) -> list[dict]:
     """Δ of the density design with the optimisation's own model at every pressure (see the
     module docstring).  Leaves the problem at the last pressure."""
-    from ..physics.mechanics import NewtonFailure
+    from ..physics.equilibrium import NewtonFailure
 
     mech = problem.mech
     mech.set_state(np.zeros_like(mech.state), converged=False)

@@ -34,9 +34,10 @@ from typing import Callable
 import numpy as np
 
 from ..physics.energy import declare
+from ..physics.equilibrium import NewtonFailure
 from ..physics.loads import Port
 from ..physics.materials import jacobian, neohookean_energy
-from ..physics.mechanics import Mechanics, NewtonFailure, Supports
+from ..physics.mechanics import Mechanics, Supports
 from ..physics.newton import NewtonSettings
 from .boundary import named_points
 

@@ -81,7 +81,7 @@ def rebuild(run: Run):
     """The run's problem with its final design analysed at the run's load (as ``run.py`` does
     for summary.json).  Returns the problem; ``problem.values`` hold ρ̄, p and Δ."""
     from ..case import build_problem
-    from ..physics.mechanics import NewtonFailure
+    from ..physics.equilibrium import NewtonFailure
 
     problem = build_problem(run.case, run.params)
     if run.x.size != problem.field.n * problem.n_design_fields:

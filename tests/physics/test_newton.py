@@ -11,9 +11,10 @@ import pytest
 
 from nonlinear_setup import cantilever, cantilever_mesh
 from pacto_ng.mesh import Layout, Segment, structured_mesh
+from pacto_ng.physics.equilibrium import NewtonFailure
 from pacto_ng.physics.loads import PointLoad
 from pacto_ng.physics.materials import jacobian, lame, neohookean_energy, svk_energy
-from pacto_ng.physics.mechanics import Mechanics, NewtonFailure, Supports
+from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.physics.newton import NewtonSettings, solve_with_continuation
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from pacto_ng.optimize.driver import LoopState, optimize
 from pacto_ng.optimize.schedules import Schedule
-from pacto_ng.physics.mechanics import NewtonFailure
+from pacto_ng.physics.equilibrium import NewtonFailure
 from pacto_ng.physics.newton import NewtonResult
 
 

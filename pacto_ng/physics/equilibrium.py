@@ -1,0 +1,229 @@
+"""Solving the mechanics block for equilibrium: the problem
+:func:`~pacto_ng.physics.newton.solve_with_continuation` drives (residual, tangent, its
+factorisation and solves, the admissibility guard, the norm of the external load), the warm
+start and the forward pass.
+
+:class:`Equilibrium` is a part of :class:`~pacto_ng.physics.mechanics.Mechanics` (its methods
+act on the block's forms and routes); :class:`NewtonFailure` is what a forward pass raises when
+no equilibrium is reached.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .newton import NewtonResult, solve_with_continuation
+from .quadrature import guard_rules
+
+
+class NewtonFailure(RuntimeError):
+    """Raised by a forward pass whose equilibrium could not be reached."""
+
+    def __init__(self, result: NewtonResult):
+        super().__init__(f"Newton failed: reached load factor {result.load_reached:.4g} of 1 "
+                         f"({result.reason})")
+        self.result = result
+
+
+class Equilibrium:
+    """The equilibrium part of :class:`~pacto_ng.physics.mechanics.Mechanics` (see the module).
+
+    The load norm's route (:attr:`load_norm_route`): with only design-independent loads the
+    load vector is fixed and its norm is computed once; for a linear system it is the norm of
+    ``f``; for a design-dependent load on a stress-free energy (``∂φ/∂G = 0`` at ``G = 0``,
+    declared) ``R(0) = -s f``, so it is the norm of ``f`` = (point/edge loads) + (body load),
+    with no ``Apply`` of the energy at ``u = 0``; otherwise the residual at ``u = 0``.
+    """
+
+    def _start_equilibrium(self, guard, *, fixed_loads: bool, load_vectors: bool):
+        """The state of this part, once the block's forms are built: ``fixed_loads`` (only
+        design-independent loads) and ``load_vectors`` (the load norm from the load vectors)
+        choose the load norm's route."""
+        from ngsolve import VOL, GridFunction, Grad, LinearForm
+
+        self._guard = guard
+        self._inv = None
+        self._tangent_at = None  # id of the state the factorisation belongs to
+        self.result: NewtonResult | None = None
+        self._ramp_first = None  # first increment of the last successful ramp from zero
+        self._gtrial = GridFunction(self.fes)
+        if guard is not None:
+            self._guard_cf = guard(Grad(self._gtrial), self.coeffs).Compile()
+            self._guard_pts = self.mesh.MapToAllElements(guard_rules(self.rules), VOL)
+        self._rhs = self.gfu.vec.CreateVector()
+        self._ext = self.gfu.vec.CreateVector()
+        # with only design-independent loads the load vector is fixed: its norm is computed once
+        self._fixed_loads = fixed_loads
+        self._unit_load_norm = None
+        self._f_unit = None  # the unit external load vector (the self-adjoint shortcut's)
+        # the point loads are design independent: assembled here, once; the body load is the
+        # residual's own LinearForm (_fbody)
+        self._load_form = None
+        if load_vectors:
+            v = self.fes.TestFunction()
+            self._load_form = LinearForm(self.fes)
+            for ld in self.loads:
+                self._load_form += ld.work(self.mesh, v)
+            self._load_form.Assemble()
+
+    # -- the problem interface used by Newton --------------------------------------------------
+    def residual(self, vec, out, load):
+        self.load.Set(load)
+        if self._lin is not None:
+            self._lin.residual(vec, out, load)
+            return
+        self.a.Apply(vec, out)
+        if self._fbody is not None:
+            out.data -= load * self._body_load()
+
+    def predictor_residual(self, vec, out, load):
+        """``K u - s f`` with the assembled ``K`` (linear systems; one sparse product): Newton's
+        first residual, from which the correction is computed.  Its round-off (products with
+        K cancel where the structure moves rigidly) is corrected by the next iteration, whose
+        convergence test uses :meth:`residual` (element by element)."""
+        if self._lin is None:
+            self.residual(vec, out, load)
+            return
+        self.load.Set(load)
+        self._lin.assemble()
+        out.data = self._lin.a.mat * vec
+        out.data -= load * self._lin.f.vec
+
+    def _body_load(self):
+        """The body-load vector ``t ∫ b·v dΩ`` of the current fields (assembled once per design)."""
+        if self._coupling is not None:
+            if self._fbody_stale:
+                self._coupling.load()
+                self._fbody_stale = False
+            return self._coupling.vec
+        if self._fbody_stale:
+            self._fbody.Assemble()
+            self._fbody_stale = False
+        return self._fbody.vec
+
+    @property
+    def matrix(self):
+        """The tangent matrix last assembled by :meth:`assemble_tangent`."""
+        return self._lin.a.mat if self._lin is not None else self.a.mat
+
+    def assemble_tangent(self, vec, load):
+        self.load.Set(load)
+        if self._lin is not None:
+            if self._tangent_at is not None:
+                return  # u- and load-independent: this design's matrix is factorised already
+            self._lin.assemble()
+        else:
+            self.a.AssembleLinearization(vec)
+        if self._inv is None:
+            self._inv = self.matrix.Inverse(self.fes.FreeDofs(), inverse=self.inverse_type)
+        else:
+            self._inv.Update()
+        self._tangent_at = (load, vec.FV().NumPy().copy()) if not self.linear else ("linear",)
+
+    def solve_tangent(self, rhs, out):
+        out.data = self._inv * rhs
+
+    def admissible(self, vec) -> bool:
+        if self._guard is None:
+            return bool(np.all(np.isfinite(vec.FV().NumPy())))
+        self._gtrial.vec.data = vec
+        vals = self._guard_cf(self._guard_pts)
+        return bool(np.all(np.isfinite(vals)) and np.min(vals) > 0.0)
+
+    def load_norm(self, load):
+        """Norm of the external load vector (the residual at u = 0) at load factor ``load``."""
+        if self._fixed_loads and self._unit_load_norm is not None:
+            return abs(load) * self._unit_load_norm
+        if self._lin is not None and not self._fixed_loads:
+            # R(0) = -s f: the norm of the (design-dependent) load vector, no residual needed
+            return abs(load) * self._lin.load_norm()
+        if self._load_form is not None:
+            f = self._load_form.vec.FV().NumPy() + self._body_load().FV().NumPy()
+            return abs(load) * float(np.linalg.norm(f[self.free]))
+        if self._fixed_loads:
+            self._ext[:] = 0.0
+            self.residual(self._ext, self._rhs, 1.0)
+            self._unit_load_norm = float(np.linalg.norm(self._rhs.FV().NumPy()[self.free]))
+            # the unit external load vector f (R(0) = -f), kept for the self-adjoint shortcut
+            self._f_unit = self._rhs.FV().NumPy().copy()
+            self._f_unit[~self.free] = 0.0
+            self._f_unit *= -1.0
+            return abs(load) * self._unit_load_norm
+        self._ext[:] = 0.0
+        self.residual(self._ext, self._rhs, load)
+        return float(np.linalg.norm(self._rhs.FV().NumPy()[self.free]))
+
+    @property
+    def load_norm_route(self) -> str:
+        """How :meth:`load_norm` is computed: ``"fixed"``, ``"linear_system"``,
+        ``"load_vectors"`` or ``"residual"`` (see the class)."""
+        if self._fixed_loads:
+            return "fixed"
+        if self._lin is not None:
+            return "linear_system"
+        if self._load_form is not None:
+            return "load_vectors"
+        return "residual"
+
+    def load_changed(self):
+        """Say that the loads changed outside the load factor (e.g. a pressure Parameter inside
+        a load): the unit load vector and its norm, kept for design-independent loads, are
+        recomputed at the next use."""
+        self._unit_load_norm = None
+        self._f_unit = None
+
+    # -- the warm state ---------------------------------------------------------------------
+    @property
+    def state(self) -> np.ndarray:
+        """A copy of the current displacement vector (the next forward pass's warm start)."""
+        return self.gfu.vec.FV().NumPy().copy()
+
+    @property
+    def state_converged(self) -> bool:
+        """Whether the current displacement is a converged equilibrium."""
+        return bool(self.result is not None and self.result.converged)
+
+    def set_state(self, u=None, *, converged: bool, result: NewtonResult | None = None):
+        """Set the displacement (a numpy array or vector; None keeps it) and whether it is an
+        equilibrium: the next forward pass starts from it if so, else ramps from zero.
+        ``result`` (a :class:`NewtonResult`) replaces the default record of a converged state
+        at the full load."""
+        if u is not None:
+            if isinstance(u, np.ndarray):
+                self.gfu.vec.FV().NumPy()[:] = u
+            else:
+                self.gfu.vec.data = u
+        if result is not None:
+            self.result = result
+        else:
+            self.result = NewtonResult(True, load_reached=1.0) if converged else None
+
+    # -- block interface ------------------------------------------------------------------------
+    def set_fields(self, *values):
+        for f, v in zip(self.fields, values):
+            if isinstance(v, np.ndarray):
+                # densities live in [0, 1]; round-off below 0 (or -0.0) would make ρ^p NaN
+                f.gf.vec.FV().NumPy()[:] = np.where(v > 0.0, v, 0.0)
+            else:
+                f.gf.vec.data = v
+        self._tangent_at = None  # a new design: any factorisation is stale
+        self._fbody_stale = True  # ... and so is the body load (it depends on the fields)
+        if self._lin is not None:
+            self._lin.stale = True
+
+    def forward(self, *values):
+        self.set_fields(*values)
+        # warm start from the last equilibrium (also one a failed solve reached on its way)
+        warm = self.result is not None and (self.result.converged or self.result.load_reached > 0)
+        if self.linear:
+            warm = True  # one Newton step from any state solves a linear problem
+        res = solve_with_continuation(self, self.gfu.vec, self.target, self.settings, warm=warm,
+                                      linear=self.linear, first_increment=self._ramp_first)
+        if res.ramp_first is not None:
+            self._ramp_first = res.ramp_first  # where the next ramp from zero starts
+        self.result = res
+        if not res.converged:
+            raise NewtonFailure(res)
+        out = self.gfu.vec.CreateVector()
+        out.data = self.gfu.vec
+        self._adjoint_ready = False
+        return out
