@@ -242,7 +242,7 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
         for k in kinds:
             pt = res.sweeps[k].points[i]
             row[k] = {"delta": num_or_none(pt.delta),
-                      "ports": {p.region: num_or_none(v) for p, v in zip(ports, pt.ports)},
+                      "ports": {q.region: num_or_none(v) for q, v in zip(ports, pt.ports)},
                       "max_u": num_or_none(pt.max_u), "min_J": num_or_none(pt.min_j),
                       "newton_iterations": int(pt.iterations), "converged": bool(pt.converged)}
         rows.append(row)
