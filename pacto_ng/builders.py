@@ -112,6 +112,11 @@ def design_chain(meshed, setup, params) -> DesignChain:
     except ValueError as err:
         raise InputError(str(err)) from None
     radius = params.filter_radius or 3.0 * meshed.h
+    corners = np.array([v.point for v in mesh.vertices])
+    diameter = float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
+    if radius > diameter:
+        raise InputError(f"filter_radius: {radius:g} is larger than the domain ({diameter:g} "
+                         "across): the filter would average the whole design")
     nf = setup.materials
     names = ("rho_bar",) if nf == 1 else ("rho_bar1", "rho_bar2")
     blocks, projections = [], []
@@ -155,6 +160,9 @@ def pressure_load(meshed, setup, params, energy, names, case_name: str) -> Press
     if params.delta_s < 0.1 * h:
         raise InputError(f"delta_s: {params.delta_s:g} is below a tenth of the element size "
                          f"{h:g} (set delta_s in the units of the mesh)")
+    if not abs(params.p_out) < params.load:
+        raise InputError(f"p_out: the outside pressure {params.p_out:g} must be smaller in size "
+                         f"than the inlet pressure (load {params.load:g})")
     pressure = setup.pressure
     if params.inlet:
         pressure = Pressure(inlet=tuple(params.inlet.split("|")), zero=pressure.zero)

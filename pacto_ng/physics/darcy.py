@@ -51,16 +51,17 @@ __all__ = ["DarcySettings", "DarcyPressure"]
 class DarcySettings(Settings):
     """The Darcy–drainage pressure model (SPEC §2, thesis Table 6.1) and its load."""
 
-    Kv: float = setting(1.0, "m^2/(Pa s)", "flow coefficient of void", range="(0, inf)")
-    Ks: float = setting(1e-7, "m^2/(Pa s)", "flow coefficient of solid", range="(0, inf)")
+    Kv: float = setting(1.0, "m^2/(Pa s)", "flow coefficient of void", range="[1e-30, 1e30]")
+    Ks: float = setting(1e-7, "m^2/(Pa s)", "flow coefficient of solid", range="[1e-30, 1e30]")
     eta_k: float = setting(0.3, "", "flow coefficient step threshold ηk", range="(0, 1)")
     beta_k: float = setting(10.0, "", "flow coefficient step sharpness βk", range="[0, 1e4]")
     eta_h: float = setting(0.2, "", "drainage step threshold ηh", range="(0, 1)")
     beta_h: float = setting(10.0, "", "drainage step sharpness βh", range="[0, 1e4]")
     r: float = setting(0.1, "", "pressure ratio reached at depth delta_s in solid",
                        range="(0, 1)")
-    delta_s: float = setting(0.002, "m", "pressure penetration depth Δs", range="(0, inf)")
-    p_out: float = setting(0.0, "Pa", "drainage outside pressure", range="[-1e300, 1e300]")
+    delta_s: float = setting(0.002, "m", "pressure penetration depth Δs", range="(0, 1e9]")
+    p_out: float = setting(0.0, "Pa", "drainage outside pressure (its size below the inlet "
+                           "pressure, the load)", range="[-1e30, 1e30]")
     load_type: str = setting("fixed", "", "Darcy load: fixed | follower",
                              choices=("fixed", "follower"))
     follower_wang: bool = setting(True, "", "Wang model: the follower load sees I + γ∇u "

@@ -139,12 +139,13 @@ class MaterialSettings(Settings):
     model: str = setting("linear", "", "mechanics: " + " | ".join(MODELS + ("auto",)),
                          choices=MODELS + ("auto",))
     plane: str = setting("strain", "", "strain | stress", choices=("strain", "stress"))
-    thickness: float = setting(1e-3, "m", "out-of-plane thickness t", range="(0, inf)")
+    thickness: float = setting(1e-3, "m", "out-of-plane thickness t", range="[1e-9, 1e9]")
     E1: float = setting(3e9, "Pa", "Young's modulus of the solid (soft material with two "
-                        "materials)", range="(0, inf)")
+                        "materials)", range="[1e-12, 1e15]")
     E2: float = setting(3e9, "Pa", "Young's modulus of the stiff second material",
-                        range="(0, inf)")
-    E0: float = setting(3e3, "Pa", "Young's modulus of void", range="(0, inf)")
+                        range="[1e-12, 1e15]")
+    E0: float = setting(3e3, "Pa", "Young's modulus of void (at least 1e-12 E1)",
+                        range="(0, 1e15]")
     nu: float = setting(0.4, "", "Poisson's ratio", range="(-1, 0.5)")
     wang_beta: float = setting(100.0, "", "Wang interpolation sharpness β1", range="(0, 1e6]")
     wang_eta: float = setting(0.001, "", "Wang interpolation threshold η1", range="(0, 1)")
@@ -154,6 +155,10 @@ class MaterialSettings(Settings):
     def check(self):
         if not self.E0 < self.E1:
             raise InputError(f"E0: must be smaller than E1 (got {self.E0:g} >= {self.E1:g})")
+        if self.E0 < 1e-12 * self.E1:
+            raise InputError(f"E0: must be at least 1e-12 E1 (got {self.E0:g} for E1 = "
+                             f"{self.E1:g}): softer void makes the tangent singular in double "
+                             "precision")
         if self.wang_gamma != -1.0 and not 0.0 <= self.wang_gamma <= 1.0:
             raise InputError(f"wang_gamma: must be -1 (eq. 5.2) or lie in [0, 1] (got "
                              f"{self.wang_gamma:g})")
