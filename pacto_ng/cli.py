@@ -22,6 +22,7 @@ exits with 1 after saving the last good design.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 
@@ -31,6 +32,28 @@ from .params import InputError, Parameters
 class _Parser(argparse.ArgumentParser):
     def error(self, message):
         raise InputError(message)
+
+
+def _positive(text: str) -> float:
+    """A finite positive number (argparse type)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got '{text}'")
+    return value
+
+
+def _seed(text: str) -> int:
+    """A random seed: an integer in [0, 2**32) (argparse type)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value < 2 ** 32:
+        raise argparse.ArgumentTypeError(f"expected an integer from 0 to 2**32 - 1, got '{text}'")
+    return value
 
 
 def _case_options(p: argparse.ArgumentParser):
@@ -69,8 +92,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="treat the densities as design variables (filter and project them)")
     g = sub.add_parser("check-gradients", help="finite-difference check of the full chain")
     _case_options(g)
-    g.add_argument("--tol", type=float, default=1e-5, help="largest relative error accepted")
-    g.add_argument("--seed", type=int, default=0)
+    g.add_argument("--tol", type=_positive, default=1e-5, help="largest relative error accepted")
+    g.add_argument("--seed", type=_seed, default=0, help="seed of the random design and "
+                   "directions (0 to 2**32 - 1)")
     _post_parsers(sub)
     s = sub.add_parser("resume", help="continue a run from its checkpoint")
     s.add_argument("dir")
