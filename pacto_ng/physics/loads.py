@@ -22,7 +22,7 @@ class LoadSettings(Settings):
 
     load: float = setting(1.0, "N", "load magnitude (force in N, or inlet pressure in Pa); "
                           "positive: the case's force directions and inlet set the sign",
-                          range="(0, 1e30]")
+                          range="[1e-20, 1e30]")
     k_out: float = setting(0.0, "N/m", "output spring stiffness", range="[0, 1e30]")
 
 
