@@ -7,6 +7,7 @@ import time
 
 import numpy as np
 
+from .files import atomic_path, atomic_write_text, claim_folder
 from .params import InputError
 
 
@@ -39,9 +40,10 @@ def deformed_png(path, mesh, gfu, title: str):
     plt.close(fig)
 
 
-def run_analysis_case(case, params, out, *, quiet: bool = False) -> int:
+def run_analysis_case(case, params, out, *, quiet: bool = False, overwrite: bool = False) -> int:
+    """The C-beam's load-factor sweep: summary.json and deformed.png in ``out`` (a folder
+    holding earlier results is refused unless ``overwrite``)."""
     from .runner import prepare_output
-    from .studies import c_beam_limit
 
     if case.name != "c-beam":
         raise InputError(f"case '{case.name}' has no analysis driver")
@@ -49,6 +51,13 @@ def run_analysis_case(case, params, out, *, quiet: bool = False) -> int:
         raise InputError(f"model: '{params.model}' cannot be used for the C-beam analysis")
     params = case.resolve(params)
     path = prepare_output(out)
+    with claim_folder(path, "run", overwrite=overwrite):
+        return _c_beam(case, params, path, quiet)
+
+
+def _c_beam(case, params, path, quiet: bool) -> int:
+    from .studies import c_beam_limit
+
     t0 = time.perf_counter()
     mesh_kind, h = ("quad", 10.0 / params.nelx) if params.nelx > 0 else ("trig", params.maxh)
     # the case's own loads: f1 downward at the top arm's end, f2 rightward at the bottom's
@@ -71,10 +80,11 @@ def run_analysis_case(case, params, out, *, quiet: bool = False) -> int:
         "wall_time_s": wall,
         "thesis_forces_N": {"neohookean": [0.0009, 0.0099], "wang": [0.0055, 0.0145]},
     }
-    (path / "summary.json").write_text(json.dumps(summ, indent=1))
-    deformed_png(path / "deformed.png", res.mechanics.mesh, res.mechanics.gfu,
-                 f"C-beam, {params.model}: λ = {res.load_factor:.3g}, "
-                 f"(f1, f2) = ({res.forces[0]:.2g}, {res.forces[1]:.2g}) N")
+    with atomic_path(path / "deformed.png") as tmp:
+        deformed_png(tmp, res.mechanics.mesh, res.mechanics.gfu,
+                     f"C-beam, {params.model}: λ = {res.load_factor:.3g}, "
+                     f"(f1, f2) = ({res.forces[0]:.2g}, {res.forces[1]:.2g}) N")
+    atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: complete
     if not quiet:
         print(f"c-beam {params.model}: largest load factor {res.load_factor:.4g} -> (f1, f2) = "
               f"({res.forces[0]:.4g}, {res.forces[1]:.4g}) N; stopped: {res.reason}; output in {path}")

@@ -4,8 +4,8 @@
     pacto new NAME
     pacto run CASE [--model M] [--load V] [--iterations N] [--maxh H | --nelx NX --nely NY]
                    [--order K] [--optimizer mma|gcmma] [--set NAME=VALUE ...] [--out DIR]
-                   [--quiet] [--show-parameters]
-    pacto evaluate CASE --density FILE [--filtered] [same options]
+                   [--overwrite] [--quiet] [--show-parameters]
+    pacto evaluate CASE --density FILE [--filtered] [same options] [--overwrite]
     pacto check-gradients CASE [same options] [--tol T]
     pacto resume DIR [--quiet]
     pacto sweep CASE --loads L1,L2,... [--models M1,M2] [--scheduler ADDRESS] [--workers N]
@@ -17,7 +17,9 @@
     pacto compare DIR1 DIR2 ... [--out FILE.png]
 
 Bad input gives a one-line error on stderr and exit code 2; a run stopped by a Newton failure
-exits with 1 after saving the last good design.
+exits with 1 after saving the last good design.  An output folder that already holds a run is
+refused (exit 2): resume it, choose another --out, or add --overwrite.  SIGINT, SIGTERM and
+SIGHUP stop a run with one line saying what is kept (exit 128 + the signal's number).
 """
 from __future__ import annotations
 
@@ -83,6 +85,8 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="optimise a case")
     _case_options(r)
     r.add_argument("--show-parameters", action="store_true", help="print every parameter and exit")
+    r.add_argument("--overwrite", action="store_true", help="the --out folder may hold an earlier "
+                   "run: remove that run's files first (by default such a folder is refused)")
     e = sub.add_parser("evaluate", help="analyse a given design (no optimisation)")
     _case_options(e)
     e.add_argument("--density", required=True, help="element densities ρ̄ (.npy, .csv, .txt: "
@@ -90,6 +94,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "checkpoint.npz (its design variables, filtered and projected)")
     e.add_argument("--filtered", action="store_true",
                    help="treat the densities as design variables (filter and project them)")
+    e.add_argument("--overwrite", action="store_true", help="the --out folder may hold earlier "
+                   "results: remove them first (default --out: output/CASE-MODEL-evaluate)")
     g = sub.add_parser("check-gradients", help="finite-difference check of the full chain")
     _case_options(g)
     g.add_argument("--tol", type=_positive, default=1e-5, help="largest relative error accepted")
@@ -201,28 +207,72 @@ def _show_parameters(case, params: Parameters):
         print(f"  {name:18s} {val!s:>12s} {unit:12s} {help_}")
 
 
-def _default_out(args, case, params):
-    return args.out or f"output/{case.name}-{params.model}"
+def _default_out(args, case, params, suffix=""):
+    return args.out or f"output/{case.name}-{params.model}{suffix}"
+
+
+class _Signalled(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, raised like Ctrl-C's KeyboardInterrupt so that a run stops the same
+    way (its checkpoint kept, no file half written)."""
+
+
+def _raise_signalled(signum, frame):
+    raise _Signalled(signum)
+
+
+def _stop_signals():
+    """SIGTERM and SIGHUP stop the command as SIGINT does; returns the handlers to restore."""
+    import signal
+
+    old = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is None:
+            continue
+        try:
+            old[sig] = signal.signal(sig, _raise_signalled)
+        except ValueError:  # not the main thread: leave the signals alone
+            break
+    return old
+
+
+def _interrupted(err: KeyboardInterrupt) -> int:
+    """The one line of an interrupted command (what is kept, how to go on); 128 + signal."""
+    import signal
+
+    signum = err.args[0] if isinstance(err, _Signalled) and err.args else signal.SIGINT
+    name = signal.Signals(signum).name
+    note = getattr(err, "pacto_note", None)
+    try:
+        print(f"pacto: interrupted by {name}" + (f": {note}" if note else ""), file=sys.stderr)
+    except OSError:  # a hung-up terminal
+        pass
+    return 128 + int(signum)
 
 
 def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
+    import signal
+
     from .threads import compute
 
+    argv = sys.argv[1:] if argv is None else argv
+    handlers = _stop_signals()
     try:
         with compute():
             return _main(argv)
     except InputError as err:
         print(f"pacto: error: {err}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("pacto: interrupted (the checkpoint of the last iteration is kept)", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as err:
+        return _interrupted(err)
     except BrokenPipeError:
         # the reader of the output went away (e.g. '| head'): stop quietly, as the
         # Python documentation advises, so that the interpreter's final flush cannot fail
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1
+    finally:
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
 
 
 def _main(argv) -> int:
@@ -259,10 +309,12 @@ def _main(argv) -> int:
         if case.analysis_only:
             from .analysis_case import run_analysis_case
 
-            return run_analysis_case(case, params, _default_out(args, case, params), quiet=args.quiet)
+            return run_analysis_case(case, params, _default_out(args, case, params),
+                                     quiet=args.quiet, overwrite=args.overwrite)
         from .runner import run_case
 
-        return run_case(case, params, _default_out(args, case, params), quiet=args.quiet)
+        return run_case(case, params, _default_out(args, case, params), quiet=args.quiet,
+                        overwrite=args.overwrite)
     if args.command == "sweep":
         from . import sweep
 
@@ -273,8 +325,9 @@ def _main(argv) -> int:
     if args.command == "evaluate":
         from .evaluate import evaluate_design
 
-        return evaluate_design(case, params, args.density, _default_out(args, case, params),
-                               filtered=args.filtered, quiet=args.quiet)
+        return evaluate_design(case, params, args.density,
+                               _default_out(args, case, params, "-evaluate"),
+                               filtered=args.filtered, quiet=args.quiet, overwrite=args.overwrite)
     if args.command == "check-gradients":
         from .gradcheck import check_case
 

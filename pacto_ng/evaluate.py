@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .case import Case, Problem, build_problem
+from .files import RUN_FILES, atomic_write_text, claim_folder
 from .outputs import summary_dict, write_vtu
 from .params import InputError, Parameters
 from .physics.equilibrium import NewtonFailure
@@ -110,9 +111,22 @@ def _vtu_element_field(fp: Path, name: str, ne: int) -> np.ndarray:
 
 
 def evaluate_design(case: Case, params: Parameters, density: str, out, *, filtered: bool,
-                    quiet: bool = False) -> int:
-    """One analysis of a given design (no optimisation); writes summary.json and design.vtu."""
+                    quiet: bool = False, overwrite: bool = False) -> int:
+    """One analysis of a given design (no optimisation); writes summary.json and design.vtu.
+
+    A folder holding a run or earlier results is refused (one-line InputError) unless
+    ``overwrite``: then pacto's files in it are removed first."""
     path = prepare_output(out)
+    src = Path(density)
+    if overwrite and src.name in RUN_FILES and src.resolve().parent == path.resolve():
+        raise InputError(f"evaluate --overwrite: --density '{density}' is one of the files it "
+                         "would remove: choose another --out")
+    with claim_folder(path, "evaluate", overwrite=overwrite):
+        return _evaluate(case, params, density, path, filtered=filtered, quiet=quiet)
+
+
+def _evaluate(case: Case, params: Parameters, density: str, path: Path, *, filtered: bool,
+              quiet: bool) -> int:
     t0 = time.perf_counter()
     problem = build_problem(case, params)
     arr, filtered = read_density(density, problem, filtered=filtered)
@@ -145,8 +159,8 @@ def evaluate_design(case: Case, params: Parameters, density: str, out, *, filter
     summ = summary_dict(problem, [], _R, time.perf_counter() - t0)
     summ["evaluated_from"] = str(density)
     summ["filtered"] = filtered
-    (path / "summary.json").write_text(json.dumps(summ, indent=1))
     write_vtu(path / "design", problem, x)
+    atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: complete
     if not quiet:
         keys = ("objective", "compliance", "output_displacement", "strain_energy", "volume_fraction")
         print("  ".join(f"{k} {summ[k]:.6g}" for k in keys if summ[k] is not None))

@@ -9,16 +9,21 @@ DIR/design.png         the physical density (a half-domain case mirrored: the wh
 DIR/pressure.png       pressure cases: p / P_in with the ρ̄ = 0.5 contour (leakage in summary.json)
 DIR/materials.png      two-material cases: where the soft and the stiff material are
 DIR/convergence.png    objective and volume against iteration
+
+Each file is written whole or not at all (:mod:`pacto_ng.files`), summary.json last: a folder
+with a summary.json holds a finished run's complete results.
 """
 from __future__ import annotations
 
 import csv
+import io
 import json
 from pathlib import Path
 
 import numpy as np
 
 from .case import Problem
+from .files import atomic_path, atomic_write_text, check_tail
 
 #: the columns of history.csv (one row per iteration), then the case's reported responses
 HISTORY_COLUMNS = ("iteration", "objective", "volume", "constraint", "change", "penal", "beta",
@@ -109,26 +114,32 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
     for key in ("objective", "volume_fraction"):
         if summ[key] is not None and not np.isfinite(summ[key]):
             raise RuntimeError(f"{key} is not finite: nothing written")
-    (path / "summary.json").write_text(json.dumps(summ, indent=1))
     # written even when no iteration finished (a Newton failure in the first one): a header only
     keys = list(history[0].keys()) if history else list(HISTORY_COLUMNS) + list(problem.reports)
-    with open(path / "history.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=keys)
-        w.writeheader()
-        w.writerows(history)
+    buf = io.StringIO(newline="")
+    w = csv.DictWriter(buf, fieldnames=keys)
+    w.writeheader()
+    w.writerows(history)
+    atomic_write_text(path / "history.csv", buf.getvalue())
     write_vtu(path / "design", problem, x)
-    density_png(path / "design.png", problem)
+    with atomic_path(path / "design.png") as tmp:
+        density_png(tmp, problem)
     if problem.pressure_block is not None:
-        pressure_png(path / "pressure.png", problem, leakage=summ.get("leakage"),
-                     leakage_any=summ["leakage_detail"]["leakage_any"])
+        with atomic_path(path / "pressure.png") as tmp:
+            pressure_png(tmp, problem, leakage=summ.get("leakage"),
+                         leakage_any=summ["leakage_detail"]["leakage_any"])
     if problem.n_design_fields == 2:
-        materials_png(path / "materials.png", problem)
+        with atomic_path(path / "materials.png") as tmp:
+            materials_png(tmp, problem)
     if history:
-        convergence_png(path / "convergence.png", history, problem.objective)
+        with atomic_path(path / "convergence.png") as tmp:
+            convergence_png(tmp, history, problem.objective)
+    atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ
 
 
 def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
+    """``stem``.vtu (atomically): x, ρ̄, u (and p) and the strain and stress measures."""
     from ngsolve import GridFunction, VTKOutput
 
     mech = problem.mech
@@ -160,8 +171,11 @@ def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
             gf = GridFunction(mech.l2)
             gf.Set(cf[i, j])  # element mean (P0 projection)
             add_l2(f"{name}_{comp}", gf.vec.FV().NumPy().copy())
-    VTKOutput(problem.mesh, coefs=coefs, names=names, filename=str(stem),
-              subdivision=0 if problem.params.order == 1 else 1, legacy=False).Do()
+    target = Path(stem).with_name(Path(stem).name + ".vtu")
+    with atomic_path(target) as tmp:
+        VTKOutput(problem.mesh, coefs=coefs, names=names, filename=str(tmp.with_suffix("")),
+                  subdivision=0 if problem.params.order == 1 else 1, legacy=False).Do()
+        check_tail(tmp, b"</VTKFile>", target)  # VTKOutput does not report a failed write
 
 
 def strain_stress_measures(problem: Problem) -> dict:

@@ -3,8 +3,13 @@
 DIR/params.json        case name, case file and every parameter (written first; ``pacto resume``
                        reads it)
 DIR/checkpoint.npz     design, optimiser state, history, warm-start displacement (every iteration)
+DIR/.pacto.lock        held while a process writes DIR (a second one is refused)
 
-and the results of :mod:`pacto_ng.outputs` (summary.json, history.csv, design.vtu, pictures).
+and the results of :mod:`pacto_ng.outputs` (summary.json, history.csv, design.vtu, pictures;
+summary.json last: a folder without it holds no finished run).  Every file is written whole or
+not at all (:mod:`pacto_ng.files`): a run killed at any moment, even by ``kill -9``, is
+continued by ``pacto resume DIR`` and ends with the design of an uninterrupted run.  A folder
+that already holds a run is refused unless resumed or ``overwrite`` removes its files first.
 """
 from __future__ import annotations
 
@@ -17,7 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from .case import Case, Problem, build_problem, case_of_run
-from .optimize.driver import LoopState, optimize
+from .files import WriteError, atomic_path, atomic_write_text, claim_folder
+from .optimize.driver import LoopResult, LoopState, optimize
 from .params import InputError, Parameters
 from .physics.equilibrium import NewtonFailure
 from .outputs import write_outputs
@@ -28,7 +34,7 @@ def prepare_output(out: str | os.PathLike) -> Path:
     path = Path(out)
     try:
         path.mkdir(parents=True, exist_ok=True)
-        probe = path / ".write-test"
+        probe = path / f".write-test-{os.getpid()}"
         probe.write_text("")
         probe.unlink()
     except OSError as err:
@@ -75,34 +81,103 @@ def _progress(row: dict, total: int) -> str:
 
 # ------------------------------------------------------------------------------------------
 def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
+    """Everything :func:`load_checkpoint` needs to continue exactly (written atomically)."""
     arrays = dict(k=state.k, x=state.x, scale=np.nan if state.scale is None else state.scale,
                   stable=state.stable, history=json.dumps(state.history),
                   u=problem.mech.state, warm=problem.mech.state_converged,
-                  load_cap=state.load_cap)
+                  load_cap=state.load_cap, load_failed_at=state.load_failed_at,
+                  ramp_first=_ramp_first(problem.mech))
     if state.last_good is not None:
         arrays["last_good"] = state.last_good
     if state.opt_state is not None:
         for key, val in state.opt_state.items():
             arrays["opt_" + key] = np.asarray(val)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(tmp, **arrays)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        np.savez(tmp, **arrays)
+
+
+# Newton's first load increment of the last successful ramp from zero: the next ramp starts
+# with it, so it is part of the warm state a resumed run needs to repeat the uninterrupted one
+# (a Neo-Hookean pa-inverter resumed without it ended 5e-4 away).  Mechanics keeps it private
+# (``_ramp_first``): read and set here until its warm state (state/set_state) carries it.
+def _ramp_first(mech) -> float:
+    value = getattr(mech, "_ramp_first", None)
+    return np.nan if value is None else float(value)
+
+
+def _set_ramp_first(mech, value: float) -> None:
+    if hasattr(mech, "_ramp_first"):
+        mech._ramp_first = None if np.isnan(value) else value
 
 
 def load_checkpoint(path: Path, problem: Problem) -> LoopState:
-    with np.load(path, allow_pickle=False) as data:
-        opt = {key[4:]: (data[key] if data[key].ndim else float(data[key]))
-               for key in data.files if key.startswith("opt_")}
-        scale = float(data["scale"])
-        state = LoopState(k=int(data["k"]), x=data["x"].copy(), opt_state=opt or None,
-                          scale=None if np.isnan(scale) else scale,
-                          history=json.loads(str(data["history"])), stable=int(data["stable"]),
-                          last_good=data["last_good"].copy() if "last_good" in data.files else None,
-                          load_cap=float(data["load_cap"]) if "load_cap" in data.files else 1.0)
-        u = data["u"]
-        if u.size == problem.mech.gfu.vec.size and bool(data["warm"]):
-            problem.mech.set_state(u, converged=True)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            opt = {key[4:]: (data[key] if data[key].ndim else float(data[key]))
+                   for key in data.files if key.startswith("opt_")}
+            scale = float(data["scale"])
+            files = data.files
+            state = LoopState(k=int(data["k"]), x=data["x"].copy(), opt_state=opt or None,
+                              scale=None if np.isnan(scale) else scale,
+                              history=json.loads(str(data["history"])),
+                              stable=int(data["stable"]),
+                              last_good=data["last_good"].copy() if "last_good" in files else None,
+                              load_cap=float(data["load_cap"]) if "load_cap" in files else 1.0,
+                              load_failed_at=(int(data["load_failed_at"])
+                                              if "load_failed_at" in files else -1))
+            u = data["u"]
+            if u.size == problem.mech.gfu.vec.size and bool(data["warm"]):
+                problem.mech.set_state(u, converged=True)
+            if "ramp_first" in files:
+                _set_ramp_first(problem.mech, float(data["ramp_first"]))
+    except (OSError, ValueError, KeyError, EOFError) as err:
+        raise InputError(f"resume: cannot read '{path}' ({type(err).__name__}: {err})") from None
     return state
+
+
+def _replay_last_analysis(problem: Problem, state: LoopState) -> None:
+    """Analyse the checkpoint's last design once more at its iteration's schedule, then restore
+    the warm state.  The Darcy block and the linear system assemble the first design of a
+    process another way than the following ones (equal to round-off, 1e-16); without this a
+    resumed run's first iteration would take the first-design way, and the optimiser would
+    carry that round-off to 1e-10 in x after 20 more iterations.  With it the resumed run
+    repeats the uninterrupted one bit for bit (with one NGSolve thread: with more the assembly's
+    order of summation varies from run to run anyway)."""
+    if not state.history or state.last_good is None:
+        return
+    mech = problem.mech
+    u, warm, ramp = mech.state, mech.state_converged, _ramp_first(mech)
+    last = state.history[-1]
+    problem.apply_schedule(last["penal"], last["beta"], last["load"])
+    try:
+        problem.evaluate(state.last_good, gradients=False)
+    except NewtonFailure:  # nothing is lost: the state is restored below either way
+        pass
+    mech.set_state(u, converged=warm)
+    _set_ramp_first(mech, ramp)
+
+
+def _stopped_converged(state: LoopState, tol: float, obj_tol: float) -> LoopResult | None:
+    """The loop's result when ``state`` is the checkpoint of the iteration at which it stopped
+    converged (the run was killed during its final writes): the driver's own test,
+    ``stable >= 2`` and a feasible last iteration.  None otherwise (the loop goes on)."""
+    if not state.history or state.stable < 2 or state.history[-1]["constraint"] > 1e-3:
+        return None
+    last = state.history[-1]
+    return LoopResult(state, True, "converged",
+                      f"converged at iteration {last['iteration']}: change {last['change']:.3g}, "
+                      f"objective change over 5 iterations below {obj_tol:g} or design change "
+                      f"below {tol:g}")
+
+
+def _kept(path: Path, saved: int | None, total: int) -> str:
+    """What an interrupted or failed run leaves, and how to go on: for one line."""
+    if saved is None:
+        return (f"no iteration was checkpointed; 'pacto resume {path}' starts the run again from "
+                "its params.json")
+    done = "its final results are not all written" if saved >= total else "continue it"
+    return (f"the checkpoint after {saved} of {total} iterations is kept ({done}: "
+            f"'pacto resume {path}')")
 
 
 # ------------------------------------------------------------------------------------------
@@ -119,32 +194,67 @@ class Finished:
 
 
 def run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
-             resume: bool = False) -> int:
+             resume: bool = False, overwrite: bool = False) -> int:
     """Optimise ``case`` with ``params``, writing the output folder.  Returns the exit code:
-    0 finished (converged or iteration limit), 1 stopped by a Newton failure."""
-    return optimise_case(case, params, out, quiet=quiet, resume=resume).exit_code
+    0 finished (converged or iteration limit), 1 stopped by a Newton failure.
+
+    A folder that already holds a run (or results) is refused with a one-line InputError
+    unless ``resume`` (continue its checkpoint) or ``overwrite`` (remove its files first); so
+    is a folder another process is writing."""
+    return optimise_case(case, params, out, quiet=quiet, resume=resume,
+                         overwrite=overwrite).exit_code
 
 
 def optimise_case(case: Case, params: Parameters, out: str | os.PathLike, *,
-                  quiet: bool = False, resume: bool = False) -> Finished:
+                  quiet: bool = False, resume: bool = False, overwrite: bool = False) -> Finished:
     """:func:`run_case`, returning the :class:`Finished` run.  Runs inside NGSolve's task
     manager (:func:`pacto_ng.threads.compute`)."""
     from .threads import compute
 
     with compute():
-        return _run_case(case, params, out, quiet=quiet, resume=resume)
+        return _run_case(case, params, out, quiet=quiet, resume=resume, overwrite=overwrite)
+
+
+class _Progress:
+    """Where a run stands, for the line an interrupt or a failed write ends it with."""
+
+    def __init__(self, path: Path, total: int):
+        self.path, self.total, self.saved = path, total, None
+
+    def note(self) -> str:
+        return _kept(self.path, self.saved, self.total)
 
 
 def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
-              resume: bool = False) -> Finished:
+              resume: bool = False, overwrite: bool = False,
+              model_choice: dict | None = None) -> Finished:
     path = prepare_output(out)
+    if overwrite and params.init_design and Path(params.init_design).resolve() == path.resolve():
+        raise InputError("run --overwrite: init_design is the --out folder, whose checkpoint it "
+                         "would remove before reading it: choose another --out")
+    lock = claim_folder(path, "resume" if resume else "run", overwrite=overwrite, resume=resume)
+    progress = _Progress(path, params.iterations)
+    try:
+        return _optimise(case, params, path, progress, quiet=quiet, resume=resume,
+                         model_choice=model_choice)
+    except KeyboardInterrupt as err:  # SIGINT, and SIGTERM/SIGHUP through pacto's handlers
+        err.pacto_note = progress.note()
+        raise
+    except WriteError as err:  # a full disk: say what is kept
+        err.args = (f"{err.args[0]}; {progress.note()}",)
+        raise
+    finally:
+        lock.release()
+
+
+def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *, quiet: bool,
+              resume: bool, model_choice: dict | None) -> Finished:
     t_start = time.perf_counter()
     if resume and (path / "summary.json").exists():  # a finished run continued: add its time
         try:
             t_start -= float(json.loads((path / "summary.json").read_text())["wall_time_s"])
         except (ValueError, KeyError, TypeError):
             pass
-    model_choice = None
     if params.model == "auto":
         from .auto import choose_model
 
@@ -152,19 +262,21 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         if not quiet:
             print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
     params = case.resolve(params)  # order 0: the case's order for the (chosen) model
-    (path / "params.json").write_text(json.dumps({"case": case.name, "case_file": case.file,
-                                                  "params": params.to_dict(),
-                                                  "model_choice": model_choice}, indent=1))
+    info = {"case": case.name, "case_file": case.file, "params": params.to_dict(),
+            "model_choice": model_choice}
+    _write_params(path / "params.json", info)
     problem = build_problem(case, params)
     problem.model_choice = model_choice
     ckpt = path / "checkpoint.npz"
-    if resume:
-        if not ckpt.exists():
-            raise InputError(f"resume: no checkpoint in '{path}'")
+    if resume and ckpt.exists():
         state = load_checkpoint(ckpt, problem)
+        _replay_last_analysis(problem, state)
+        progress.saved = state.k
         if not quiet:
             print(f"resuming {case.name} at iteration {state.k}")
     else:
+        if resume and not quiet:
+            print(f"resuming {case.name}: no checkpoint yet, starting at iteration 0")
         ref = problem.setup.objective_ref
         state = LoopState(k=0, x=initial_design(problem), opt_state=None,
                           scale=10.0 / ref if ref > 0 else None)
@@ -174,13 +286,16 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
 
     def on_iteration(st, row):
         save_checkpoint(ckpt, st, problem)
+        progress.saved = st.k
         if not quiet:
             print(_progress(row, params.iterations), flush=True)
 
-    result = optimize(problem, params.schedule.schedule(), iterations=params.iterations, tol=params.tol,
-                      method=params.optimizer, move=params.move, state=state,
-                      on_iteration=on_iteration, obj_tol=params.obj_tol,
-                      load_adapt=params.load_adapt)
+    result = _stopped_converged(state, params.tol, params.obj_tol) if resume else None
+    if result is None:
+        result = optimize(problem, params.schedule.schedule(), iterations=params.iterations,
+                          tol=params.tol, method=params.optimizer, move=params.move, state=state,
+                          on_iteration=on_iteration, obj_tol=params.obj_tol,
+                          load_adapt=params.load_adapt)
     failed = result.stopped == "newton"
     final_x = state.last_good if failed else state.x
     if final_x is None:
@@ -214,12 +329,26 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
     return Finished(1 if failed else 0, problem, final_x, state.history, summary)
 
 
+def _write_params(path: Path, info: dict) -> None:
+    """params.json, written atomically and only when its content changes (a resume with the
+    same parameters leaves the file as it is)."""
+    text = json.dumps(info, indent=1)
+    try:
+        if path.read_text() == text:
+            return
+    except OSError:
+        pass
+    atomic_write_text(path, text)
+
+
 def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int | None = None) -> int:
-    """Continue the run in ``out`` from its checkpoint; ``iterations`` raises its cap."""
+    """Continue the run in ``out`` from its checkpoint (a run killed before its first
+    checkpoint starts again from its params.json); ``iterations`` raises its cap."""
     path = Path(out)
     try:
         info = json.loads((path / "params.json").read_text())
-    except (OSError, ValueError):
+        info["params"]
+    except (OSError, ValueError, KeyError, TypeError):
         raise InputError(f"resume: '{path}' holds no run (params.json missing or unreadable)") from None
     case = case_of_run(info, "resume")
     params = case.parameters(info["params"])
@@ -227,4 +356,8 @@ def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int |
         if iterations < params.iterations:
             raise InputError(f"iterations: {iterations} is below the run's cap {params.iterations}")
         params = params.replace(iterations=iterations)
-    return run_case(case, params, path, quiet=quiet, resume=True)
+    from .threads import compute
+
+    with compute():
+        return _run_case(case, params, path, quiet=quiet, resume=True,
+                         model_choice=info.get("model_choice")).exit_code

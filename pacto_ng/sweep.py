@@ -17,6 +17,7 @@ arguments and of the files in DIR, and needs no Dask.
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
@@ -25,6 +26,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from .files import atomic_path, atomic_write_text
 from .params import InputError, Parameters
 
 COLUMNS = ("model", "load", "objective", "output_displacement", "load_reached", "converged",
@@ -248,13 +250,12 @@ def _cell(val):
 
 def write_csv(path: str | os.PathLike, rows: list[dict]) -> None:
     """Write the table (``COLUMNS``; empty cells for missing values, converged as true/false)."""
-    tmp = Path(str(path) + ".tmp")
-    with open(tmp, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(COLUMNS)
-        for row in rows:
-            w.writerow([_cell(row.get(c)) for c in COLUMNS])
-    os.replace(tmp, path)
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(COLUMNS)
+    for row in rows:
+        w.writerow([_cell(row.get(c)) for c in COLUMNS])
+    atomic_write_text(path, buf.getvalue())
 
 
 def plot_sweep(path: str | os.PathLike, rows: list[dict], title: str = "",
@@ -299,7 +300,8 @@ def plot_sweep(path: str | os.PathLike, rows: list[dict], title: str = "",
     if title:
         fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
 
 
 def _fmt(val, spec=".4e"):
@@ -334,7 +336,9 @@ def run_one(case_name: str, params: dict, folder: str, resume: bool) -> dict:
     folder : str
         Absolute output folder of the run.
     resume : bool
-        Continue from the folder's checkpoint.
+        Continue from the folder's checkpoint; otherwise the folder is the sweep's own and
+        holds no finished run nor a checkpoint (:func:`run_status`): what a run killed before
+        its first checkpoint left there is removed first.
 
     Returns
     -------
@@ -353,7 +357,7 @@ def run_one(case_name: str, params: dict, folder: str, resume: bool) -> dict:
     with contextlib.redirect_stdout(buf):
         case = get_case(case_name)
         code = run_case(case, case.parameters(params), folder, quiet=True,
-                        resume=resume)
+                        resume=resume, overwrite=not resume)
     return {"exit_code": int(code), "output": buf.getvalue().strip()}
 
 

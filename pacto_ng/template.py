@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .files import atomic_write_text
 from .params import InputError
 
 TEMPLATE = '''"""{name}: a soft finger with a round chamber that bends down under pressure.
@@ -106,5 +107,5 @@ def write_template(name: str) -> Path:
         raise InputError(f"new: '{path}' already exists (choose another name or remove it)")
     if not path.parent.is_dir():
         raise InputError(f"new: folder '{path.parent}' does not exist")
-    path.write_text(TEMPLATE.format(name=stem, file=path.name))
+    atomic_write_text(path, TEMPLATE.format(name=stem, file=path.name))
     return path
