@@ -122,18 +122,14 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
     w.writerows(history)
     atomic_write_text(path / "history.csv", buf.getvalue())
     write_vtu(path / "design", problem, x)
-    with atomic_path(path / "design.png") as tmp:
-        density_png(tmp, problem)
+    density_png(path / "design.png", problem)  # the pictures are written atomically too
     if problem.pressure_block is not None:
-        with atomic_path(path / "pressure.png") as tmp:
-            pressure_png(tmp, problem, leakage=summ.get("leakage"),
-                         leakage_any=summ["leakage_detail"]["leakage_any"])
+        pressure_png(path / "pressure.png", problem, leakage=summ.get("leakage"),
+                     leakage_any=summ["leakage_detail"]["leakage_any"])
     if problem.n_design_fields == 2:
-        with atomic_path(path / "materials.png") as tmp:
-            materials_png(tmp, problem)
+        materials_png(path / "materials.png", problem)
     if history:
-        with atomic_path(path / "convergence.png") as tmp:
-            convergence_png(tmp, history, problem.objective)
+        convergence_png(path / "convergence.png", history, problem.objective)
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ
 

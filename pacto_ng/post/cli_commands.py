@@ -47,6 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import atomic_path, atomic_write_text
 from ..params import InputError
 from ..threads import compute
 from .report import analysis_dict, fmt_value, report_md, short_table
@@ -303,7 +304,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     data = analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, order,
                           choice, maxh, ports, supports, p_shown, rho_thr,
                           time.perf_counter() - t0, path_note)
-    (out_dir / "analysis.json").write_text(json.dumps(data, indent=1))
+    atomic_write_text(out_dir / "analysis.json", json.dumps(data, indent=1))
     import sys
 
     if path_note:
@@ -318,7 +319,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     plot_sweeps(out_dir / "analysis.png", [res.sweeps[k] for k in kinds if k in res.sweeps],
                 expected=exp_pair, log=True,
                 title=f"{run.case.name} — {p.model} design (optimised at {run.load:.3g} Pa)")
-    (out_dir / "report.md").write_text(report_md(data))
+    atomic_write_text(out_dir / "report.md", report_md(data))
     _say(quiet, short_table(data))
     _say(quiet, f"  written to {out_dir} ({data['wall_time_s']:.1f} s)")
     return 0
@@ -337,7 +338,8 @@ def _add_pressure_field(files, mesh, sample, scale):
             continue
         m = meshio.read(str(f))
         m.point_data["p"] = pv_
-        m.write(str(f), file_format="vtu")
+        with atomic_path(f) as tmp:
+            m.write(str(tmp), file_format="vtu")
 
 
 # ------------------------------------------------------------------------------------------
@@ -382,7 +384,8 @@ def write_msh(path, mesh):
     m = meshio.Mesh(np.c_[pts, np.zeros(len(pts))], cells,
                     cell_data={"gmsh:physical": phys, "gmsh:geometrical": phys},
                     field_data=field_data)
-    meshio.write(str(path), m, file_format="gmsh22", binary=False)
+    with atomic_path(path) as tmp:
+        meshio.write(str(tmp), m, file_format="gmsh22", binary=False)
     return m
 
 

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import atomic_path
 from ..params import InputError
 from .report import fmt_value
 from .runs import load_run
@@ -202,7 +203,8 @@ def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, title="colour: run", title_fontsize=8)
         ax.set_title("expected (optimisation) and the Neo-Hookean re-analyses", fontsize=9)
-    fig.savefig(str(dst), dpi=130)
+    with atomic_path(dst) as tmp:
+        fig.savefig(str(tmp), dpi=130)
     if not quiet:
         print(f"{'run':40s} {'case':12s} {'model':11s} {'load':>9s} {'Δ (m)':>11s} "
               f"{'gap darcy':>10s} {'gap follower':>13s}")

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import atomic_path
+
 FORMATS = {".stl": "stl", ".vtk": "vtk", ".vtu": "vtu", ".msh": "gmsh"}
 
 
@@ -66,7 +68,8 @@ def extrude_solid(source, thickness: float):
 def write_stl(path, source, thickness: float):
     """Write the extruded solid as a binary STL; returns the PolyData written."""
     solid = extrude_solid(source, thickness)
-    solid.save(str(path), binary=True)
+    with atomic_path(path) as tmp:
+        solid.save(str(tmp), binary=True)
     return solid
 
 
@@ -148,7 +151,8 @@ def write_vtu(path, mesh, u=None, *, E: float | None = None, nu: float | None = 
         raise ValueError("a deformed configuration needs the displacement u")
     out = meshio.Mesh(np.c_[pts, np.zeros(len(pts))], blocks, point_data=point_data,
                       cell_data=cell_data)
-    out.write(str(path), file_format="vtu")
+    with atomic_path(path) as tmp:
+        out.write(str(tmp), file_format="vtu")
     return out
 
 
@@ -182,10 +186,13 @@ def convert(src, dst):
         if not tri:
             raise ValueError(f"{src.name} has no triangles to write as STL")
         m = meshio.Mesh(m.points, tri)
-    try:
-        meshio.write(str(dst), m, file_format=fmt, **({"binary": True} if fmt == "stl" else {}))
-    except Exception as exc:  # meshio raises assorted types for unsupported cells
-        raise ValueError(f"meshio cannot write {src.name} as {fmt}: {exc}") from exc
+    with atomic_path(dst) as tmp:
+        try:
+            meshio.write(str(tmp), m, file_format=fmt, **({"binary": True} if fmt == "stl" else {}))
+        except OSError:
+            raise  # a failed write (atomic_path: one line naming dst)
+        except Exception as exc:  # meshio raises assorted types for unsupported cells
+            raise ValueError(f"meshio cannot write {src.name} as {fmt}: {exc}") from exc
     return dst
 
 
@@ -249,7 +256,8 @@ def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mi
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), frameon=False)
     fig.colorbar(tc, ax=ax, label="|u| (m), deformed solid", shrink=0.9)
     ax.set_title(title or "deformed solid (true scale) over the undeformed outline")
-    fig.savefig(str(path), dpi=dpi)
+    with atomic_path(path) as tmp:
+        fig.savefig(str(tmp), dpi=dpi)
     return path
 
 
@@ -293,5 +301,6 @@ def plot_sweeps(path, sweeps, *, expected=None, title: str | None = None, dpi: i
     ax.grid(True, alpha=0.3)
     ax.legend()
     ax.set_title(title or "output displacement against pressure")
-    fig.savefig(str(path), dpi=dpi)
+    with atomic_path(path) as tmp:
+        fig.savefig(str(tmp), dpi=dpi)
     return path

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..files import atomic_path
+
 
 def element_polygons(mesh) -> list[np.ndarray]:
     pts = np.array([v.point for v in mesh.vertices])
@@ -95,7 +97,8 @@ def density_png(path, problem, field_name: str | None = None, title: str | None 
                  + ("" if line is None else ", mirrored about the symmetry line"))
     fig.colorbar(pc, ax=ax, fraction=0.03)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=120)
     plt.close(fig)
 
 
@@ -115,7 +118,8 @@ def convergence_png(path, history: list, objective_name: str):
     ax2.set_ylabel("volume fraction", color="r")
     ax.set_title("convergence")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 
@@ -178,7 +182,8 @@ def pressure_png(path, problem, title: str | None = None, leakage: float | None 
                  f"ρ̄ = 0.5 contour{extra}", fontsize=10)
     fig.colorbar(tpc, ax=ax, fraction=0.03, label="p / P_in")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=120)
     plt.close(fig)
 
 
@@ -208,5 +213,6 @@ def materials_png(path, problem, title: str | None = None, mirror=True):
               loc="upper right", fontsize=8)
     ax.set_title(title or f"{problem.case.name} — ρ̄1 (solid) mixed by ρ̄2 (stiff fraction)")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=120)
     plt.close(fig)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import io
 import json
 import math
 from dataclasses import dataclass, field
@@ -29,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import atomic_write_text
 from ..physics.loads import Port
 from ..physics.mechanics import Supports
 from ..physics.newton import NewtonSettings
@@ -149,10 +151,11 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
             files.pop(k)
     plot_sweeps(files["analysis_png"], sweeps, expected=expected)
     rows = [row for sw in sweeps.values() for row in sw.table()]
-    with open(files["csv"], "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    buf = io.StringIO(newline="")
+    writer = csv.DictWriter(buf, fieldnames=list(rows[0]))
+    writer.writeheader()
+    writer.writerows(rows)
+    atomic_write_text(files["csv"], buf.getvalue())
     summary = {
         "threshold": th.threshold, "thresholded_area": th.area,
         "polygon_area": th.polygon_area, "removed_speck_area": th.removed_area,
@@ -168,7 +171,7 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         "expected": None if expected is None else [list(map(float, a)) for a in expected],
         "sweeps": {k: [_jsonable(r) for r in sw.table()] for k, sw in sweeps.items()},
     }
-    files["json"].write_text(json.dumps(summary, indent=2))
+    atomic_write_text(files["json"], json.dumps(summary, indent=2))
     return PostResult(th, rm, sweeps, files, summary)
 
 
