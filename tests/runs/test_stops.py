@@ -1,16 +1,22 @@
 """How a run ends when it is stopped from outside (issue 18, part 4): SIGINT, SIGTERM and
 SIGHUP end it with one true line and the checkpoint kept; a full disk (a file size limit here)
-ends it with one line, the last complete checkpoint kept and nothing half written."""
+ends it with one line, the last complete checkpoint kept and nothing half written; kill -9 and
+resume give the uninterrupted run's design (the short variant of benchmarks/kill_resume.py)."""
 import json
+import os
 import re
 import resource
 import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
 
 def pacto(*args, **kw):
     return subprocess.Popen([sys.executable, "-m", "pacto_ng.cli", *args],
@@ -107,3 +113,16 @@ def test_a_full_disk_at_the_first_checkpoint(tmp_path):
         err.strip()), err
     assert sorted(p.name for p in out.iterdir()) == [".pacto.lock", "params.json"]
     assert json.loads((out / "params.json").read_text())["case"] == "mbb"
+
+
+@pytest.mark.slow
+def test_kill_resume_short_study(tmp_path):
+    """benchmarks/kill_resume.py --quick: two kill -9 at random moments of a small
+    pa-inverter run, each resumed; every resume completes with the uninterrupted design."""
+    r = subprocess.run([sys.executable, "-m", "benchmarks.kill_resume", "--quick", "--out",
+                        str(tmp_path)], cwd=ROOT, capture_output=True, text=True, timeout=1800,
+                       env={**os.environ})
+    assert r.returncode == 0, r.stdout + r.stderr
+    (res,) = json.loads((tmp_path / "kill_resume.json").read_text())
+    assert res["kills"] == 2 and res["completed"] == 2 and res["unreadable_files"] == 0
+    assert res["max_abs_dx"] <= 1e-10
