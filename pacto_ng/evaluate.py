@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -52,21 +53,35 @@ def read_density(path: str, problem: Problem, *, filtered: bool = False) -> tupl
         raise
     except (OSError, ValueError, KeyError, EOFError) as err:  # unreadable file content
         raise InputError(f"--density: cannot read '{path}' ({type(err).__name__}: {err})") from None
+    if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+        raise InputError(f"--density: '{path}' holds {arr.dtype} values; expected real numbers")
     arr = np.asarray(arr, dtype=float)
     ne = problem.mesh.ne
-    if arr.ndim == 2 and p.nelx > 0:
-        if arr.shape != (p.nely, p.nelx):
-            raise InputError(f"--density: '{path}' is a {arr.shape[0]} x {arr.shape[1]} grid, "
-                             f"the mesh is nely x nelx = {p.nely} x {p.nelx}")
-        arr = arr[::-1].ravel()
-    else:
+    grid = p.nelx > 0 and arr.shape == (p.nely, p.nelx)
+    vector = arr.ndim == 1 or (arr.ndim == 2 and 1 in arr.shape)
+    if grid:
+        arr = arr[::-1].ravel()  # row 0 is the top row of elements
+    elif vector:
         arr = arr.ravel()
+    elif arr.ndim == 2 and p.nelx > 0:
+        raise InputError(f"--density: '{path}' is a {arr.shape[0]} x {arr.shape[1]} grid, "
+                         f"the mesh is nely x nelx = {p.nely} x {p.nelx}")
+    else:
+        raise InputError(f"--density: '{path}' is an array of shape {arr.shape}; expected one "
+                         "value per element" + (" or a nely x nelx grid" if p.nelx else ""))
     if arr.size != ne:
         raise InputError(f"--density: '{path}' holds {arr.size} values, the mesh has {ne} elements")
     if not np.all(np.isfinite(arr)) or arr.min() < 0 or arr.max() > 1:
         raise InputError(f"--density: values in '{path}' must be finite and lie in [0, 1]")
     if filtered:
         arr = arr[problem.field.design_index]
+    else:
+        field = problem.field
+        changed = int(np.count_nonzero(arr[field.solid] != 1.0)
+                      + np.count_nonzero(arr[field.void] != 0.0))
+        if changed:
+            print(f"evaluate: the values of {changed} passive elements in '{path}' replaced "
+                  "by the case's (solid 1, void 0)", file=sys.stderr)
     return arr, filtered
 
 
@@ -128,6 +143,8 @@ def evaluate_design(case: Case, params: Parameters, density: str, out, *, filter
 def _evaluate(case: Case, params: Parameters, density: str, path: Path, *, filtered: bool,
               quiet: bool) -> int:
     t0 = time.perf_counter()
+    if not Path(density).is_file():  # before the problem is built
+        raise InputError(f"--density: file '{density}' does not exist")
     problem = build_problem(case, params)
     arr, filtered = read_density(density, problem, filtered=filtered)
     if problem.n_design_fields != 1 and not Path(density).suffix.lower() == ".npz":
@@ -140,6 +157,7 @@ def _evaluate(case: Case, params: Parameters, density: str, path: Path, *, filte
     else:
         problem.apply_schedule(params.penal, sched.beta(10 ** 6), 1.0)
     x = None
+    failure = None
     try:
         if filtered:
             x = arr
@@ -149,18 +167,23 @@ def _evaluate(case: Case, params: Parameters, density: str, path: Path, *, filte
             rho[problem.field.solid] = 1.0
             rho[problem.field.void] = 0.0
             problem.chain.forward(rho_bar=rho)
-    except NewtonFailure as err:
-        print(f"evaluate: {err}")
-        return 1
+    except NewtonFailure as err:  # written too: the load reached and why it stopped
+        failure = err
 
     class _R:
-        converged, stopped, message = True, "evaluated", "single analysis"
+        converged = failure is None
+        stopped = "evaluated" if failure is None else "newton"
+        message = "single analysis" if failure is None else str(failure)
 
     summ = summary_dict(problem, [], _R, time.perf_counter() - t0)
     summ["evaluated_from"] = str(density)
     summ["filtered"] = filtered
     write_vtu(path / "design", problem, x)
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: complete
+    if failure is not None:
+        print(f"evaluate: no equilibrium at the full load: {failure} (summary.json records the "
+              "load reached)", file=sys.stderr)
+        return 1
     if not quiet:
         keys = ("objective", "compliance", "output_displacement", "strain_energy", "volume_fraction")
         print("  ".join(f"{k} {summ[k]:.6g}" for k in keys if summ[k] is not None))

@@ -38,7 +38,9 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
     def val(name):
         return float(vals[name]) if name in vals else None
 
-    newton_counts = [h["newton"] for h in history]
+    # an optimisation's Newton iterations per iteration; a single analysis (evaluate): its own
+    newton_counts = [h["newton"] for h in history] if history else \
+        ([int(mech_res.iterations)] if mech_res else [])
     out = {
         "case": problem.case.name,
         "model": p.model,
@@ -52,7 +54,7 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "volume_fraction": problem.volume_fraction(),
         "output_displacement": val("delta"),
         "compliance": val("compliance"),
-        "strain_energy": val("se"),
+        "strain_energy": val("se") if "se" in vals else strain_energy(problem),
         "load_reached": (mech_res.load_reached * p.load) if mech_res else None,
         "load_factor_reached": mech_res.load_reached if mech_res else None,
         "converged": result.converged,
@@ -75,6 +77,18 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
     }
     out.update(pressure_and_material_summary(problem))
     return out
+
+
+def strain_energy(problem: Problem) -> float | None:
+    """The stored strain energy of the last analysed state, for a run whose chain does not
+    compute it (None before any analysis)."""
+    from .responses import StrainEnergy
+
+    vals = problem.values
+    if "u" not in vals:
+        return None
+    block = StrainEnergy(problem.mech)
+    return block.forward(*(vals[name] for name in block.inputs))
 
 
 def pressure_and_material_summary(problem: Problem) -> dict:
