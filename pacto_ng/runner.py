@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import time
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -108,6 +109,15 @@ def _ramp_first(mech) -> float:
 def _set_ramp_first(mech, value: float) -> None:
     if hasattr(mech, "_ramp_first"):
         mech._ramp_first = None if np.isnan(value) else value
+
+
+def _checkpoint_k(path: Path) -> int | None:
+    """The iterations a checkpoint holds (None without a readable one)."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return int(data["k"])
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+        return None
 
 
 def load_checkpoint(path: Path, problem: Problem) -> LoopState:
@@ -234,6 +244,8 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
                          "would remove before reading it: choose another --out")
     lock = claim_folder(path, "resume" if resume else "run", overwrite=overwrite, resume=resume)
     progress = _Progress(path, params.iterations)
+    if resume:  # what an interrupt before the checkpoint is loaded leaves: the one there
+        progress.saved = _checkpoint_k(path / "checkpoint.npz")
     try:
         return _optimise(case, params, path, progress, quiet=quiet, resume=resume,
                          model_choice=model_choice)

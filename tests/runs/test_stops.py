@@ -126,3 +126,26 @@ def test_kill_resume_short_study(tmp_path):
     (res,) = json.loads((tmp_path / "kill_resume.json").read_text())
     assert res["kills"] == 2 and res["completed"] == 2 and res["unreadable_files"] == 0
     assert res["max_abs_dx"] <= 1e-10
+
+
+def test_an_interrupt_while_resume_starts_names_the_checkpoint_there(tmp_path, monkeypatch,
+                                                                     capsys):
+    """Ctrl-C while resume builds the problem (before it loads the checkpoint): the line names
+    the checkpoint in the folder, which is untouched."""
+    from pacto_ng import runner
+    from pacto_ng.cli import main
+
+    out = tmp_path / "run"
+    assert main(["run", *MBB, "--out", str(out), "--quiet"]) == 0
+    before = (out / "checkpoint.npz").read_bytes()
+
+    def interrupted(*args, **kw):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(runner, "build_problem", interrupted)
+    capsys.readouterr()
+    assert main(["resume", str(out), "--iterations", "5", "--quiet"]) == 130
+    err = capsys.readouterr().err.strip()
+    assert err == (f"pacto: interrupted by SIGINT: the checkpoint after 3 of 5 iterations is "
+                   f"kept (continue it: 'pacto resume {out}')")
+    assert (out / "checkpoint.npz").read_bytes() == before
