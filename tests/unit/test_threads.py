@@ -3,7 +3,7 @@
 import pytest
 
 from pacto_ng.params import InputError
-from pacto_ng.threads import compute, thread_count
+from pacto_ng.threads import compute, core_count, thread_count
 
 
 def _blas_threads():
@@ -25,8 +25,12 @@ def test_blas_is_one_thread_inside_and_restored_after():
 
 
 def test_thread_count_from_the_environment(monkeypatch):
-    monkeypatch.setenv("PACTO_THREADS", "3")
-    assert thread_count() == 3
+    monkeypatch.setenv("PACTO_THREADS", "1")
+    assert thread_count() == 1
+    monkeypatch.setenv("PACTO_THREADS", str(core_count()))
+    assert thread_count() == core_count()
+    monkeypatch.delenv("PACTO_THREADS")
+    assert thread_count() == core_count()
     monkeypatch.setenv("PACTO_THREADS", "two")
     with pytest.raises(InputError, match="PACTO_THREADS"):
         thread_count()
