@@ -385,8 +385,12 @@ def mesh_for(case: Case, params: Parameters):
     maxh, or structured quads if nelx > 0 (rectangular layouts only)."""
     from .geometry import mesh_geometry
 
+    # the resources check (pacto_ng.resources) before meshing: a follower load makes the
+    # tangent unsymmetric (umfpack), otherwise it is symmetric (sparsecholesky)
     return mesh_geometry(case.make_geometry(params), maxh=params.maxh, nelx=params.nelx,
-                         nely=params.nely)
+                         nely=params.nely, order=params.order,
+                         mesh_time_limit=params.mesh_time_limit,
+                         solver="umfpack" if params.load_type == "follower" else "sparsecholesky")
 
 
 def build_problem(case: Case, params: Parameters) -> Problem:

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import resources
 from .mesh import Layout, layout_shape, netgen_mesh, structured_mesh
 from .params import InputError
 from .settings import Settings, setting
@@ -45,6 +46,9 @@ class MeshSettings(Settings):
                          "order for the model, see Case.model_orders)", choices=(0, 1, 2, 3))
     unit_elements: bool = setting(False, "", "structured mesh of unit square elements (domain "
                                   "nelx x nely)")
+    mesh_time_limit: float = setting(resources.MESH_TIME_LIMIT, "s", "refuse, before "
+                                     "meshing, a mesh estimated to take longer to make "
+                                     "(pacto_ng/resources.py)", range="(0, inf)")
 
     def check(self):
         if (self.nelx > 0) != (self.nely > 0):
@@ -138,18 +142,29 @@ def extent(geometry) -> float | None:
     return None
 
 
-def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0) -> Meshed:
+def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, order: int = 1,
+                  mesh_time_limit: float = resources.MESH_TIME_LIMIT,
+                  solver: str | None = None) -> Meshed:
     """Mesh a case's geometry (see the module docstring for what it may be).
 
     Netgen triangles of size ``maxh``; with ``nelx, nely > 0`` structured quads, for a
-    :class:`~pacto_ng.mesh.Layout` only."""
+    :class:`~pacto_ng.mesh.Layout` only.
+
+    Before a mesh is made, its elements, its displacement dofs at ``order`` and a run's memory
+    are estimated (:mod:`pacto_ng.resources`; ``solver`` of the displacement system,
+    ``sparsecholesky`` or ``umfpack``, None for the larger estimate): a mesh that would not
+    fit this machine's memory, or would take Netgen (or the grid builder) longer than
+    ``mesh_time_limit`` seconds to make, is refused with one line.  A mesh file or an
+    ``ngsolve.Mesh`` is checked on its own counts."""
     import ngsolve
 
+    source = "the mesh"
     if isinstance(geometry, (str, os.PathLike)):
         low = str(geometry).lower()
         if low.endswith(CAD_SUFFIXES):
             geometry = load_cad(geometry)
         elif low.endswith(MESH_SUFFIXES):
+            source = f"mesh file '{geometry}'"
             geometry = load_mesh(geometry)
         else:
             raise InputError(f"geometry: '{geometry}' is neither a CAD file "
@@ -158,13 +173,26 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0) -> Mes
     if nelx > 0 and not isinstance(geometry, Layout):
         raise InputError("nelx, nely: structured quads need a rectangular domain (a Layout); "
                          "this case's geometry is not one (give --maxh instead)")
+
+    def fits(estimate, what, advice):
+        resources.check(estimate, what, mesh_time_limit=mesh_time_limit, advice=advice)
+
+    finer = "give a larger maxh or a lower order"
     if isinstance(geometry, ngsolve.Mesh):
-        return Meshed(_checked_mesh(geometry), _mean_size(geometry), None)
+        mesh = _checked_mesh(geometry)
+        fits(resources.estimate_mesh(mesh, order, solver=solver), source,
+             "give a coarser mesh or a lower order")
+        return Meshed(mesh, _mean_size(mesh), None)
     if isinstance(geometry, Layout):
         if nelx > 0:
+            fits(resources.estimate_grid(nelx, nely, order, solver=solver),
+                 f"nelx x nely = {nelx} x {nely}", "give a smaller nelx, nely or order")
             mesh = structured_mesh(geometry, nelx, nely)
             return Meshed(mesh, min(geometry.width / nelx, geometry.height / nely), None)
         _check_maxh(maxh, min(geometry.width, geometry.height))
+        triangles = resources.netgen_triangles(geometry.width * geometry.height, maxh)
+        fits(resources.estimate_triangles(triangles, order, solver=solver), f"maxh = {maxh:g}",
+             finer)
         return Meshed(netgen_mesh(geometry, maxh), maxh, layout_shape(geometry))
     if _is_occ_shape(geometry):
         if len(geometry.solids) > 0:
@@ -173,6 +201,9 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0) -> Mes
         if len(geometry.faces) == 0:
             raise InputError("geometry: the shape has no face to mesh")
         _check_maxh(maxh, _extent(geometry))
+        triangles = resources.shape_triangles(geometry, maxh)
+        fits(resources.estimate_triangles(triangles, order, solver=solver), f"maxh = {maxh:g}",
+             finer)
         from netgen import occ
 
         try:
