@@ -15,6 +15,7 @@ import dataclasses
 import hashlib
 import importlib
 import importlib.util
+import json
 import os
 import sys
 import traceback
@@ -301,6 +302,33 @@ def case_of_run(info: dict, command: str) -> Case:
                          "case file; from that script use pacto_ng.load_result(folder, "
                          "case=CASE), or move CASE into a case file")
     return get_case(name)
+
+
+def read_run_params(folder, command: str, case: Case | None = None) -> tuple[dict, Case, Parameters]:
+    """A run folder's params.json: its content, its case (``case`` if given: it must be the
+    run's) and its parameters; one-line InputError naming the file for anything damaged."""
+    fp = Path(folder) / "params.json"
+    try:
+        info = json.loads(fp.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{command}: '{folder}' holds no run (no params.json)") from None
+    except (OSError, ValueError) as err:
+        raise InputError(f"{command}: '{fp}' is unreadable ({type(err).__name__})") from None
+    if not (isinstance(info, dict) and isinstance(info.get("case"), str)
+            and isinstance(info.get("params"), dict)
+            and isinstance(info.get("case_file") or "", str)):
+        raise InputError(f"{command}: '{fp}' is not a run's parameter file (it needs a case "
+                         "name and a table of parameters)")
+    if case is None:  # an error in a user's case file is shown as itself
+        case = case_of_run(info, command)
+    elif case.name != info["case"]:
+        raise InputError(f"{command}: '{folder}' is a run of '{info['case']}', not of "
+                         f"'{case.name}'")
+    try:
+        params = case.parameters(info["params"])
+    except InputError as err:
+        raise InputError(f"{command}: '{fp}': {err}") from None
+    return info, case, params
 
 
 def available_cases() -> list[Case]:

@@ -5,6 +5,7 @@ import json
 import os
 import sys
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +52,7 @@ def read_density(path: str, problem: Problem, *, filtered: bool = False) -> tupl
                              "checkpoint .npz file")
     except InputError:
         raise
-    except (OSError, ValueError, KeyError, EOFError) as err:  # unreadable file content
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:  # unreadable
         raise InputError(f"--density: cannot read '{path}' ({type(err).__name__}: {err})") from None
     if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
         raise InputError(f"--density: '{path}' holds {arr.dtype} values; expected real numbers")
@@ -89,7 +90,7 @@ def _checkpoint_design(fp: Path, problem: Problem) -> np.ndarray:
     try:
         with np.load(fp, allow_pickle=False) as data:
             x = np.asarray(data["x"], dtype=float).ravel()
-    except (OSError, ValueError, KeyError, EOFError) as err:
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"--density: '{fp}' is not a readable checkpoint ({type(err).__name__}: "
                          f"{err})") from None
     n = problem.field.n * problem.n_design_fields
@@ -103,8 +104,12 @@ def _checkpoint_design(fp: Path, problem: Problem) -> np.ndarray:
 
 def checkpoint_iteration(fp: str | os.PathLike) -> int:
     """The iteration count ``k`` a checkpoint was written at (its schedule is that of k - 1)."""
-    with np.load(fp, allow_pickle=False) as data:
-        return int(data["k"])
+    try:
+        with np.load(fp, allow_pickle=False) as data:
+            return int(data["k"])
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
+        raise InputError(f"--density: '{fp}' is not a readable checkpoint ({type(err).__name__}: "
+                         f"{err})") from None
 
 
 def _vtu_element_field(fp: Path, name: str, ne: int) -> np.ndarray:

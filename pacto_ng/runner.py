@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .case import Case, Problem, build_problem, case_of_run
+from .case import Case, Problem, build_problem, read_run_params
 from .files import WriteError, atomic_path, atomic_write_text, claim_folder
 from .optimize.driver import LoopResult, LoopState, optimize
 from .params import InputError, Parameters
@@ -57,12 +57,12 @@ def initial_design(problem: Problem) -> np.ndarray:
 def design_of_run(folder: str | os.PathLike, problem: Problem) -> np.ndarray:
     """The design variables x of a run folder's checkpoint, for a run on the same mesh."""
     ckpt = Path(folder) / "checkpoint.npz"
-    if not ckpt.is_file():
-        raise InputError(f"init_design: no checkpoint.npz in '{folder}'")
     try:
         with np.load(ckpt, allow_pickle=False) as data:
             x = np.asarray(data["x"], dtype=float)
-    except (OSError, ValueError, KeyError) as err:
+    except FileNotFoundError:
+        raise InputError(f"init_design: no checkpoint.npz in '{folder}'") from None
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"init_design: cannot read '{ckpt}' ({err})") from None
     n = problem.field.n * problem.n_design_fields
     if x.shape != (n,):
@@ -87,7 +87,9 @@ def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
                   stable=state.stable, history=json.dumps(state.history),
                   u=problem.mech.state, warm=problem.mech.state_converged,
                   load_cap=state.load_cap, load_failed_at=state.load_failed_at,
-                  ramp_first=_ramp_first(problem.mech))
+                  # Newton's first increment of its last ramp: a Neo-Hookean pa-inverter
+                  # resumed without it ended 5e-4 away from the uninterrupted run
+                  ramp_first=_nan_if_none(problem.mech.ramp_first))
     if state.last_good is not None:
         arrays["last_good"] = state.last_good
     if state.opt_state is not None:
@@ -97,18 +99,8 @@ def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
         np.savez(tmp, **arrays)
 
 
-# Newton's first load increment of the last successful ramp from zero: the next ramp starts
-# with it, so it is part of the warm state a resumed run needs to repeat the uninterrupted one
-# (a Neo-Hookean pa-inverter resumed without it ended 5e-4 away).  Mechanics keeps it private
-# (``_ramp_first``): read and set here until its warm state (state/set_state) carries it.
-def _ramp_first(mech) -> float:
-    value = getattr(mech, "_ramp_first", None)
+def _nan_if_none(value: float | None) -> float:
     return np.nan if value is None else float(value)
-
-
-def _set_ramp_first(mech, value: float) -> None:
-    if hasattr(mech, "_ramp_first"):
-        mech._ramp_first = None if np.isnan(value) else value
 
 
 def _checkpoint_k(path: Path) -> int | None:
@@ -139,9 +131,15 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
             if u.size == problem.mech.gfu.vec.size and bool(data["warm"]):
                 problem.mech.set_state(u, converged=True)
             if "ramp_first" in files:
-                _set_ramp_first(problem.mech, float(data["ramp_first"]))
-    except (OSError, ValueError, KeyError, EOFError) as err:
+                ramp = float(data["ramp_first"])
+                problem.mech.ramp_first = None if np.isnan(ramp) else ramp
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"resume: cannot read '{path}' ({type(err).__name__}: {err})") from None
+    n = problem.field.n * problem.n_design_fields
+    for name, x in (("x", state.x), ("last_good", state.last_good)):
+        if x is not None and x.shape != (n,):
+            raise InputError(f"resume: '{path}' holds {x.size} design variables ({name}), this "
+                             f"run has {n}: a checkpoint of another case or mesh")
     return state
 
 
@@ -156,7 +154,7 @@ def _replay_last_analysis(problem: Problem, state: LoopState) -> None:
     if not state.history or state.last_good is None:
         return
     mech = problem.mech
-    u, warm, ramp = mech.state, mech.state_converged, _ramp_first(mech)
+    u, warm, ramp = mech.state, mech.state_converged, mech.ramp_first
     last = state.history[-1]
     problem.apply_schedule(last["penal"], last["beta"], last["load"])
     try:
@@ -164,7 +162,7 @@ def _replay_last_analysis(problem: Problem, state: LoopState) -> None:
     except NewtonFailure:  # nothing is lost: the state is restored below either way
         pass
     mech.set_state(u, converged=warm)
-    _set_ramp_first(mech, ramp)
+    mech.ramp_first = ramp
 
 
 def _stopped_converged(state: LoopState, tol: float, obj_tol: float) -> LoopResult | None:
@@ -357,13 +355,7 @@ def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int |
     """Continue the run in ``out`` from its checkpoint (a run killed before its first
     checkpoint starts again from its params.json); ``iterations`` raises its cap."""
     path = Path(out)
-    try:
-        info = json.loads((path / "params.json").read_text())
-        info["params"]
-    except (OSError, ValueError, KeyError, TypeError):
-        raise InputError(f"resume: '{path}' holds no run (params.json missing or unreadable)") from None
-    case = case_of_run(info, "resume")
-    params = case.parameters(info["params"])
+    info, case, params = read_run_params(path, "resume")
     if iterations is not None:
         if iterations < params.iterations:
             raise InputError(f"iterations: {iterations} is below the run's cap {params.iterations}")

@@ -182,6 +182,16 @@ class Equilibrium:
         """Whether the current displacement is a converged equilibrium."""
         return bool(self.result is not None and self.result.converged)
 
+    @property
+    def ramp_first(self) -> float | None:
+        """Newton's first load increment (a fraction) of the last successful ramp from zero,
+        where the next ramp starts; part of the warm state (None: no ramp yet)."""
+        return self._ramp_first
+
+    @ramp_first.setter
+    def ramp_first(self, value: float | None) -> None:
+        self._ramp_first = value
+
     def set_state(self, u=None, *, converged: bool, result: NewtonResult | None = None):
         """Set the displacement (a numpy array or vector; None keeps it) and whether it is an
         equilibrium: the next forward pass starts from it if so, else ramps from zero.

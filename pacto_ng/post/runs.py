@@ -4,6 +4,7 @@ thresholded, remeshed part of it (:func:`part_of_run`)."""
 from __future__ import annotations
 
 import json
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,33 +36,19 @@ class Run:
 def load_run(folder, command: str, case=None) -> Run:
     """Read ``params.json``, ``summary.json`` and ``checkpoint.npz``; InputError if anything
     that a finished run holds is missing."""
-    from ..case import case_of_run
+    from ..case import read_run_params
 
     path = Path(folder)
     if not path.is_dir():
         raise InputError(f"{command}: '{folder}' is not a folder")
-    try:
-        info = json.loads((path / "params.json").read_text())
-        if not isinstance(info, dict) or "case" not in info:
-            raise ValueError("no case named")
-    except (OSError, ValueError):
-        raise InputError(f"{command}: '{folder}' holds no run (params.json missing or "
-                         f"unreadable)") from None
-    if case is None:  # an error in a user's case file is shown as itself
-        case = case_of_run(info, command)
-    elif case.name != info["case"]:
-        raise InputError(f"{command}: '{folder}' is a run of '{info['case']}', not of "
-                         f"'{case.name}'")
-    try:
-        params = case.parameters(info["params"])
-    except (KeyError, TypeError) as err:
-        raise InputError(f"{command}: '{path / 'params.json'}' has no valid parameters "
-                         f"({err})") from None
+    info, case, params = read_run_params(path, command, case)
     if case.analysis_only:
         raise InputError(f"{command}: '{folder}' is an analysis case ({case.name}), not an "
                          f"optimised design")
     try:
         summary = json.loads((path / "summary.json").read_text())
+        if not isinstance(summary, dict):
+            raise ValueError("not an object")
     except (OSError, ValueError):
         raise InputError(f"{command}: '{folder}' holds no finished run (summary.json missing: "
                          f"still running, or stopped before its first result)") from None
@@ -71,7 +58,7 @@ def load_run(folder, command: str, case=None) -> Run:
             design = "last_good" if use_last_good else "x"
             x = np.asarray(data[design], dtype=float).copy()
             k = int(data["k"])
-    except (OSError, ValueError, KeyError):
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
         raise InputError(f"{command}: '{folder}' has no readable checkpoint.npz (the final "
                          f"design)") from None
     return Run(path, case, params, summary, x, design, k)
