@@ -14,6 +14,7 @@ names in both:
 """
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -267,4 +268,23 @@ def structured_mesh(layout: Layout, nelx: int, nely: int):
         j = int(np.argmin(np.abs(ys - py)))
         idx = m.AddRegion(name, dim=0)
         m.Add(Element0D(pid[i, j], index=idx))
+    _say_snapped_segments(layout, xs, ys)
     return ngsolve.Mesh(m)
+
+
+def _say_snapped_segments(layout: Layout, xs: np.ndarray, ys: np.ndarray) -> None:
+    """One line on stderr for each named segment whose ends fall between the grid's nodes: it
+    takes the whole element edges whose midpoints it covers, so its length is not the one
+    given (e.g. the cantilever's load_width of 0.036 m and 0.04 m give the same patch)."""
+    tol = 1e-9 * max(layout.width, layout.height)
+    for seg in layout.segments:
+        along_x = abs(seg.start[1] - seg.end[1]) <= tol  # a horizontal segment
+        nodes = xs if along_x else ys
+        ends = (seg.start[0], seg.end[0]) if along_x else (seg.start[1], seg.end[1])
+        if any(np.min(np.abs(nodes - e)) > tol for e in ends):
+            lo, hi = sorted(ends)
+            mids = 0.5 * (nodes[:-1] + nodes[1:])
+            covered = np.flatnonzero((mids >= lo) & (mids <= hi))
+            got = (nodes[covered[-1] + 1] - nodes[covered[0]]) if covered.size else 0.0
+            print(f"mesh: boundary '{seg.name}' ({hi - lo:.4g} long) ends between grid nodes: "
+                  f"it covers whole element edges, {got:.4g} long", file=sys.stderr)

@@ -30,3 +30,18 @@ def test_negative_load_width_is_a_one_line_error(tmp_path, capsys):
     code = main(["run", "cantilever", "--set", "load_width=-1", "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert code != 0 and "load_width" in err and "Traceback" not in err
+
+
+def test_a_segment_between_grid_nodes_is_said_with_the_length_it_covers(capsys):
+    """On 50 x 12 quads of the 1 x 0.25 m cantilever (element height 0.25/12 m), a load patch
+    of 0.036 m centred at mid-height covers the two element edges whose midpoints it holds:
+    2 x 0.25/12 = 0.04167 m, and stderr says so."""
+    from pacto_ng.case import get_case, mesh_for
+
+    case = get_case("cantilever")
+    mesh_for(case, case.resolve(case.defaults.replace(nelx=50, nely=12, load_width=0.036)))
+    err = capsys.readouterr().err
+    assert "boundary 'load' (0.036 long)" in err and f"{2 * 0.25 / 12:.4g} long" in err
+    mesh_for(case, case.resolve(case.defaults.replace(nelx=50, nely=12,
+                                                      load_width=2 * 0.25 / 12)))
+    assert "load" not in capsys.readouterr().err  # on the nodes: nothing to say
