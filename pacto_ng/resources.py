@@ -30,27 +30,28 @@ linear elasticity on VectorH1, orders 1–3, Netgen triangles (2 x 1 rectangle, 
 sparse Cholesky and UMFPACK (a follower pressure's unsymmetric tangent), and fitted (points
 above 2·10⁴ dofs) as ``bytes = a · ndof^b · q^[quads] · o^k``::
 
-    sparsecholesky  a = 416   b = 1.091  q = 1.24  o = 1.096   measured/fit 0.89–1.07
-    umfpack         a = 1212  b = 1.055  q = 1.14  o = 1.230   measured/fit 0.90–1.14
+    sparsecholesky  a = 447   b = 1.074  q = 1.17  o = 1.170   measured/fit 0.91–1.10
+    umfpack         a = 1182  b = 1.051  q = 1.11  o = 1.272   measured/fit 0.89–1.13
 
-e.g. 1.67·10⁶ dofs (order 3, 184 662 triangles, Cholesky): 3.5 GB; 1.44·10⁶ dofs (order 3,
-200 x 100 quads, UMFPACK): 7.6 GB.  A run holds more: the mesh (``_MESH_BYTES`` per element,
+(``bytes`` less ``_MESH_BYTES`` per element), e.g. 1.67·10⁶ dofs (order 3, 184 662
+triangles): 3.56 GB with Cholesky, 8.81 GB with UMFPACK; 1.44·10⁶ dofs (order 3, 200 x 100
+quads): 3.73 and 7.55 GB.  A run holds more: the mesh (``_MESH_BYTES`` per element,
 860 measured), the linear fast paths' element matrices while they are built (about 88 bytes
 per entry, built only below 20·10⁶ entries: physics/scatter.py; counted for the displacement
 and a Darcy pressure in every case, an over-estimate for cases without them), and the
-pressure's and filter's systems, MMA and the outputs (``_RUN_FACTOR`` = 1.2 on the system).
+pressure's and filter's systems, MMA and the outputs (``_RUN_FACTOR`` = 1.25 on the system).
 Checked on whole runs (``pacto run ... --set iterations=2``, peak RSS by ``/usr/bin/time``,
 less the 0.22 GB of a default mbb run), estimate / measured:
 
     run                                                    dofs      measured  est/meas
-    mbb --nelx 400 --nely 300 --order 3                   2 164 202   6.72 GB   1.01
-    mbb --nelx 200 --nely 100 --order 1                      40 602   0.20 GB   1.31
-    mbb --nelx 200 --nely 100 --order 2                     161 202   0.88 GB   1.41
-    mbb --nelx 200 --nely 100 --order 3                     361 802   0.85 GB   2.19
+    mbb --nelx 400 --nely 300 --order 3                   2 164 202   6.71 GB   1.00
+    mbb --nelx 200 --nely 100 --order 1                      40 602   0.20 GB   1.29
+    mbb --nelx 200 --nely 100 --order 2                     161 202   0.87 GB   1.40
+    mbb --nelx 200 --nely 100 --order 3                     361 802   0.85 GB   2.22
     pa-inverter --maxh 0.002 --order 1                       11 894   0.09 GB   0.96
-    pa-inverter --maxh 0.002 --order 2                       46 970   0.26 GB   1.19
-    pa-inverter --maxh 0.001 --order 2                      185 914   1.11 GB   1.13
-    pa-inverter --maxh 0.002 --order 2, Neo-Hookean,         46 970   0.22 GB   1.92
+    pa-inverter --maxh 0.002 --order 2                       46 970   0.26 GB   1.20
+    pa-inverter --maxh 0.001 --order 2                      185 914   1.11 GB   1.14
+    pa-inverter --maxh 0.002 --order 2, Neo-Hookean,         46 970   0.22 GB   1.95
       load_type=follower (UMFPACK)
     pa-inverter --maxh 0.001 --order 1, the same             46 780   0.31 GB   1.35
 
@@ -77,10 +78,10 @@ from pathlib import Path
 from .params import InputError
 
 # the displacement system's memory fit (see the module docstring): (a, b, quad, per order)
-_FIT = {"sparsecholesky": (416.4, 1.0911, 1.239, 1.0956),
-        "umfpack": (1211.6, 1.0548, 1.141, 1.2297)}
+_FIT = {"sparsecholesky": (447.2, 1.0735, 1.168, 1.1697),
+        "umfpack": (1181.7, 1.0512, 1.108, 1.2717)}
 _MESH_BYTES = 1000.0        # per element of the mesh (Netgen + NGSolve; 860 measured at 185k)
-_RUN_FACTOR = 1.2           # a whole run over its displacement system (module docstring)
+_RUN_FACTOR = 1.25          # a whole run over its displacement system (module docstring)
 _SCATTER_BYTES = 88.0       # per entry of the fast paths' element matrices, while built
 _SCATTER_MAX = 20_000_000   # entries above which they are not built (physics/scatter.py)
 _SAFETY = 0.8               # of the free memory a run may plan to use
