@@ -101,7 +101,7 @@ def case_parameters(case: Case, settings: dict) -> Parameters:
 
 
 def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
-        quiet: bool = True, **settings) -> Result:
+        quiet: bool = True, overwrite: bool = False, **settings) -> Result:
     """Optimise a case and return its :class:`Result`.
 
     Parameters
@@ -113,6 +113,9 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
         Output folder (default: a new temporary folder).
     quiet : bool
         No line per iteration (default True).
+    overwrite : bool
+        Remove an earlier run's files in ``out`` first (default False: a folder that holds a
+        run is refused with an InputError, as by ``pacto run``).
     **settings
         Any parameter by name, e.g. ``model="neohookean"``, ``load=1e5``, ``iterations=50``,
         ``maxh=0.002`` (default: the case's; ``iterations`` is 100 unless the case sets it).
@@ -140,7 +143,7 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
         case = get_case(os.fspath(case))
     params = case_parameters(case, settings)
     folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=f"pacto-{case.name}-"))
-    done = optimise_case(case, params, folder, quiet=quiet)
+    done = optimise_case(case, params, folder, quiet=quiet, overwrite=overwrite)
     return Result(folder, done.exit_code, done.summary, done.history, done.x, done.problem)
 
 

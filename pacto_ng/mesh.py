@@ -273,10 +273,11 @@ def structured_mesh(layout: Layout, nelx: int, nely: int):
 
 
 def _say_snapped_segments(layout: Layout, xs: np.ndarray, ys: np.ndarray) -> None:
-    """One line on stderr for each named segment whose ends fall between the grid's nodes: it
+    """One line on stderr naming the segments whose ends fall between the grid's nodes: each
     takes the whole element edges whose midpoints it covers, so its length is not the one
     given (e.g. the cantilever's load_width of 0.036 m and 0.04 m give the same patch)."""
     tol = 1e-9 * max(layout.width, layout.height)
+    moved = []
     for seg in layout.segments:
         along_x = abs(seg.start[1] - seg.end[1]) <= tol  # a horizontal segment
         nodes = xs if along_x else ys
@@ -286,5 +287,7 @@ def _say_snapped_segments(layout: Layout, xs: np.ndarray, ys: np.ndarray) -> Non
             mids = 0.5 * (nodes[:-1] + nodes[1:])
             covered = np.flatnonzero((mids >= lo) & (mids <= hi))
             got = (nodes[covered[-1] + 1] - nodes[covered[0]]) if covered.size else 0.0
-            print(f"mesh: boundary '{seg.name}' ({hi - lo:.4g} long) ends between grid nodes: "
-                  f"it covers whole element edges, {got:.4g} long", file=sys.stderr)
+            moved.append(f"'{seg.name}' {hi - lo:.4g} -> {got:.4g}")
+    if moved:
+        print("mesh: boundaries ending between grid nodes cover whole element edges (length "
+              "given -> covered): " + ", ".join(moved), file=sys.stderr)

@@ -23,11 +23,11 @@ import numpy as np
 #: the finished runs the scenarios start from (built once per session, see conftest.py):
 #: a small pa-inverter (pressure, linear) and a small cantilever (force, linear)
 BASE_RUNS = {
-    "pa": ["run", "pa-inverter", "--nelx", "12", "--nely", "8", "--set", "iterations=3"],
+    "pa": ["run", "pa-inverter", "--nelx", "20", "--nely", "10", "--set", "iterations=3"],
     "cant": ["run", "cantilever", "--nelx", "12", "--nely", "4", "--set", "iterations=3"],
 }
 #: the mesh and iteration options that make a scenario's run small
-SMALL = {"pa-inverter": ["--nelx", "12", "--nely", "8"], "cantilever": ["--nelx", "12", "--nely", "4"],
+SMALL = {"pa-inverter": ["--nelx", "20", "--nely", "10"], "cantilever": ["--nelx", "12", "--nely", "4"],
          "inverter": ["--nelx", "12", "--nely", "6"], "mm-gripper": ["--nelx", "12", "--nely", "6"]}
 ITER = ["--set", "iterations=2"]
 
@@ -258,7 +258,7 @@ def folder_scenarios() -> list[Scenario]:
 
 
 # -- density files of evaluate ----------------------------------------------------------------
-N_PA = 12 * 8  # elements of the small pa-inverter
+N_PA = 20 * 10  # elements of the small pa-inverter
 
 
 def _density(name: str, make: Callable[[], object]):
@@ -278,8 +278,8 @@ DENSITIES = {
     "garbage.npy": lambda: b"\x93NUMPY garbage",
     "short.npy": lambda: np.full(N_PA - 1, 0.5),
     "long.npy": lambda: np.full(N_PA + 1, 0.5),
-    "column3d.npy": lambda: np.full((8, 12, 1), 0.5),
-    "grid3d.npy": lambda: np.full((2, 8, 12), 0.5),
+    "column3d.npy": lambda: np.full((10, 20, 1), 0.5),
+    "grid3d.npy": lambda: np.full((2, 10, 20), 0.5),
     "complex.npy": lambda: np.full(N_PA, 0.5 + 0.1j),
     "nan.npy": lambda: np.r_[np.full(N_PA - 1, 0.5), np.nan],
     "inf.npy": lambda: np.r_[np.full(N_PA - 1, 0.5), np.inf],

@@ -25,10 +25,10 @@ def test_the_strain_energy_of_a_compliance_run_is_half_its_compliance(tmp_path):
 
 
 def test_a_neohookean_evaluation_reports_its_newton_iterations(tmp_path):
-    np.save(tmp_path / "rho.npy", np.full((8, 12), 0.5))
+    np.save(tmp_path / "rho.npy", np.full((10, 20), 0.5))
     out = tmp_path / "ev"
-    assert main(["evaluate", "pa-inverter", "--model", "neohookean", "--nelx", "12", "--nely",
-                 "8", "--density", str(tmp_path / "rho.npy"), "--out", str(out),
+    assert main(["evaluate", "pa-inverter", "--model", "neohookean", "--nelx", "20", "--nely",
+                 "10", "--density", str(tmp_path / "rho.npy"), "--out", str(out),
                  "--quiet"]) == 0
     s = _summary(out)
     assert s["newton_iterations_total"] >= 2  # a nonlinear solve takes more than one step
@@ -36,10 +36,10 @@ def test_a_neohookean_evaluation_reports_its_newton_iterations(tmp_path):
 
 
 def test_a_failed_evaluation_writes_the_load_it_reached(tmp_path, capsys):
-    np.save(tmp_path / "rho.npy", np.full((8, 12), 0.5))
+    np.save(tmp_path / "rho.npy", np.full((10, 20), 0.5))
     out = tmp_path / "ev"
-    code = main(["evaluate", "pa-inverter", "--model", "neohookean", "--nelx", "12", "--nely",
-                 "8", "--load", "1e10", "--set", "newton_min_increment=0.05", "--density",
+    code = main(["evaluate", "pa-inverter", "--model", "neohookean", "--nelx", "20", "--nely",
+                 "10", "--load", "1e10", "--set", "newton_min_increment=0.05", "--density",
                  str(tmp_path / "rho.npy"), "--out", str(out), "--quiet"])
     assert code == 1
     s = _summary(out)
@@ -63,7 +63,9 @@ def test_density_arrays_of_other_shapes_or_types_are_refused(tmp_path, capsys, a
 
 def test_a_grid_is_read_top_row_first(tmp_path):
     """The nely x nelx grid and the same values as one column in NGSolve's element order (row 0
-    of the grid is the top row of elements; NGSolve numbers from the bottom) give one result."""
+    of the grid is the top row of elements; NGSolve numbers from the bottom) give one result:
+    equal but for the round-off of a parallel assembly (two threads sum in a varying order;
+    rows read in the wrong order change the objective in its first digits)."""
     rng = np.random.default_rng(3)
     grid = rng.uniform(0.2, 1.0, (8, 12))
     np.save(tmp_path / "grid.npy", grid)
@@ -74,4 +76,4 @@ def test_a_grid_is_read_top_row_first(tmp_path):
         assert main(["evaluate", "pa-inverter", "--nelx", "12", "--nely", "8", "--density",
                      str(tmp_path / f"{name}.npy"), "--out", str(out), "--quiet"]) == 0
         objectives.append(_summary(out)["objective"])
-    assert objectives[0] == objectives[1]
+    assert objectives[0] == pytest.approx(objectives[1], rel=1e-12, abs=0)
