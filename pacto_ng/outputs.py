@@ -52,8 +52,9 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "objective_name": problem.objective,
         "objective_history": [h["objective"] for h in history],
         "volume_fraction": problem.volume_fraction(),
-        "output_displacement": val("delta"),
-        "compliance": val("compliance"),
+        "output_displacement": val("delta") if "delta" in vals else output_displacement(problem),
+        "output_displacement_at": output_displacement_at(problem),
+        "compliance": val("compliance") if "compliance" in vals else compliance(problem),
         "strain_energy": val("se") if "se" in vals else strain_energy(problem),
         "load_reached": (mech_res.load_reached * p.load) if mech_res else None,
         "load_factor_reached": mech_res.load_reached if mech_res else None,
@@ -89,6 +90,71 @@ def strain_energy(problem: Problem) -> float | None:
         return None
     block = StrainEnergy(problem.mech)
     return block.forward(*(vals[name] for name in block.inputs))
+
+
+def compliance(problem: Problem) -> float | None:
+    """The end compliance ``f·u`` of the last analysed state at full load, for a run whose
+    chain does not compute it: the point/edge loads and a fixed Darcy body load, as the
+    compliance objective defines it.  None before any analysis, and where no compliance is
+    defined (a follower load, whose load vector depends on u; no load at all)."""
+    vals = problem.values
+    mech = problem.mech
+    if "u" not in vals or mech.has_residual_density:
+        return None
+    if problem.pressure_block is not None:
+        from .physics.darcy_load import Compliance
+
+        block = Compliance(mech, problem.pressure_block)
+        return block.forward(*(vals[name] for name in block.inputs))
+    if not mech.loads:
+        return None
+    from .responses import compliance as compliance_block
+
+    return compliance_block(mech).forward(vals["u"])
+
+
+def _output_ports(problem: Problem) -> tuple:
+    """What the reported output displacement reads, and whether that is the case's ports:
+    its ports, or else a unit-direction port at its one point/edge load (empty: neither)."""
+    from .physics.loads import Port
+
+    setup = problem.setup
+    if setup.ports:
+        return setup.ports, "port"
+    if len(setup.loads) == 1:
+        force = np.asarray(setup.loads[0].force, dtype=float)
+        norm = float(np.linalg.norm(force))
+        if norm > 0:
+            return (Port(setup.loads[0].region, tuple(force / norm)),), "load"
+    return (), None
+
+
+def output_displacement(problem: Problem) -> float | None:
+    """``Δ = Σ weight · d·u`` of the last analysed state (see :func:`output_displacement_at`),
+    for a run whose chain does not compute it.  None before any analysis or where the case has
+    neither a port nor a single point/edge load."""
+    from .physics.loads import Outputs
+    from .responses import output_displacement as output_block
+
+    vals = problem.values
+    ports, _ = _output_ports(problem)
+    if "u" not in vals or not ports:
+        return None
+    where = ports[0] if len(ports) == 1 else Outputs(ports)
+    return output_block(problem.mech, where).forward(vals["u"])
+
+
+def output_displacement_at(problem: Problem) -> dict | None:
+    """Where the output displacement is read: ``kind`` "port" (the case's output ports) or
+    "load" (no port: at its one point/edge load, in the force's direction), and each
+    ``region`` with its ``direction`` d and ``weight`` (Δ = Σ weight · d·u, u at a named point
+    or its mean over a named boundary).  None where no output displacement is defined."""
+    ports, kind = _output_ports(problem)
+    if not ports:
+        return None
+    return {"kind": kind,
+            "terms": [{"region": port.region, "direction": [float(c) for c in port.direction],
+                       "weight": float(port.weight)} for port in ports]}
 
 
 def pressure_and_material_summary(problem: Problem) -> dict:
