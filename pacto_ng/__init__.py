@@ -36,9 +36,11 @@ from .settings import Settings, setting  # noqa: E402
 from .physics.loads import Outputs, PointLoad, Port, Spring  # noqa: E402
 from .physics.mechanics import Supports  # noqa: E402
 from .mesh import Layout, Region, Segment  # noqa: E402
-from .case import Case, Pressure, Setup, domain_size, get_case, load_case_file  # noqa: E402
+from .case import Case, Pressure, Problem, Setup, domain_size, get_case, load_case_file  # noqa: E402
+from .builders import Builder, Responses, standard_chain  # noqa: E402
+from .responses import StrainEnergy, output_displacement  # noqa: E402
 from .geometry import load_cad, load_mesh, mesh_geometry  # noqa: E402
-from .api import Result, load_result, run  # noqa: E402
+from .api import Result, check_gradients, load_result, run  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -53,9 +55,11 @@ __all__ = [
     # a case
     "Case", "Setup", "Parameters", "Supports", "Pressure", "Port", "Outputs", "Spring",
     "PointLoad", "Settings", "setting", "domain_size",
+    # its chain of blocks
+    "Builder", "standard_chain", "Problem", "Responses", "output_displacement", "StrainEnergy",
     # geometry
     "Layout", "Segment", "Region", "load_cad", "load_mesh", "mesh_geometry",
     # running
-    "run", "Result", "load_result", "get_case", "load_case_file", "InputError", "main",
+    "run", "Result", "load_result", "check_gradients", "get_case", "load_case_file", "InputError", "main",
     "__version__",
 ]

@@ -147,6 +147,28 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
     return Result(folder, done.exit_code, done.summary, done.history, done.x, done.problem)
 
 
+def check_gradients(case: Case | str | os.PathLike, *, seed: int = 0, quiet: bool = True,
+                    **settings) -> float:
+    """Check the adjoint gradients of a case's chain against finite differences, as ``pacto
+    check-gradients`` does, and return the worst relative error.
+
+    Every value the optimiser sees (objective, constraints) and every reported response is
+    differentiated along random directions on a random design (a coarse mesh unless
+    ``settings`` give ``maxh`` or ``nelx``); 1e-5 is the command's pass tolerance.
+
+    Examples
+    --------
+    >>> check_gradients("my_case.py") < 1e-5                              # doctest: +SKIP
+    """
+    from .gradcheck import check_case
+
+    if not isinstance(case, Case):
+        case = get_case(os.fspath(case))
+    params = case_parameters(case, settings)
+    explicit = any(k in settings for k in ("maxh", "nelx", "nely"))
+    return check_case(case, params, seed=seed, quiet=quiet, explicit_mesh=explicit)
+
+
 def load_result(folder: str | os.PathLike, *, case: Case | None = None,
                 exit_code: int | None = None) -> Result:
     """The :class:`Result` of a finished run folder (its final design analysed again).

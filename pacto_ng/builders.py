@@ -1,15 +1,21 @@
-"""The builders of an optimisation chain, one concern each, called in order by
-:func:`pacto_ng.case.build_problem`:
+"""The builders of an optimisation chain, one concern each, and the chain a case calls them in.
 
-    meshed   = mesh_for(case, params)                          geometry -> mesh
-    design   = design_chain(meshed, setup, params)             x -> ρ -> ρ̃ -> ρ̄ (per field)
-    energy   = make_energy(params, design.penal, design.names) φ(∇u; ρ̄) of the model
-    pressure = pressure_load(meshed, setup, params, energy, design.names)   ρ̄ -> p, load
-    mech     = mechanics(meshed, setup, params, energy, design, pressure)   (ρ̄, p) -> u
-    response = responses(mech, setup, params, pressure, case_name)          u -> f0, g
-    volume   = volume_constraints(design, params)                           ρ̄ -> V/V* - 1
+A case's ``chain(b)`` (``Case.chain``; :func:`standard_chain` unless the case writes its own)
+gets a :class:`Builder` ``b`` -- the case, its parameters, its meshed geometry and its set-up
+-- and calls the builders in order::
 
-Each returns the blocks it adds (with what the next builder needs); the problem is their chain.
+    design   = b.design()                           x -> ρ -> ρ̃ -> ρ̄ (per field)
+    model    = b.energy(design)                     φ(∇u; ρ̄) of --model
+    pressure = b.pressure(model, design)            ρ̄ -> p and its load (none without one)
+    mech     = b.mechanics(model, design, pressure) (ρ̄, p) -> u
+    response = b.responses(mech, pressure)          u -> the objective of the set-up
+    volume   = b.volume(design)                     ρ̄ -> V/V* - 1
+    return b.problem(design, pressure, mech, response, volume)
+
+Each builder returns the blocks it adds (with what the next one needs).  A case that needs
+another objective writes its own chain and its own response block (any object with ``inputs``,
+``output``, ``forward`` and ``backward``, :mod:`pacto_ng.core`) in place of ``b.responses``;
+``pacto check-gradients`` then checks its gradient like any other.
 """
 from __future__ import annotations
 
@@ -98,159 +104,217 @@ class Responses:
     constraints: list = field(default_factory=list)
 
 
-def design_chain(meshed, setup, params) -> DesignChain:
-    """Embed, filter (Helmholtz, cone or none), project and fix the passive elements, for one
-    or two design fields (``setup.materials``)."""
-    from ngsolve import Parameter
+@dataclass
+class Model:
+    """The energy of ``--model`` on the design's densities, its Newton guard and whether it is
+    linear (one linear solve per design)."""
 
-    from .design import DesignField, Embed, FixPassive
-    from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
-
-    mesh = meshed.mesh
-    try:
-        field_ = DesignField(mesh, solid=setup.solid, void=setup.void)
-    except ValueError as err:
-        raise InputError(str(err)) from None
-    radius = params.filter_radius or 3.0 * meshed.h
-    corners = np.array([v.point for v in mesh.vertices])
-    diameter = float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
-    if radius > diameter:
-        raise InputError(f"filter_radius: {radius:g} is larger than the domain ({diameter:g} "
-                         "across): the filter would average the whole design")
-    nf = setup.materials
-    names = ("rho_bar",) if nf == 1 else ("rho_bar1", "rho_bar2")
-    blocks, projections = [], []
-    if nf == 2:
-        blocks += [Slice(field_.n, 0, "x1"), Slice(field_.n, 1, "x2")]
-    for i, out in enumerate(names):
-        suf = "" if nf == 1 else str(i + 1)
-        xin = "x" if nf == 1 else f"x{suf}"
-        blocks.append(Embed(field_, inputs=(xin,), output=f"rho{suf}"))
-        if params.filter == "helmholtz":
-            flt = HelmholtzFilter(mesh, radius, inputs=(f"rho{suf}",), output=f"rho_tilde{suf}")
-        elif params.filter == "cone":
-            flt = ConeFilter(field_.centroids(), field_.areas, radius, inputs=(f"rho{suf}",),
-                             output=f"rho_tilde{suf}")
-        else:
-            flt = IdentityFilter(inputs=(f"rho{suf}",), output=f"rho_tilde{suf}")
-        blocks.append(flt)
-        pr = HeavisideProjection(params.beta, params.eta, inputs=(f"rho_tilde{suf}",),
-                                 output=f"rho_proj{suf}")
-        projections.append(pr)
-        blocks.append(pr)
-        blocks.append(FixPassive(field_, inputs=(f"rho_proj{suf}",), output=out))
-    return DesignChain(field_, blocks, projections, Parameter(params.penal), names)
+    energy: object
+    guard: object
+    linear: bool
 
 
-def pressure_load(meshed, setup, params, energy, names, case_name: str) -> PressureLoad:
-    """The Darcy pressure of the case's inlet and zero-pressure boundaries, and its load:
-    fixed (a body force) or follower (a residual density, SPEC §4)."""
-    from .case import Pressure
+class Builder:
+    """What a case's chain is built from: the case, its parameters, the meshed geometry
+    (:class:`~pacto_ng.geometry.Meshed`: ``mesh``, ``h``, ``shape``) and the set-up; its
+    methods are the builders, called in order by the case's ``chain``."""
 
-    if params.load_type == "follower" and setup.pressure is None:
-        raise InputError(f"load_type: case '{case_name}' has no pressure load to follow the "
-                         "deformation")
-    if params.inlet and setup.pressure is None:
-        raise InputError(f"inlet: case '{case_name}' has no pressure load")
-    if setup.pressure is None:
-        return PressureLoad()
-    from .physics import darcy_load
+    def __init__(self, case, params, meshed, setup):
+        self.case, self.params, self.meshed, self.setup = case, params, meshed, setup
 
-    h = meshed.h
-    if params.delta_s < 0.1 * h:
-        raise InputError(f"delta_s: {params.delta_s:g} is below a tenth of the element size "
-                         f"{h:g} (set delta_s in the units of the mesh)")
-    if not abs(params.p_out) < params.load:
-        raise InputError(f"p_out: the outside pressure {params.p_out:g} must be smaller in size "
-                         f"than the inlet pressure (load {params.load:g})")
-    pressure = setup.pressure
-    if params.inlet:
-        pressure = Pressure(inlet=tuple(params.inlet.split("|")), zero=pressure.zero)
-    try:
-        # Wang: the follower load sees the deformation I + γ∇u of the energy's large-strain
-        # part (void: the fixed load), unless follower_wang=0
-        gamma = energy.gamma if params.model == "wang" and params.follower_wang else None
-        block, pfield, body = darcy_load.for_case(meshed.mesh, params.darcy, params.load,
-                                                  pressure, names[0], order=params.order,
-                                                  gamma=gamma)
-    except ValueError as err:
-        raise InputError(str(err)) from None
-    if params.load_type == "follower":
-        # -cof(F)∇p: a residual term (unsymmetric tangent, transposed adjoint).  It is affine
-        # in u in 2D, so a linear material keeps its one-step linear solve.
-        return PressureLoad(block, pfield, None, body)
-    return PressureLoad(block, pfield, body, None)
+    @property
+    def mesh(self):
+        """The ``ngsolve.Mesh``."""
+        return self.meshed.mesh
+
+    def design(self) -> DesignChain:
+        """Embed, filter (Helmholtz, cone or none), project and fix the passive elements, for
+        one or two design fields (``setup.materials``)."""
+        from ngsolve import Parameter
+
+        from .design import DesignField, Embed, FixPassive
+        from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
+
+        mesh, setup, params = self.mesh, self.setup, self.params
+        try:
+            field_ = DesignField(mesh, solid=setup.solid, void=setup.void)
+        except ValueError as err:
+            raise InputError(str(err)) from None
+        radius = params.filter_radius or 3.0 * self.meshed.h
+        corners = np.array([v.point for v in mesh.vertices])
+        diameter = float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
+        if radius > diameter:
+            raise InputError(f"filter_radius: {radius:g} is larger than the domain ({diameter:g} "
+                             "across): the filter would average the whole design")
+        nf = setup.materials
+        names = ("rho_bar",) if nf == 1 else ("rho_bar1", "rho_bar2")
+        blocks, projections = [], []
+        if nf == 2:
+            blocks += [Slice(field_.n, 0, "x1"), Slice(field_.n, 1, "x2")]
+        for i, out in enumerate(names):
+            suf = "" if nf == 1 else str(i + 1)
+            xin = "x" if nf == 1 else f"x{suf}"
+            blocks.append(Embed(field_, inputs=(xin,), output=f"rho{suf}"))
+            if params.filter == "helmholtz":
+                flt = HelmholtzFilter(mesh, radius, inputs=(f"rho{suf}",),
+                                      output=f"rho_tilde{suf}")
+            elif params.filter == "cone":
+                flt = ConeFilter(field_.centroids(), field_.areas, radius, inputs=(f"rho{suf}",),
+                                 output=f"rho_tilde{suf}")
+            else:
+                flt = IdentityFilter(inputs=(f"rho{suf}",), output=f"rho_tilde{suf}")
+            blocks.append(flt)
+            pr = HeavisideProjection(params.beta, params.eta, inputs=(f"rho_tilde{suf}",),
+                                     output=f"rho_proj{suf}")
+            projections.append(pr)
+            blocks.append(pr)
+            blocks.append(FixPassive(field_, inputs=(f"rho_proj{suf}",), output=out))
+        return DesignChain(field_, blocks, projections, Parameter(params.penal), names)
+
+    def energy(self, design: DesignChain) -> Model:
+        """The energy of ``--model`` (:mod:`pacto_ng.physics.energy`) with SIMP on the
+        design's densities."""
+        from .physics.energy import make_energy
+
+        return Model(*make_energy(self.params, design.penal, design.names))
+
+    def pressure(self, model: Model, design: DesignChain) -> PressureLoad:
+        """The Darcy pressure of the set-up's inlet and zero-pressure boundaries, and its load:
+        fixed (a body force) or follower (a residual density, SPEC §4); empty for a set-up
+        without pressure."""
+        from .case import Pressure
+
+        params, setup, name = self.params, self.setup, self.case.name
+        if params.load_type == "follower" and setup.pressure is None:
+            raise InputError(f"load_type: case '{name}' has no pressure load to follow the "
+                             "deformation")
+        if params.inlet and setup.pressure is None:
+            raise InputError(f"inlet: case '{name}' has no pressure load")
+        if setup.pressure is None:
+            return PressureLoad()
+        from .physics import darcy_load
+
+        h = self.meshed.h
+        if params.delta_s < 0.1 * h:
+            raise InputError(f"delta_s: {params.delta_s:g} is below a tenth of the element size "
+                             f"{h:g} (set delta_s in the units of the mesh)")
+        if not abs(params.p_out) < params.load:
+            raise InputError(f"p_out: the outside pressure {params.p_out:g} must be smaller in "
+                             f"size than the inlet pressure (load {params.load:g})")
+        pressure = setup.pressure
+        if params.inlet:
+            pressure = Pressure(inlet=tuple(params.inlet.split("|")), zero=pressure.zero)
+        try:
+            # Wang: the follower load sees the deformation I + γ∇u of the energy's large-strain
+            # part (void: the fixed load), unless follower_wang=0
+            gamma = model.energy.gamma if params.model == "wang" and params.follower_wang else None
+            block, pfield, body = darcy_load.for_case(self.mesh, params.darcy, params.load,
+                                                      pressure, design.names[0],
+                                                      order=params.order, gamma=gamma)
+        except ValueError as err:
+            raise InputError(str(err)) from None
+        if params.load_type == "follower":
+            # -cof(F)∇p: a residual term (unsymmetric tangent, transposed adjoint).  It is affine
+            # in u in 2D, so a linear material keeps its one-step linear solve.
+            return PressureLoad(block, pfield, None, body)
+        return PressureLoad(block, pfield, body, None)
+
+    def mechanics(self, model: Model, design: DesignChain, pressure: PressureLoad):
+        """The mechanics block ``(ρ̄, [p]) -> u`` with the set-up's supports, loads and
+        springs."""
+        from .physics.loads import PointLoad
+        from .physics.mechanics import Mechanics
+
+        params, setup = self.params, self.setup
+        fields = list(design.names) + ([pressure.field] if pressure.field is not None else [])
+        loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force)))
+                      for ld in setup.loads)
+        try:
+            return Mechanics(self.mesh, order=params.order, energy=model.energy, fields=fields,
+                             supports=setup.supports, loads=loads, springs=setup.all_springs,
+                             body=pressure.body, thickness=params.thickness, guard=model.guard,
+                             linear=model.linear, newton=params.newton.settings(),
+                             residual_density=pressure.follower, realcompile=params.realcompile)
+        except ValueError as err:
+            raise InputError(str(err)) from None
+
+    def responses(self, mech, pressure: PressureLoad) -> Responses:
+        """The blocks of the set-up's objective (or ``--set objective``): compliance, strain
+        energy, or an output displacement (alone, over the strain energy, or under a
+        strain-energy limit)."""
+        from . import responses as R
+
+        params, setup = self.params, self.setup
+        obj = params.objective or setup.objective
+        if obj not in OBJECTIVES:
+            raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{obj}')")
+        if obj == "compliance":
+            if pressure.follower is not None:
+                raise InputError("objective: compliance is not defined for a follower load (the "
+                                 "load vector depends on u); use energy, mechanism, output or "
+                                 "output_se")
+            if pressure.body is not None:
+                from .physics import darcy_load
+
+                return Responses([darcy_load.Compliance(mech, pressure.block)], "compliance")
+            return Responses([R.compliance(mech)], "compliance")
+        if obj == "energy":
+            return Responses([R.StrainEnergy(mech)], "se")
+        if not setup.ports:
+            raise InputError(f"objective '{obj}' needs an output port")
+        blocks = [R.output_displacement(mech, setup.output)]
+        if obj == "output":
+            return Responses(blocks + [R.Scale(-1.0, ("delta",), "objective")], "objective",
+                             ["delta"])
+        if obj == "output_se":  # max Δ subject to SE <= se_max
+            se_max = params.se_max or setup.se_max
+            if not se_max > 0:
+                raise InputError(f"se_max: objective output_se needs a positive limit (case "
+                                 f"'{self.case.name}' has no default; --set se_max=...)")
+            blocks += [R.Scale(-1.0, ("delta",), "objective"), R.StrainEnergy(mech),
+                       Bound(se_max, ("se",), "se_limit")]
+            return Responses(blocks, "objective", ["delta", "se"], ["se_limit"])
+        blocks += [R.StrainEnergy(mech), R.MechanismRatio()]
+        return Responses(blocks, "objective", ["delta", "se"])
+
+    def volume(self, design: DesignChain) -> Responses:
+        """``V(ρ̄)/V* - 1 <= 0`` on the (total) solid, and on the stiff material where
+        ``volfrac2`` > 0 (two materials)."""
+        from . import responses as R
+
+        blocks, names = [], []
+        for i, out in enumerate(design.names):
+            vf = self.params.volfrac if i == 0 else self.params.volfrac2
+            if i == 0 or self.params.volfrac2 > 0:
+                name = "volume" if i == 0 else "volume2"
+                blocks.append(R.Volume(design.field, vf, inputs=(out,), output=name))
+                names.append(name)
+        return Responses(blocks, "volume", [], names)
+
+    def problem(self, design: DesignChain, pressure: PressureLoad, mech, response: Responses,
+                volume: Responses):
+        """The :class:`~pacto_ng.case.Problem`: the chain of the blocks in this order, the
+        response's objective, the volume's and the response's constraints."""
+        from .case import Problem
+        from .core import Chain
+
+        chain = Chain(design.blocks + pressure.blocks + [mech] + response.blocks
+                      + volume.blocks, inputs=("x",))
+        return Problem(self.case, self.params, self.mesh, design.field, chain,
+                       response.objective, volume.constraints + response.constraints, mech,
+                       design.projections, design.penal, self.setup, self.meshed.h,
+                       response.reports, pressure.block, self.setup.materials,
+                       shape=self.meshed.shape)
 
 
-def mechanics(meshed, setup, params, energy, guard, linear, design: DesignChain,
-              pressure: PressureLoad):
-    """The mechanics block ``(ρ̄, [p]) -> u`` with the case's supports, loads and springs."""
-    from .physics.loads import PointLoad
-    from .physics.mechanics import Mechanics
-
-    fields = list(design.names) + ([pressure.field] if pressure.field is not None else [])
-    loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force)))
-                  for ld in setup.loads)
-    try:
-        return Mechanics(meshed.mesh, order=params.order, energy=energy, fields=fields,
-                         supports=setup.supports, loads=loads, springs=setup.all_springs,
-                         body=pressure.body, thickness=params.thickness, guard=guard,
-                         linear=linear, newton=params.newton.settings(),
-                         residual_density=pressure.follower, realcompile=params.realcompile)
-    except ValueError as err:
-        raise InputError(str(err)) from None
-
-
-def responses(mech, setup, params, pressure: PressureLoad, case_name: str) -> Responses:
-    """The objective's blocks: compliance, strain energy, or an output displacement (alone,
-    over the strain energy, or under a strain-energy limit)."""
-    from . import responses as R
-
-    obj = params.objective or setup.objective
-    if obj not in OBJECTIVES:
-        raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{obj}')")
-    if obj == "compliance":
-        if pressure.follower is not None:
-            raise InputError("objective: compliance is not defined for a follower load (the load "
-                             "vector depends on u); use energy, mechanism, output or output_se")
-        if pressure.body is not None:
-            from .physics import darcy_load
-
-            return Responses([darcy_load.Compliance(mech, pressure.block)], "compliance")
-        return Responses([R.compliance(mech)], "compliance")
-    if obj == "energy":
-        return Responses([R.StrainEnergy(mech)], "se")
-    if not setup.ports:
-        raise InputError(f"objective '{obj}' needs an output port")
-    blocks = [R.output_displacement(mech, setup.output)]
-    if obj == "output":
-        return Responses(blocks + [R.Scale(-1.0, ("delta",), "objective")], "objective",
-                         ["delta"])
-    if obj == "output_se":  # max Δ subject to SE <= se_max
-        se_max = params.se_max or setup.se_max
-        if not se_max > 0:
-            raise InputError(f"se_max: objective output_se needs a positive limit (case "
-                             f"'{case_name}' has no default; --set se_max=...)")
-        blocks += [R.Scale(-1.0, ("delta",), "objective"), R.StrainEnergy(mech),
-                   Bound(se_max, ("se",), "se_limit")]
-        return Responses(blocks, "objective", ["delta", "se"], ["se_limit"])
-    blocks += [R.StrainEnergy(mech), R.MechanismRatio()]
-    return Responses(blocks, "objective", ["delta", "se"])
-
-
-def volume_constraints(design: DesignChain, params) -> Responses:
-    """``V(ρ̄)/V* - 1 <= 0`` on the (total) solid, and on the stiff material where
-    ``volfrac2`` > 0 (two materials)."""
-    from . import responses as R
-
-    blocks, names = [], []
-    for i, out in enumerate(design.names):
-        vf = params.volfrac if i == 0 else params.volfrac2
-        if i == 0 or params.volfrac2 > 0:
-            name = "volume" if i == 0 else "volume2"
-            blocks.append(R.Volume(design.field, vf, inputs=(out,), output=name))
-            names.append(name)
-    return Responses(blocks, "volume", [], names)
+def standard_chain(b: Builder):
+    """The chain of every built-in case: design, energy, [pressure], mechanics, the set-up's
+    objective and the volume constraint."""
+    design = b.design()
+    model = b.energy(design)
+    pressure = b.pressure(model, design)
+    mech = b.mechanics(model, design, pressure)
+    return b.problem(design, pressure, mech, b.responses(mech, pressure), b.volume(design))
 
 
 class Bound:

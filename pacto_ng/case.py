@@ -6,8 +6,8 @@ A :class:`Case` is frozen data: a name, a one-line summary, its source, default
 (``setup(params) -> Setup``: supports, loads, springs, ports, passive regions, objective).  The
 built-in cases in ``cases/`` define one each; a user's own case is a Python file that defines
 ``CASE`` (:func:`load_case_file`).  :func:`build_problem` turns a case and parameters into a
-:class:`Problem`: the mesh, the design field, the chain of blocks and the names of the
-objective and the constraints.
+:class:`Problem` through the case's chain (``Case.chain``, :mod:`pacto_ng.builders`): the mesh,
+the design field, the chain of blocks and the names of the objective and the constraints.
 """
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from typing import Callable
 
 import numpy as np
 
-from .builders import OBJECTIVES
+from .builders import OBJECTIVES, Builder, standard_chain
 from .core import Chain
 from .params import InputError, Parameters
 from .physics.loads import Outputs, PointLoad, Port, Spring
@@ -140,6 +140,11 @@ class Case:
     options : Settings, optional
         The case's own settings with their defaults (a :class:`~pacto_ng.settings.Settings`
         instance), set like any parameter (``--set NAME=VALUE``) and read as ``params.NAME``.
+    chain : callable
+        ``chain(b)`` -> :class:`Problem`: the blocks of the case in order, built with the
+        :class:`~pacto_ng.builders.Builder` ``b`` (design, energy, pressure, mechanics,
+        responses, volume); :func:`~pacto_ng.builders.standard_chain` unless the case needs
+        another objective or other reported values (``pacto run CASE --show-chain``).
     """
 
     name: str
@@ -159,6 +164,8 @@ class Case:
     #: the case's own settings (a pacto_ng.Settings instance with their defaults), set like
     #: any parameter: ``--set NAME=VALUE``, ``params.NAME``
     options: object = None
+    #: the case's chain of blocks (``chain(builder) -> Problem``)
+    chain: Callable = standard_chain
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.strip():
@@ -166,7 +173,7 @@ class Case:
         if not isinstance(self.defaults, Parameters):
             raise InputError(f"case '{self.name}': defaults must be Parameters (got "
                              f"{type(self.defaults).__name__})")
-        for attr in ("geometry", "setup"):
+        for attr in ("geometry", "setup", "chain"):
             if not callable(getattr(self, attr)):
                 raise InputError(f"case '{self.name}': {attr} must be a function of the "
                                  "parameters")
@@ -193,11 +200,20 @@ class Case:
                              f"{type(setup).__name__}, not a Setup")
         return setup
 
-    def _user_call(self, fn, params):
+    def make_problem(self, builder: Builder) -> "Problem":
+        """The case's chain on ``builder`` (an error in a user's case file: one line)."""
+        problem = self._user_call(self.chain, builder)
+        if not isinstance(problem, Problem):
+            raise InputError(f"case '{self.name}': chain(b) returned a "
+                             f"{type(problem).__name__}, not a Problem (end it with "
+                             "b.problem(...))")
+        return problem
+
+    def _user_call(self, fn, arg):
         if not self.file:
-            return fn(params)
+            return fn(arg)
         try:
-            return fn(params)
+            return fn(arg)
         except InputError:
             raise
         except Exception as err:  # noqa: BLE001 - any error of a user's code, shown as file:line
@@ -371,6 +387,15 @@ class Problem:
             pr.beta = beta
         self.mech.target = load
 
+    def describe(self) -> list[str]:
+        """The chain as text: one line per block (its kind, what it reads and makes), then the
+        objective, the constraints and the values reported each iteration."""
+        lines = [f"  {type(b).__name__:20s} {', '.join(b.inputs)} -> {b.output}"
+                 for b in self.chain.blocks]
+        lines.append(f"objective: {self.objective}; constraints (<= 0): "
+                     f"{', '.join(self.constraints)}; reported: {', '.join(self.reports) or '-'}")
+        return lines
+
     # -- evaluation -------------------------------------------------------------------------------
     def evaluate(self, x: np.ndarray, gradients: bool = True):
         """Return ``f0, fvals`` and, with ``gradients``, ``df0, dfvals`` (shape (m, n))."""
@@ -422,11 +447,9 @@ def mesh_for(case: Case, params: Parameters):
 
 
 def build_problem(case: Case, params: Parameters) -> Problem:
-    """The case's chain: mesh, design chain, energy, [Darcy pressure], mechanics, responses
-    and volume constraints, each from its builder (:mod:`pacto_ng.builders`)."""
-    from . import builders as B
+    """The case's problem: its set-up and mesh, checked against each other, then its chain
+    (``case.chain``, :mod:`pacto_ng.builders`)."""
     from .geometry import check_inlet_touches_design, check_setup_names, check_vectors
-    from .physics.energy import make_energy
 
     if case.analysis_only:
         raise InputError(f"case '{case.name}' is an analysis, not an optimisation")
@@ -444,16 +467,4 @@ def build_problem(case: Case, params: Parameters) -> Problem:
     if setup.pressure is not None:
         check_inlet_touches_design(meshed.mesh, setup.pressure.inlet, setup.void)
 
-    design = B.design_chain(meshed, setup, params)
-    energy, guard, linear = make_energy(params, design.penal, design.names)
-    pressure = B.pressure_load(meshed, setup, params, energy, design.names, case.name)
-    mech = B.mechanics(meshed, setup, params, energy, guard, linear, design, pressure)
-    response = B.responses(mech, setup, params, pressure, case.name)
-    volume = B.volume_constraints(design, params)
-
-    chain = Chain(design.blocks + pressure.blocks + [mech] + response.blocks + volume.blocks,
-                  inputs=("x",))
-    return Problem(case, params, meshed.mesh, design.field, chain, response.objective,
-                   volume.constraints + response.constraints, mech, design.projections,
-                   design.penal, setup, meshed.h, response.reports, pressure.block,
-                   setup.materials, shape=meshed.shape)
+    return case.make_problem(Builder(case, params, meshed, setup))

@@ -85,6 +85,8 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="optimise a case")
     _case_options(r)
     r.add_argument("--show-parameters", action="store_true", help="print every parameter and exit")
+    r.add_argument("--show-chain", action="store_true",
+                   help="build the case's chain of blocks, print it and exit")
     r.add_argument("--overwrite", action="store_true", help="the --out folder may hold an earlier "
                    "run: remove that run's files first (by default such a folder is refused)")
     e = sub.add_parser("evaluate", help="analyse a given design (no optimisation)")
@@ -305,6 +307,13 @@ def _main(argv) -> int:
     if args.command == "run":
         if args.show_parameters:
             _show_parameters(case, case.resolve(params))
+            return 0
+        if args.show_chain:
+            from .case import build_problem
+
+            problem = build_problem(case, params)
+            print(f"{case.name} ({problem.mesh.ne} elements, model {problem.params.model}):")
+            print("\n".join(problem.describe()))
             return 0
         if case.analysis_only:
             from .analysis_case import run_analysis_case

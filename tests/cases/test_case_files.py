@@ -128,6 +128,10 @@ MISTAKES = [
     ("error inside geometry()", [("chamber = occ.WorkPlane().Circle(0.35 * L, 0.5 * H, CHAMBER_R).Face()",
                                   "chamber = occ.WorkPlane().Circle(0.35 * L, 0.5 * H, CHAMBER_R).Fase()")],
      "AttributeError"),
+    ("chain returns the wrong type", [("    setup=setup,\n", "    setup=setup,\n    chain=lambda b: b.design(),\n")],
+     "chain(b) returned a DesignChain, not a Problem"),
+    ("error inside chain()", [("    setup=setup,\n", "    setup=setup,\n    chain=lambda b: b.desing(),\n")],
+     "AttributeError: 'Builder' object has no attribute 'desing'"),
 ]
 
 

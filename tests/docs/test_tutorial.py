@@ -101,6 +101,9 @@ def test_tutorial_runs_as_written(in_tmp, capsys):
                  "pressure.png", "params.json", "checkpoint.npz"):
         assert (folder / name).is_file(), name
 
+    listing = str(sorted(f.name for f in folder.iterdir() if f.name != "export"))  # before §7
+    assert listing in out and listing in TUTORIAL.read_text()
+
     # 7. the STL: exit code 0, closed, volume = remeshed area x thickness > 0
     assert ns["code"] == 0
     stl = folder / "export" / "design.stl"
@@ -127,5 +130,12 @@ def test_tutorial_runs_as_written(in_tmp, capsys):
     assert "\n" not in message
     assert "'fixd'" in message and "fixed, inlet, outer" in message
     assert message in TUTORIAL.read_text()  # the tutorial shows the message as it is
+
+    # 10. the chain as --show-chain prints it, and the own objective's gradients
+    chain_text = f"my_actuator ({mesh.ne} elements, model linear):\n" + "\n".join(
+        result.problem.describe())
+    assert chain_text in TUTORIAL.read_text()
+    assert ns["worst"] < 1e-6
+    assert f"worst relative error {ns['worst']:.1e}" in out
 
     assert elapsed < 90, f"the tutorial took {elapsed:.0f} s"
