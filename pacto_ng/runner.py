@@ -1,7 +1,7 @@
 """A run and its output folder (the contract users and scripts rely on).
 
-DIR/params.json        case name, case file and every parameter (written first; ``pacto resume``
-                       reads it)
+DIR/params.json        case name, case file and every parameter (written once the problem is
+                       built, before the first iteration; ``pacto resume`` reads it)
 DIR/checkpoint.npz     design, optimiser state, history, warm-start displacement (every iteration)
 DIR/.pacto.lock        held while a process writes DIR (a second one is refused)
 
@@ -180,6 +180,8 @@ def _stopped_converged(state: LoopState, tol: float, obj_tol: float) -> LoopResu
 
 def _kept(path: Path, saved: int | None, total: int) -> str:
     """What an interrupted or failed run leaves, and how to go on: for one line."""
+    if saved is None and not (path / "params.json").exists():
+        return "nothing was written yet (the problem was being built): run the command again"
     if saved is None:
         return (f"no iteration was checkpointed; 'pacto resume {path}' starts the run again from "
                 "its params.json")
@@ -272,11 +274,12 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
         if not quiet:
             print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
     params = case.resolve(params)  # order 0: the case's order for the (chosen) model
+    problem = build_problem(case, params)
+    problem.model_choice = model_choice
+    # after the problem is built: a run refused while building it leaves the folder as it was
     info = {"case": case.name, "case_file": case.file, "params": params.to_dict(),
             "model_choice": model_choice}
     _write_params(path / "params.json", info)
-    problem = build_problem(case, params)
-    problem.model_choice = model_choice
     ckpt = path / "checkpoint.npz"
     if resume and ckpt.exists():
         state = load_checkpoint(ckpt, problem)

@@ -88,6 +88,23 @@ def test_overwrite_removes_the_earlier_runs_files_only(tmp_path):
         assert ck["x"].size == 12 * 4 and int(ck["k"]) == 2
 
 
+def test_a_run_refused_while_building_its_problem_writes_nothing(tmp_path, capsys):
+    """A filter radius larger than the domain is refused by the design chain's builder, once
+    the mesh is built: no params.json is left behind, in a new folder nor in a folder of the
+    user's."""
+    refused = [*MBB, "--set", "filter_radius=100"]
+    new = tmp_path / "new"
+    assert main(["run", *refused, "--out", str(new)]) == 2
+    assert one_error_line(capsys).startswith("pacto: error: filter_radius: 100 is larger than")
+    assert snapshot(new) == {}
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("the user's")
+    before = snapshot(mine)
+    assert main(["run", *refused, "--out", str(mine), "--quiet"]) == 2
+    assert snapshot(mine) == before
+
+
 @pytest.mark.slow
 def test_a_run_that_fails_at_iteration_0_never_resumes_the_old_design(tmp_path, capsys):
     """--overwrite removes the earlier checkpoint before the new run starts: when the new run

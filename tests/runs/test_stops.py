@@ -69,6 +69,27 @@ def test_an_interrupt_before_the_first_checkpoint_says_there_is_none(tmp_path):
     assert json.loads((out / "summary.json").read_text())["iterations"] == 2
 
 
+def test_an_interrupt_while_the_problem_is_built_leaves_nothing_to_resume(tmp_path):
+    """Ctrl-C while the mesh and chain are built (about 7 s for this mesh; the folder's lock
+    is taken before): params.json is written only once the problem is built, so nothing is
+    there, and the line says to run the command again, not to resume."""
+    out = tmp_path / "run"
+    proc = pacto("run", "cantilever", "--maxh", "0.004", "--iterations", "1", "--out",
+                 str(out), "--quiet")
+    while not (out / ".pacto.lock").exists():
+        assert proc.poll() is None, proc.stderr.read()
+        time.sleep(0.002)
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    if (out / "params.json").exists():  # the problem was built before the signal
+        pytest.skip("the problem was built before the signal")
+    assert err.strip() == ("pacto: interrupted by SIGINT: nothing was written yet (the problem "
+                           "was being built): run the command again")
+    assert [p.name for p in out.iterdir()] == [".pacto.lock"]
+
+
 def _file_limit(nbytes):
     def limit():
         resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, nbytes))
