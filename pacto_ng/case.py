@@ -42,6 +42,8 @@ CASE_MODULES = {
     "mm-gripper": "pacto_ng.cases.mm_gripper",
     "soft-finger": "pacto_ng.cases.soft_finger",
     "jaw-gripper": "pacto_ng.cases.jaw_gripper",
+    "sorotop": "pacto_ng.cases.sorotop",
+    "topress": "pacto_ng.cases.topress",
 }
 
 
