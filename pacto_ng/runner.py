@@ -143,28 +143,6 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
     return state
 
 
-def _replay_last_analysis(problem: Problem, state: LoopState) -> None:
-    """Analyse the checkpoint's last design once more at its iteration's schedule, then restore
-    the warm state.  The Darcy block and the linear system assemble the first design of a
-    process another way than the following ones (equal to round-off, 1e-16); without this a
-    resumed run's first iteration would take the first-design way, and the optimiser would
-    carry that round-off to 1e-10 in x after 20 more iterations.  With it the resumed run
-    repeats the uninterrupted one bit for bit (with one NGSolve thread: with more the assembly's
-    order of summation varies from run to run anyway)."""
-    if not state.history or state.last_good is None:
-        return
-    mech = problem.mech
-    u, warm, ramp = mech.state, mech.state_converged, mech.ramp_first
-    last = state.history[-1]
-    problem.apply_schedule(last["penal"], last["beta"], last["load"])
-    try:
-        problem.evaluate(state.last_good, gradients=False)
-    except NewtonFailure:  # nothing is lost: the state is restored below either way
-        pass
-    mech.set_state(u, converged=warm)
-    mech.ramp_first = ramp
-
-
 def _stopped_converged(state: LoopState, tol: float, obj_tol: float) -> LoopResult | None:
     """The loop's result when ``state`` is the checkpoint of the iteration at which it stopped
     converged (the run was killed during its final writes): the driver's own test,
@@ -276,6 +254,11 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     params = case.resolve(params)  # order 0: the case's order for the (chosen) model
     problem = build_problem(case, params)
     problem.model_choice = model_choice
+    # an optimisation: every design assembled one way, from the process's first on (a resumed
+    # run would otherwise take the single-analysis way for its first design)
+    problem.mech.expect_many_designs()
+    if problem.pressure_block is not None:
+        problem.pressure_block.expect_many_designs()
     # after the problem is built: a run refused while building it leaves the folder as it was
     info = {"case": case.name, "case_file": case.file, "params": params.to_dict(),
             "model_choice": model_choice}
@@ -283,7 +266,6 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     ckpt = path / "checkpoint.npz"
     if resume and ckpt.exists():
         state = load_checkpoint(ckpt, problem)
-        _replay_last_analysis(problem, state)
         progress.saved = state.k
         if not quiet:
             print(f"resuming {case.name} at iteration {state.k}")

@@ -201,12 +201,14 @@ class DarcyPressure:
         self._rhs = self.gfp.vec.CreateVector()
         self._ready = False
         # A(ρ̄) = Σ_e K_e L_e + D_e M_e from precomputed element matrices (ElementMatrices),
-        # built at the second design (a single analysis does not pay for them): a sparse
-        # product per design instead of an assembly; the sensitivities from the same element
-        # matrices.  None (then the forms are assembled) until then or if the check fails.
+        # built at the second design (a single analysis does not pay for them), or at the
+        # first after expect_many_designs: a sparse product per design instead of an assembly;
+        # the sensitivities from the same element matrices.  None (then the forms are
+        # assembled) until then or if the check fails.
         self._scatter = None
         self._scatter_pending = True
         self._designs = 0
+        self._many_designs = False
         one = GridFunction(self.fes)
         one.Set(1.0)
         self._one = one.vec.FV().NumPy().copy()  # the constant 1 (p - p_out in the sensitivity)
@@ -245,7 +247,7 @@ class DarcyPressure:
         self.rho.vec.FV().NumPy()[:] = rho
         Kvals = self.Kv - (self.Kv - self.Ks) * heaviside_np(rho, self.eta_k, self.beta_k)
         Dvals = self._drain * heaviside_np(rho, self.eta_h, self.beta_h)
-        if self._scatter_pending and self._designs >= 1:
+        if self._scatter_pending and (self._designs >= 1 or self._many_designs):
             self._build_scatter()
         self._designs += 1
         self.K.vec.FV().NumPy()[:] = Kvals
@@ -302,6 +304,19 @@ class DarcyPressure:
         self._dD.vec.FV().NumPy()[:] = dD
         self._sens.Assemble()
         return (-self._sens.vec.FV().NumPy().copy(),)
+
+    @property
+    def route(self) -> str:
+        """How the matrix of a design is assembled: ``"element_matrices"`` once they are built,
+        else ``"forms"`` (NGSolve's assembly of the bilinear form)."""
+        return "element_matrices" if self._scatter is not None else "forms"
+
+    def expect_many_designs(self):
+        """Say that many designs follow (an optimisation): the element matrices are built at
+        the next design, not at the second.  Every design of a run then takes one route,
+        whichever design its process starts at (a resumed run repeats the uninterrupted one
+        bit for bit)."""
+        self._many_designs = True
 
     # -- helpers --------------------------------------------------------------------------------
     def _build_scatter(self):

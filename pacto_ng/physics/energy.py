@@ -45,9 +45,10 @@ class EnergyTraits:
     modulus : callable or None
         ``values -> (E, {field: ∂E/∂field})`` on numpy arrays of the element values of the fields
         read: ``φ(G; fields) = E(fields) φ1(G)`` on every element with one fixed ``φ1`` (SIMP).
-        With ``quadratic``, ``C = E C1``: from the second design on ``K`` and the field
-        sensitivities come from element matrices computed once
-        (:class:`~pacto_ng.physics.scatter.ElementMatrices`) and ``E`` per design from numpy.
+        With ``quadratic``, ``C = E C1``: from the second design on (the first in an
+        optimisation) ``K`` and the field sensitivities come from element matrices computed
+        once (:class:`~pacto_ng.physics.scatter.ElementMatrices`) and ``E`` per design from
+        numpy.
         Verified against the energy's CF when the block is built (``ValueError`` if wrong).
     """
 

@@ -123,9 +123,11 @@ class LinearSystem:
                 self._dC[f.name] = (self.C.Diff(f.gf, mech.one).Compile(), GridFunction(self.l2C))
         self.field_names = tuple(self._dC)
         # a declared modulus: C = (E / E1) C1 per element; the element matrices from the second
-        # design on (not for the first, so that a single analysis does not pay for them)
+        # design on (not for the first, so that a single analysis does not pay for them), or
+        # from the first after expect_many_designs
         self.scatter = None
         self._scatter_built = False
+        self._many_designs = False
         self._modulus = None
         self._g = self._dg = None
         modulus = mech.energy_traits.modulus
@@ -230,6 +232,13 @@ class LinearSystem:
         """Whether ``E`` comes from the energy's declared numpy modulus."""
         return self._modulus is not None
 
+    def expect_many_designs(self):
+        """Say that many designs follow (an optimisation): the element matrices are built at
+        the next assembly, not at the second design.  Every design of a run then takes one
+        route, whichever design its process starts at (a resumed run repeats the uninterrupted
+        one bit for bit)."""
+        self._many_designs = True
+
     def _build_scatter(self):
         """Build the element matrices (once; above their memory budget the assembly stays
         symbolic)."""
@@ -245,7 +254,8 @@ class LinearSystem:
         """Assemble ``K`` and ``f`` for the current fields (once per design)."""
         if not self.stale:
             return
-        if self._modulus is not None and self.version >= 1 and not self._scatter_built:
+        if (self._modulus is not None and not self._scatter_built
+                and (self.version >= 1 or self._many_designs)):
             self._build_scatter()  # a second design: from now on worth the element matrices
         if self.scatter is not None:
             modulus, E1 = self._modulus

@@ -23,7 +23,8 @@ declares nothing gets the general route above), never from probes:
 
 * a quadratic energy (``φ = ½ G:C:G``, C per element) in a linear, conservative block: ``K``
   from ``C`` and ``R(u) = K u - s f`` element by element, with a declared numpy modulus
-  (``C = E C1``, SIMP) from element matrices from the second design on
+  (``C = E C1``, SIMP) from element matrices from the second design on (from the first after
+  :meth:`Mechanics.expect_many_designs`)
   (:class:`~pacto_ng.physics.linear_system.LinearSystem`);
 * a field the energy does not read that enters through a body load linear in it (the Darcy
   pressure): the load ``B p`` and ``λᵀ∂R/∂p = -s Bᵀλ`` with a design-independent ``B``
@@ -308,7 +309,8 @@ class Mechanics(Equilibrium, Adjoint):
         """The routes in use (read-only description, for tests and the run summary):
 
         * ``linear_system``: None (``Variation``), ``"hessian"`` (``K`` from ``C`` per element)
-          or ``"element_matrices"`` (``K`` from element matrices, from the second design on);
+          or ``"element_matrices"`` (``K`` from element matrices, from the second design on,
+          or the first after :meth:`expect_many_designs`);
         * ``modulus``: ``"numpy"`` when ``E`` per design comes from the declared numpy modulus;
         * ``body_coupling``: the fields whose body load is ``B p``;
         * ``load_norm``: ``"linear_system"``, ``"load_vectors"`` (stress-free energy: the norm
@@ -320,6 +322,13 @@ class Mechanics(Equilibrium, Adjoint):
                 "modulus": "numpy" if lin is not None and lin.uses_modulus else None,
                 "body_coupling": () if self._coupling is None else (self._coupling.field.name,),
                 "load_norm": self.load_norm_route}
+
+    def expect_many_designs(self):
+        """Say that many designs follow (an optimisation): a linear system builds its element
+        matrices at the next design, not at the second
+        (:meth:`~pacto_ng.physics.linear_system.LinearSystem.expect_many_designs`)."""
+        if self._lin is not None:
+            self._lin.expect_many_designs()
 
     def hot(self, cf):
         """``cf`` compiled for a form that Newton assembles in every iteration."""
