@@ -26,7 +26,7 @@ from .case import Case, Problem, build_problem, read_run_params
 from .files import WriteError, atomic_path, atomic_write_text, claim_folder
 from .optimize.driver import LoopResult, LoopState, optimize
 from .params import InputError, Parameters
-from .physics.equilibrium import NewtonFailure
+from .physics.equilibrium import NewtonFailure, WarmState
 from .outputs import write_outputs
 
 
@@ -83,13 +83,14 @@ def _progress(row: dict, total: int) -> str:
 # ------------------------------------------------------------------------------------------
 def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
     """Everything :func:`load_checkpoint` needs to continue exactly (written atomically)."""
+    warm = problem.mech.state
     arrays = dict(k=state.k, x=state.x, scale=np.nan if state.scale is None else state.scale,
                   stable=state.stable, history=json.dumps(state.history),
-                  u=problem.mech.state, warm=problem.mech.state_converged,
+                  u=warm.u, warm=warm.converged,
                   load_cap=state.load_cap, load_failed_at=state.load_failed_at,
                   # Newton's first increment of its last ramp: a Neo-Hookean pa-inverter
                   # resumed without it ended 5e-4 away from the uninterrupted run
-                  ramp_first=_nan_if_none(problem.mech.ramp_first))
+                  ramp_first=_nan_if_none(warm.ramp_first))
     if state.last_good is not None:
         arrays["last_good"] = state.last_good
     if state.opt_state is not None:
@@ -127,12 +128,12 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
                               load_cap=float(data["load_cap"]) if "load_cap" in files else 1.0,
                               load_failed_at=(int(data["load_failed_at"])
                                               if "load_failed_at" in files else -1))
-            u = data["u"]
-            if u.size == problem.mech.gfu.vec.size and bool(data["warm"]):
-                problem.mech.set_state(u, converged=True)
-            if "ramp_first" in files:
-                ramp = float(data["ramp_first"])
-                problem.mech.ramp_first = None if np.isnan(ramp) else ramp
+            u, ndof = data["u"], problem.mech.fes.ndof
+            warm = u.size == ndof and bool(data["warm"])
+            # (a checkpoint written before the ramp's first increment was kept: None)
+            ramp = float(data["ramp_first"]) if "ramp_first" in files else np.nan
+            problem.mech.set_state(WarmState(u if warm else np.zeros(ndof), converged=warm,
+                                             ramp_first=None if np.isnan(ramp) else ramp))
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"resume: cannot read '{path}' ({type(err).__name__}: {err})") from None
     n = problem.field.n * problem.n_design_fields
@@ -299,7 +300,7 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     k_last = max(state.k - 1, 0)
     problem.apply_schedule(*params.schedule.schedule().values(k_last))
     # the last iteration's equilibrium (a warm start)
-    u_last, res_last = problem.mech.state, problem.mech.result
+    warm_last, res_last = problem.mech.state, problem.mech.result
     try:
         problem.evaluate(final_x, gradients=False)
     except NewtonFailure as err:
@@ -307,8 +308,7 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
         result.message += f"; the final analysis at the full load failed ({err})"
         last = state.history[-1]["load"] if state.history else 1.0
         if params.load_adapt and last < 1.0:  # report the design at the load it carried
-            problem.mech.set_state(u_last, converged=res_last is not None and res_last.converged,
-                                   result=res_last)
+            problem.mech.set_state(warm_last, result=res_last)
             problem.mech.target = last
             final_x = state.last_good if state.last_good is not None else final_x
             try:

@@ -9,6 +9,8 @@ no equilibrium is reached.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .newton import NewtonResult, solve_with_continuation
@@ -22,6 +24,20 @@ class NewtonFailure(RuntimeError):
         super().__init__(f"Newton failed: reached load factor {result.load_reached:.4g} of 1 "
                          f"({result.reason})")
         self.result = result
+
+
+@dataclass(frozen=True)
+class WarmState:
+    """Where the next forward pass starts (:attr:`Equilibrium.state`; a run checkpoints it).
+
+    ``u``: the displacement dofs; ``converged``: ``u`` is an equilibrium (the next pass starts
+    from it, else it ramps the load from zero); ``ramp_first``: Newton's first load increment
+    (a fraction) of the last successful ramp from zero, where the next ramp starts (None: no
+    ramp yet, the settings' first increment)."""
+
+    u: np.ndarray
+    converged: bool
+    ramp_first: float | None = None
 
 
 class Equilibrium:
@@ -173,39 +189,22 @@ class Equilibrium:
 
     # -- the warm state ---------------------------------------------------------------------
     @property
-    def state(self) -> np.ndarray:
-        """A copy of the current displacement vector (the next forward pass's warm start)."""
-        return self.gfu.vec.FV().NumPy().copy()
+    def state(self) -> WarmState:
+        """The warm state (a copy): where the next forward pass starts."""
+        return WarmState(self.gfu.vec.FV().NumPy().copy(),
+                         bool(self.result is not None and self.result.converged),
+                         self._ramp_first)
 
-    @property
-    def state_converged(self) -> bool:
-        """Whether the current displacement is a converged equilibrium."""
-        return bool(self.result is not None and self.result.converged)
-
-    @property
-    def ramp_first(self) -> float | None:
-        """Newton's first load increment (a fraction) of the last successful ramp from zero,
-        where the next ramp starts; part of the warm state (None: no ramp yet)."""
-        return self._ramp_first
-
-    @ramp_first.setter
-    def ramp_first(self, value: float | None) -> None:
-        self._ramp_first = value
-
-    def set_state(self, u=None, *, converged: bool, result: NewtonResult | None = None):
-        """Set the displacement (a numpy array or vector; None keeps it) and whether it is an
-        equilibrium: the next forward pass starts from it if so, else ramps from zero.
-        ``result`` (a :class:`NewtonResult`) replaces the default record of a converged state
-        at the full load."""
-        if u is not None:
-            if isinstance(u, np.ndarray):
-                self.gfu.vec.FV().NumPy()[:] = u
-            else:
-                self.gfu.vec.data = u
+    def set_state(self, state: WarmState, *, result: NewtonResult | None = None):
+        """Start the next forward pass from ``state`` (e.g. :attr:`state` of earlier, or of a
+        checkpoint).  ``result`` (a :class:`NewtonResult`) replaces the default record of the
+        state: converged at the full load, or none."""
+        self.gfu.vec.FV().NumPy()[:] = state.u
+        self._ramp_first = state.ramp_first
         if result is not None:
             self.result = result
         else:
-            self.result = NewtonResult(True, load_reached=1.0) if converged else None
+            self.result = NewtonResult(True, load_reached=1.0) if state.converged else None
 
     # -- block interface ------------------------------------------------------------------------
     def set_fields(self, *values):

@@ -153,7 +153,8 @@ class Mechanics(Equilibrium, Adjoint):
 
     Public state: ``result`` (the :class:`~pacto_ng.physics.newton.NewtonResult` of the last
     forward pass: iterations, load reached, ...; None before), ``gfu`` (the displacement),
-    ``lam`` (the adjoint state), :attr:`state` / :meth:`set_state` (the warm start),
+    ``lam`` (the adjoint state), :attr:`state` / :meth:`set_state` (the warm start: a
+    :class:`~pacto_ng.physics.equilibrium.WarmState`),
     ``adjoint_solves`` / ``adjoint_solves_skipped`` and ``self_adjoint_shortcut`` (set False
     to always solve the adjoint), :attr:`assembly` (the routes in use).
     """

@@ -43,6 +43,7 @@ import json
 import math
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -105,7 +106,8 @@ def expected_sweep(problem, x, pressures, load) -> list[dict]:
     from ..physics.equilibrium import NewtonFailure
 
     mech = problem.mech
-    mech.set_state(np.zeros_like(mech.state), converged=False)
+    warm = mech.state
+    mech.set_state(replace(warm, u=np.zeros_like(warm.u), converged=False))
     rows, failed = [], False
     with compute():
         for P in pressures:
