@@ -16,6 +16,8 @@ import pytest
 
 from pacto_ng.cli import main
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 PRESSURES = [1e2, 1e3, 1e4, 1e5]
 FILES = ("analysis.json", "analysis.png", "deformed.png", "report.md", "design.stl",
          "remeshed.vtu", "deformed.vtu")
@@ -27,11 +29,6 @@ def _serial(argv):
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("PACTO_THREADS", "1")
         return main(argv)
-
-
-@pytest.fixture(autouse=True)
-def _one_thread(monkeypatch):
-    monkeypatch.setenv("PACTO_THREADS", "1")
 
 
 @pytest.fixture(scope="session")

@@ -13,13 +13,10 @@ import pytest
 
 from pacto_ng.cli import main
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 PRESSURES = [1e2, 1e3]
 PORTS = ("top_jaw", "bottom_jaw")
-
-
-@pytest.fixture(autouse=True)
-def _one_thread(monkeypatch):
-    monkeypatch.setenv("PACTO_THREADS", "1")
 
 
 @pytest.fixture(scope="module")
