@@ -207,7 +207,7 @@ def run_profile(quick):
             "for Wang (γ = H(ρ^p) inside φ_H(γG) - φ_L(γG) + φ_L(G)).  They are now the "
             "gradient of the same integrand by automatic differentiation in ρ: `Apply` of a "
             "`Variation` form in the field's trial function (`FieldGradient`, "
-            "pacto_ng/physics/mechanics.py; same values), and for linear mechanics the "
+            "pacto_ng/physics/sensitivities.py; same values), and for linear mechanics the "
             "tangent's ∂C/∂ρ.  And the "
             "load norm of a design-dependent load on a stress-free energy (∂φ/∂G = 0 at G = 0, "
             "checked once) is now the norm of the loads' LinearForm instead of an `Apply` of "
