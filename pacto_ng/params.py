@@ -1,25 +1,31 @@
 """Every parameter of a run under its flat name, put together from the parts of the
 configuration, each defined and validated next to the code that reads it:
 
-==============  ==========================================  ============================
-part            settings                                    defined in
-==============  ==========================================  ============================
-``mesh``        maxh, nelx, nely, order, unit_elements      :mod:`pacto_ng.geometry`
-``material``    model, plane, thickness, E0, E1, E2, nu,    :mod:`pacto_ng.physics.energy`
-                wang_*
-``design``      volfrac, volfrac2, filter, filter_radius,   :mod:`pacto_ng.builders`
-                eta, seed_density, init_design
-``schedule``    penal*, beta*, load_ramp                    :mod:`pacto_ng.optimize.schedules`
-``loads``       load, k_out                                 :mod:`pacto_ng.physics.loads`
-``darcy``       Kv, Ks, eta_k, beta_k, eta_h, beta_h, r,    :mod:`pacto_ng.physics.darcy`
-                delta_s, p_out, load_type, inlet, ...
-``responses``   objective, se_max                           :mod:`pacto_ng.builders`
-``newton``      newton_*, realcompile                       :mod:`pacto_ng.physics.newton`
-``optimization``  iterations, optimizer, move, tol,         :mod:`pacto_ng.optimize.driver`
-                obj_tol, load_adapt
-``case``        the case's own options (e.g. the            the case's file
-                cantilever's load_width)
-==============  ==========================================  ============================
+================  ==========================================  ==================================
+part              settings                                    defined in
+================  ==========================================  ==================================
+``mesh``          maxh, nelx, nely, order, unit_elements,     :mod:`pacto_ng.geometry`
+                  mesh_time_limit
+``material``      model, plane, thickness, E0, E1, E2, nu,    :mod:`pacto_ng.physics.energy`
+                  wang_beta, wang_eta, wang_gamma
+``design``        volfrac, volfrac2, filter, filter_radius,   :mod:`pacto_ng.builders`
+                  eta, seed_density, init_design
+``schedule``      penal, penal_start, penal_step,             :mod:`pacto_ng.optimize.schedules`
+                  penal_every, beta, beta_max, beta_every,
+                  load_ramp
+``loads``         load, k_out                                 :mod:`pacto_ng.physics.loads`
+``darcy``         Kv, Ks, eta_k, beta_k, eta_h, beta_h, r,    :mod:`pacto_ng.physics.darcy`
+                  delta_s, p_out, load_type, follower_wang,
+                  load_sensitivity, inlet
+``responses``     objective, se_max                           :mod:`pacto_ng.builders`
+``newton``        newton_rtol, newton_max_iter,               :mod:`pacto_ng.physics.newton`
+                  newton_increment, newton_min_increment,
+                  realcompile
+``optimization``  iterations, optimizer, move, tol,           :mod:`pacto_ng.optimize.driver`
+                  obj_tol, load_adapt
+``case``          the case's own options (e.g. the            the case's file
+                  cantilever's load_width)
+================  ==========================================  ==================================
 
 A case supplies its defaults; ``--set NAME=VALUE`` overrides any of them by its flat name.
 ``params.E1`` reads a setting by that name, ``params.darcy`` a whole part.
