@@ -11,7 +11,7 @@ import sys
 
 from dataclasses import dataclass
 
-from pacto_ng import Case, Parameters, PointLoad, Settings, Setup, Supports, setting
+from pacto_ng import Case, InputError, Parameters, PointLoad, Settings, Setup, Supports, setting
 from pacto_ng.geometries import cantilever as geo
 
 
@@ -20,7 +20,12 @@ class Options(Settings):
     """The cantilever's own settings."""
 
     load_width: float = setting(0.0, "m", "width of the tip patch the force is spread over (0: "
-                                "4 element sizes, the case's definition)", range="[0, inf)")
+                                "4 element sizes, the case's definition)", range="[0, 0.25]")
+
+    def check(self):
+        if 0 < self.load_width < 1e-9:
+            raise InputError(f"load_width: {self.load_width:g} m is no patch (0: the default of "
+                             "4 element sizes)")
 
 
 def _h(p: Parameters) -> float:

@@ -12,7 +12,8 @@ import sys
 
 from dataclasses import dataclass
 
-from pacto_ng import Case, Parameters, PointLoad, Port, Settings, Setup, Spring, Supports, setting
+from pacto_ng import (Case, InputError, Parameters, PointLoad, Port, Settings, Setup, Spring,
+                      Supports, setting)
 from pacto_ng.geometries import inverter as geo
 
 
@@ -21,8 +22,13 @@ class Options(Settings):
     """The inverter's own settings."""
 
     load_width: float = setting(0.0, "m", "height of the input the force is spread over (0: 2 "
-                                "element sizes, the case's definition)", range="[0, inf)")
+                                "element sizes, the case's definition)", range="[0, 7.5e-5]")
     k_in: float = setting(4000.0, "N/m", "input spring stiffness", range="[0, inf)")
+
+    def check(self):
+        if 0 < self.load_width < 1e-12:
+            raise InputError(f"load_width: {self.load_width:g} m is no patch (0: the default of "
+                             "2 element sizes)")
 
 
 def _h(p: Parameters) -> float:

@@ -86,6 +86,9 @@ def _geometry(p: Parameters):
     if p.output_width >= H:
         raise InputError(f"output_width: {p.output_width:g} is not shorter than the right edge "
                          f"({H:g})")
+    if 0 < p.output_width < 1e-9 * H:
+        raise InputError(f"output_width: {p.output_width:g} is no length of the edge (0: the "
+                         "corner point)")
     return geo.layout(L, H, output_edge=p.output_width)
 
 

@@ -50,6 +50,9 @@ class DesignSettings(Settings):
                                "lower load")
 
     def check(self):
+        if 0 < self.volfrac2 < 1e-6:
+            raise InputError(f"volfrac2: {self.volfrac2:g} leaves no stiff material (0: no limit "
+                             "on it)")
         if self.volfrac2 > self.volfrac:
             raise InputError(f"volfrac2: the stiff material's fraction must not exceed volfrac "
                              f"(got {self.volfrac2:g} > {self.volfrac:g})")

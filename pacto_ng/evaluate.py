@@ -44,6 +44,8 @@ def read_density(path: str, problem: Problem, *, filtered: bool = False) -> tupl
         if suffix == ".npy":
             arr = np.load(fp, allow_pickle=False)
         elif suffix in (".csv", ".txt"):
+            if not fp.read_text().strip():
+                raise InputError(f"--density: '{path}' is empty")
             arr = np.loadtxt(fp, delimiter="," if suffix == ".csv" else None, ndmin=1)
         elif suffix == ".vtu":
             arr = _vtu_element_field(fp, "x" if filtered else "rho_bar", problem.mesh.ne)
