@@ -50,16 +50,43 @@ def run_analysis_case(case, params, out, *, quiet: bool = False, overwrite: bool
     if params.model not in ("linear", "gnl", "neohookean", "wang"):
         raise InputError(f"model: '{params.model}' cannot be used for the C-beam analysis")
     params = case.resolve(params)
+    _check_resources(case, params)  # before the folder is made and the mesh is started
     path = prepare_output(out)
     with claim_folder(path, "run", overwrite=overwrite):
         return _c_beam(case, params, path, quiet)
+
+
+def _mesh_of(params) -> tuple[str, float]:
+    """The C-beam's mesh: ``("quad", 10 / nelx)`` (an nelx x nelx grid on the 10 m square) or
+    ``("trig", maxh)`` (Netgen triangles)."""
+    return ("quad", 10.0 / params.nelx) if params.nelx > 0 else ("trig", params.maxh)
+
+
+def _check_resources(case, params) -> None:
+    """The C-beam's mesh and analysis checked as a run's (:mod:`pacto_ng.resources`: memory
+    and meshing time), one line and no mesh started when they do not fit."""
+    from . import resources
+
+    kind, h = _mesh_of(params)
+    solver = "sparsecholesky"  # a symmetric tangent (no follower load)
+    if kind == "quad":
+        n = params.nelx
+        est = resources.estimate_grid(n, n, params.order, solver=solver)
+        what, advice = f"nelx = {n} ({n} x {n} quads)", "give a smaller nelx or order"
+    else:
+        layout = case.make_geometry(params)
+        est = resources.estimate_triangles(
+            resources.netgen_triangles(layout.width * layout.height, h), params.order,
+            solver=solver)
+        what, advice = f"maxh = {h:g}", "give a larger maxh or a lower order"
+    resources.check(est, what, mesh_time_limit=params.mesh_time_limit, advice=advice)
 
 
 def _c_beam(case, params, path, quiet: bool) -> int:
     from .studies import c_beam_limit
 
     t0 = time.perf_counter()
-    mesh_kind, h = ("quad", 10.0 / params.nelx) if params.nelx > 0 else ("trig", params.maxh)
+    mesh_kind, h = _mesh_of(params)
     # the case's own loads: f1 downward at the top arm's end, f2 rightward at the bottom's
     forces = {ld.region: ld.force for ld in case.make_setup(params).loads}
     res = c_beam_limit(params.model, order=params.order, mesh=mesh_kind, h=h,

@@ -52,7 +52,8 @@ from ..files import atomic_path, atomic_write_text
 from ..params import InputError
 from ..threads import compute
 from .report import analysis_dict, fmt_value, report_md, short_table
-from .runs import copy_gridfunction, domain_of, load_run, part_of_run, rebuild, thresholded_elements
+from .runs import (check_part_mesh, copy_gridfunction, domain_of, load_run, part_of_run, rebuild,
+                   thresholded_elements)
 
 KINDS = ("darcy", "fixed", "follower")
 
@@ -208,6 +209,9 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     p = run.params
     rho = np.asarray(problem.values["rho_bar"], dtype=float).copy()
     maxh = 0.5 * problem.h if maxh is None else float(maxh)
+    # the part's mesh and its Neo-Hookean sweeps (the follower's tangent is unsymmetric)
+    check_part_mesh(run, problem, rho, maxh, order=order,
+                    solver="umfpack" if "follower" in kinds else "sparsecholesky")
     if problem.failure:
         import sys
 

@@ -132,6 +132,22 @@ def _design_density(problem) -> np.ndarray:
     return np.asarray(vals["rho_bar"] if "rho_bar" in vals else vals["rho_bar1"], dtype=float)
 
 
+def check_part_mesh(run: Run, problem, rho: np.ndarray, maxh: float, *,
+                    order: int | None = None, solver: str | None = None) -> None:
+    """Refuse with one line (an InputError), before Netgen starts, a remesh of the run's part
+    at ``maxh`` that would not fit this machine (:func:`pacto_ng.resources.estimate_part`):
+    its triangles from the solid area of the design ``rho`` (``Σ a_e ρ̄_e``, about the
+    thresholded part's), its meshing time against the run's ``mesh_time_limit`` and, with
+    ``order``, the memory of a re-analysis on it (``solver``: its displacement system's)."""
+    from .. import resources
+
+    area = float(problem.field.areas @ rho)
+    resources.check(resources.estimate_part(area, maxh, order, solver=solver),
+                    f"--maxh = {maxh:g}", mesh_time_limit=run.params.mesh_time_limit,
+                    advice="give a larger --maxh" + (" or a lower --order" if order else ""),
+                    longer="the run's setting")
+
+
 def part_of_run(run: Run, threshold_value: float, maxh: float | None):
     """Threshold and remesh the final design of a run (the wetting rule for pressure cases).
     Returns ``(Thresholded, Remeshed, problem)``; InputError when there is no part."""
@@ -148,6 +164,7 @@ def part_of_run(run: Run, threshold_value: float, maxh: float | None):
         kw = dict(pressure=copy_gridfunction(problem.pressure_block.gfp), p_in=run.load,
                   wet_boundaries=setup.pressure.inlet)
     h = 0.5 * problem.h if maxh is None else maxh
+    check_part_mesh(run, problem, rho, h)
     try:
         th = threshold(problem.mesh, rho, threshold_value, exclude=exclude)
         rm = remesh(th, h, clamp=setup.supports.clamp, domain=shape, **kw)

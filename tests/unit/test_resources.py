@@ -30,8 +30,12 @@ def no_meshing(monkeypatch):
     def started(*args, **kwargs):
         raise MeshingStarted
 
+    import pacto_ng.mesh as mesh
+
     monkeypatch.setattr(geometry, "structured_mesh", started)
     monkeypatch.setattr(geometry, "netgen_mesh", started)
+    monkeypatch.setattr(mesh, "structured_mesh", started)  # the C-beam analysis's mesher
+    monkeypatch.setattr(mesh, "netgen_mesh", started)
     monkeypatch.setattr(occ, "OCCGeometry", started)
 
 
@@ -65,6 +69,30 @@ def test_refused_before_meshing(args, words, tmp_path, capsys, no_meshing):
     for w in words:
         assert w in line, line
     assert seconds < 1.0, f"{seconds:.2f} s: {line}"
+
+
+@pytest.mark.parametrize("args, words", [
+    (["run", "c-beam", "--maxh", "1e-6"],
+     ("maxh = 1e-06", "triangles", "memory", "Netgen", "larger maxh")),
+    (["run", "c-beam", "--nelx", "100000"],
+     ("nelx = 100000 (100000 x 100000 quads)", "memory", "mesh_time_limit", "smaller nelx")),
+])
+def test_the_c_beam_analysis_is_refused_before_meshing(args, words, tmp_path, capsys,
+                                                       no_meshing):
+    """The C-beam analysis (its own mesher, an nelx x nelx grid or Netgen triangles on the
+    10 m square) is checked like a run's mesh, before its folder is made."""
+    line, seconds = _refused(args, tmp_path, capsys)
+    for w in words:
+        assert w in line, line
+    assert seconds < 1.0, f"{seconds:.2f} s: {line}"
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_c_beam_defaults_pass_the_check(tmp_path, no_meshing):
+    with pytest.raises(MeshingStarted):
+        main(["run", "c-beam", "--out", str(tmp_path / "out")])
+    with pytest.raises(MeshingStarted):
+        main(["run", "c-beam", "--maxh", "0.5", "--out", str(tmp_path / "trig")])
 
 
 def test_order_3_grid_of_the_issue_refused_where_it_does_not_fit(tmp_path, capsys, no_meshing,
