@@ -181,6 +181,7 @@ def _evaluate(case: Case, params: Parameters, density: str, path: Path, *, filte
         converged = failure is None
         stopped = "evaluated" if failure is None else "newton"
         message = "single analysis" if failure is None else str(failure)
+        best = None
 
     summ = summary_dict(problem, [], _R, time.perf_counter() - t0)
     summ["evaluated_from"] = str(density)

@@ -61,6 +61,9 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "converged": result.converged,
         "stopped": result.stopped,
         "message": result.message,
+        # the lowest objective of an iterate of the final problem, where it beats the reported
+        # design's: {"iteration", "objective"} (null: the reported design is the best seen)
+        "best_iterate": result.best,
         "newton_iterations": newton_counts,
         "newton_iterations_total": int(sum(newton_counts)),
         "wall_time_s": wall,

@@ -317,6 +317,15 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
                                    f"{last:.4g}")
             except NewtonFailure:
                 pass
+    if not failed:
+        from .optimize.driver import best_iterate
+
+        result.best = best_iterate(state.history, params.schedule.schedule(),
+                                   float(problem.values[problem.objective]))
+        if result.best is not None:
+            result.message += (f"; iteration {result.best['iteration']} had a lower objective "
+                               f"({result.best['objective']:.6g}, feasible, at the final "
+                               "schedule) than the reported design")
     wall = time.perf_counter() - t_start
     summary = write_outputs(path, problem, final_x, state.history, result, wall)
     if not quiet or failed:

@@ -35,12 +35,14 @@ class OptimizerSettings(Settings):
     continuation."""
 
     iterations: int = setting(100, "", "maximum optimisation iterations", range="[0, 1000000]")
-    optimizer: str = setting("mma", "", "mma | gcmma", choices=("mma", "gcmma"))
-    move: float = setting(0.1, "", "move limit per iteration", range="(0, 1]")
+    optimizer: str = setting("mma-gcmma", "", "mma-gcmma: MMA while a schedule still changes, "
+                             "then GCMMA, whose accepted steps lower the objective, so the run's "
+                             "tail settles | mma | gcmma", choices=("mma-gcmma", "mma", "gcmma"))
+    move: float = setting(0.1, "", "move limit per iteration", range="[1e-6, 1]")
     tol: float = setting(0.01, "", "stop when the largest design change falls below this",
                          range="[0, 1]")
-    obj_tol: float = setting(1e-4, "", "... or the objective changed less than this (relative) "
-                             "over 5 iterations", range="[0, 1]")
+    obj_tol: float = setting(1e-4, "", "... or the objective changed by less than this "
+                             "(relative) in each of the last 5 iterations", range="[0, 1]")
     load_adapt: float = setting(1.2, "", "on a Newton failure go on at the load reached, "
                                 "raising it by this factor per iteration (0: stop at the "
                                 "failure)", range="[0, 100]")
@@ -72,15 +74,34 @@ class LoopResult:
     converged: bool
     stopped: str  # "converged" | "iterations" | "newton"
     message: str
+    #: an iterate better than the reported design (:func:`best_iterate`), or None
+    best: dict | None = None
+
+
+def best_iterate(history: list, schedule: Schedule, final_objective: float) -> dict | None:
+    """The iteration with the lowest objective among those of the final problem (the final
+    penalty and β, the full load) that met every constraint (<= 1e-3), if it is lower than
+    the reported design's ``final_objective`` by more than 1e-6 relative; else None."""
+    final = schedule.values(10 ** 9)
+    rows = [r for r in history
+            if (r["penal"], r["beta"]) == final[:2] and r["load"] >= 1.0
+            and r["constraint"] <= 1e-3]
+    if not rows:
+        return None
+    best = min(rows, key=lambda r: r["objective"])
+    if best["objective"] < final_objective - 1e-6 * abs(final_objective):
+        return {"iteration": int(best["iteration"]), "objective": float(best["objective"])}
+    return None
 
 
 def _stalled(history: list, obj_tol: float, window: int = 5) -> bool:
-    """The objective moved less than ``obj_tol`` (relative) over the last ``window`` iterations."""
+    """The objective changed by less than ``obj_tol`` (relative) in each of the last ``window``
+    iterations."""
     if obj_tol <= 0 or len(history) <= window:
         return False
-    recent = [h["objective"] for h in history[-window - 1:]]
+    recent = np.array([h["objective"] for h in history[-window - 1:]])
     scale = max(abs(recent[-1]), 1e-300)
-    return (max(recent) - min(recent)) / scale < obj_tol
+    return bool(np.max(np.abs(np.diff(recent))) / scale < obj_tol)
 
 
 def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method: str,
@@ -89,7 +110,13 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
     # ---- set-up: everything invariant before the loop ------------------------------------
     n = state.x.size
     m = len(problem.constraints)
-    opt = Optimizer(n, m, method=method, move=move)
+    # mma-gcmma: MMA through the continuation, GCMMA on the final problem.  With MMA alone the
+    # Darcy cases zigzag there (pa-inverter: -Δ/SE alternating by 12 % for the last 60
+    # iterations, every design change at the move limit; with move 0.005 still 2.5 %):
+    # at β = 32 a step of 0.005 in x changes ρ̄ of a wall element by up to 0.08, and the strain
+    # energy of the pressurised wall follows it (docs/benchmarks.md, "Convergence at defaults")
+    final_method = "gcmma" if method == "mma-gcmma" else method
+    opt = Optimizer(n, m, method="mma" if method == "mma-gcmma" else method, move=move)
     opt.state = state.opt_state
     x = state.x.copy()
 
@@ -141,13 +168,15 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         if state.scale is None:  # fix the objective normalisation once (kept on resume)
             state.scale = 10.0 / max(abs(f0), 1e-300)
         # ---- design update (MMA / GCMMA with move limit) ------------------------------------
+        if schedule.settled(k) and load >= 1.0:
+            opt.method = final_method
         xnew = opt.update(k + 1, x, f0 * state.scale, df0 * state.scale, f, df,
-                          evaluate=values_only if method == "gcmma" else None)
+                          evaluate=values_only if opt.method == "gcmma" else None)
         change = float(np.max(np.abs(xnew - x)))
         # ---- record ----------------------------------------------------------------------
         res = problem.mech.result
         row = dict(iteration=k, objective=f0, volume=problem.volume_fraction(),
-                   constraint=float(f[0]), change=change, penal=penal, beta=beta, load=load,
+                   constraint=float(np.max(f)), change=change, penal=penal, beta=beta, load=load,
                    newton=(res.iterations if res else 0) + failed_newton, load_steps=res.steps if res else 0,
                    time=time.perf_counter() - t0)
         for name in problem.reports:
@@ -161,7 +190,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         state.stable = state.stable + 1 if (small and settled) else 0
         if on_iteration is not None:
             on_iteration(state, row)
-        if state.stable >= 2 and f[0] <= 1e-3:
+        if state.stable >= 2 and np.max(f) <= 1e-3:
             return LoopResult(state, True, "converged",
                               f"converged at iteration {k}: change {change:.3g}, objective "
                               f"change over 5 iterations below {obj_tol:g} or design change below {tol:g}")

@@ -1,0 +1,85 @@
+"""The optimisation loop's stopping test, its switch from MMA to GCMMA on the final problem,
+and the best iterate it reports."""
+import numpy as np
+import pytest
+
+from pacto_ng.optimize.driver import LoopState, _stalled, best_iterate, optimize
+from pacto_ng.optimize.schedules import Schedule
+
+
+def _rows(objectives, **extra):
+    return [dict(iteration=i, objective=f, penal=3.0, beta=1.0, load=1.0, constraint=-0.01,
+                 **extra) for i, f in enumerate(objectives)]
+
+
+def test_stalled_needs_every_one_of_the_last_five_changes_below_obj_tol():
+    slow = [1.0 - 5e-4 * i for i in range(8)]           # 5e-4 per iteration
+    assert _stalled(_rows(slow), 1e-3)
+    zigzag = [1.0, 0.9, 1.0, 0.9, 1.0, 0.9, 1.0]        # a 2-cycle: never
+    assert not _stalled(_rows(zigzag), 1e-3)
+    jump = [1.0, 1.0, 1.0, 0.99, 0.99, 0.99, 0.99]      # one change of 1 % in the window
+    assert not _stalled(_rows(jump), 1e-3)
+    assert _stalled(_rows(jump + [0.99, 0.99]), 1e-3)    # ... which then left it
+    assert not _stalled(_rows(slow[:5]), 1e-3)           # too few iterations to tell
+    assert not _stalled(_rows(slow), 0.0)                # 0: off
+
+
+def test_best_iterate_is_the_lowest_feasible_objective_of_the_final_problem():
+    sched = Schedule(penal=3.0, penal_start=1.0, penal_step=1.0, beta_start=1.0, beta_max=4.0,
+                     beta_every=1)
+    rows = _rows([-1.0, -2.0, -3.0, -2.5, -2.9])
+    rows[0]["penal"] = 2.0                              # an earlier problem: not compared
+    rows[0]["objective"] = -9.0
+    for r in rows:
+        r["beta"] = 4.0
+    rows[2]["constraint"] = 0.01                        # infeasible: not compared
+    assert best_iterate(rows, sched, final_objective=-2.7) == {"iteration": 4, "objective": -2.9}
+    assert best_iterate(rows, sched, final_objective=-2.95) is None
+    assert best_iterate([], sched, final_objective=0.0) is None
+
+
+class _Mech:
+    target, result = 1.0, None
+
+
+class Quadratic:
+    """min Σ (x - 0.3)² s.t. mean(x) <= 0.5; counts the value-only evaluations (GCMMA's inner
+    loop) per outer iteration."""
+
+    constraints = ("volume",)
+    reports = ()
+
+    def __init__(self):
+        self.mech, self.values, self.k = _Mech(), {}, 0
+        self.inner = {}
+
+    def apply_schedule(self, penal, beta, load):
+        pass
+
+    def volume_fraction(self):
+        return 0.0
+
+    def evaluate(self, x, gradients=True):
+        f0, f = float(np.sum((x - 0.3) ** 2)) + 1.0, np.array([x.mean() / 0.5 - 1.0])
+        if not gradients:
+            self.inner[self.k] = self.inner.get(self.k, 0) + 1
+            return f0, f
+        self.k += 1
+        return f0, f, 2 * (x - 0.3), np.full((1, x.size), 1 / (0.5 * x.size))
+
+
+def test_mma_gcmma_runs_gcmma_once_every_schedule_value_is_final():
+    sched = Schedule(penal=3.0, penal_start=1.0, penal_step=0.5)   # final from iteration 4
+    prob = Quadratic()
+    state = LoopState(k=0, x=np.full(6, 0.9), opt_state=None, scale=1.0)
+    res = optimize(prob, sched, iterations=30, tol=0.0, method="mma-gcmma", move=0.2,
+                   state=state, obj_tol=0.0)
+    assert res.stopped == "iterations"
+    # GCMMA's inner loop evaluates values only: never before iteration 4, at least once after
+    assert all(k > 4 for k in prob.inner), prob.inner
+    assert sum(prob.inner.values()) >= 26
+    assert np.allclose(state.x, 0.3, atol=1e-3)
+    # once GCMMA runs the objective does not rise by more than GCMMA's acceptance tolerance
+    # (epsimin = 1e-7: an accepted step is conservative up to it)
+    tail = [r["objective"] for r in state.history[6:]]
+    assert all(b <= a + 1e-7 for a, b in zip(tail, tail[1:]))
