@@ -1,9 +1,9 @@
-"""The optimisation loop's stopping test, its switch from MMA to GCMMA on the final problem,
-and the best iterate it reports."""
+"""The optimisation loop's stopping test, its switch from MMA to GCMMA when MMA zigzags on the
+final problem, and the best iterate it reports."""
 import numpy as np
 import pytest
 
-from pacto_ng.optimize.driver import LoopState, _stalled, best_iterate, optimize
+from pacto_ng.optimize.driver import LoopState, _stalled, best_iterate, optimize, zigzag_at
 from pacto_ng.optimize.schedules import Schedule
 
 
@@ -42,9 +42,19 @@ class _Mech:
     target, result = 1.0, None
 
 
-class Quadratic:
-    """min Σ (x - 0.3)² s.t. mean(x) <= 0.5; counts the value-only evaluations (GCMMA's inner
-    loop) per outer iteration."""
+def test_zigzag_at_finds_the_first_two_cycle():
+    assert zigzag_at([1.0, 0.9, 1.0, 0.9, 1.0]) == 4
+    assert zigzag_at([1.0, 0.9, 0.8, 0.9, 0.8, 0.9]) == 5
+    assert zigzag_at([1.0, 0.9, 0.8, 0.7, 0.6]) is None
+    assert zigzag_at([1.0, 0.9, 1.0, 0.9]) is None          # three alternations only
+    assert zigzag_at([1.0, 0.9, 0.9, 1.0, 0.9, 1.0]) is None  # a flat step is no alternation
+    assert zigzag_at([1.0, 0.9, 0.9, 1.0, 0.9, 1.0, 0.9]) == 6
+
+
+class Rugged:
+    """min Σ cos(12 x_i) + 3 (x_i - 0.5)²  s.t. mean(x) <= 0.6: at a move limit of 0.5 MMA's
+    steps cross the wells and the objective zigzags.  Counts the value-only evaluations
+    (GCMMA's inner loop) per outer iteration."""
 
     constraints = ("volume",)
     reports = ()
@@ -60,26 +70,34 @@ class Quadratic:
         return 0.0
 
     def evaluate(self, x, gradients=True):
-        f0, f = float(np.sum((x - 0.3) ** 2)) + 1.0, np.array([x.mean() / 0.5 - 1.0])
+        f0 = float(np.sum(np.cos(12 * x) + 3 * (x - 0.5) ** 2)) + 20.0
+        f = np.array([x.mean() / 0.6 - 1.0])
         if not gradients:
             self.inner[self.k] = self.inner.get(self.k, 0) + 1
             return f0, f
         self.k += 1
-        return f0, f, 2 * (x - 0.3), np.full((1, x.size), 1 / (0.5 * x.size))
+        return f0, f, -12 * np.sin(12 * x) + 6 * (x - 0.5), np.full((1, x.size), 1 / (0.6 * x.size))
 
 
-def test_mma_gcmma_runs_gcmma_once_every_schedule_value_is_final():
-    sched = Schedule(penal=3.0, penal_start=1.0, penal_step=0.5)   # final from iteration 4
-    prob = Quadratic()
-    state = LoopState(k=0, x=np.full(6, 0.9), opt_state=None, scale=1.0)
-    res = optimize(prob, sched, iterations=30, tol=0.0, method="mma-gcmma", move=0.2,
-                   state=state, obj_tol=0.0)
-    assert res.stopped == "iterations"
-    # GCMMA's inner loop evaluates values only: never before iteration 4, at least once after
-    assert all(k > 4 for k in prob.inner), prob.inner
-    assert sum(prob.inner.values()) >= 26
-    assert np.allclose(state.x, 0.3, atol=1e-3)
-    # once GCMMA runs the objective does not rise by more than GCMMA's acceptance tolerance
+def _run(method):
+    prob = Rugged()
+    state = LoopState(k=0, x=np.linspace(0.05, 0.95, 8), opt_state=None, scale=1.0)
+    optimize(prob, Schedule(), iterations=40, tol=0.0, method=method, move=0.5, state=state,
+             obj_tol=0.0)
+    return prob, [r["objective"] for r in state.history]
+
+
+def test_mma_gcmma_switches_to_gcmma_at_the_first_zigzag_and_settles():
+    _, mma = _run("mma")
+    first = zigzag_at(mma)
+    assert first is not None                                 # MMA alone zigzags here ...
+    assert zigzag_at(mma[-8:]) is not None                   # ... to the end
+    prob, both = _run("mma-gcmma")
+    start = zigzag_at(both)
+    assert start == first and both[:start + 1] == mma[:start + 1]   # MMA up to the zigzag
+    # GCMMA's inner loop evaluates values only: from the update after the zigzag on
+    assert min(prob.inner) == start + 1 and sum(prob.inner.values()) >= 40 - start - 1
+    # afterwards the objective does not rise by more than GCMMA's acceptance tolerance
     # (epsimin = 1e-7: an accepted step is conservative up to it)
-    tail = [r["objective"] for r in state.history[6:]]
+    tail = both[start + 1:]
     assert all(b <= a + 1e-7 for a, b in zip(tail, tail[1:]))
