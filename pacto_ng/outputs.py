@@ -79,7 +79,25 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "adjoint_solves": {"solved": problem.mech.adjoint_solves,
                            "skipped_self_adjoint": problem.mech.adjoint_solves_skipped},
     }
+    out.update(lowest_jacobian(problem))
     out.update(pressure_and_material_summary(problem))
+    return out
+
+
+def lowest_jacobian(problem: Problem) -> dict:
+    """Where ``J = det F`` of the last analysed state is lowest: ``lowest_J`` at the
+    quadrature points (where the energy is evaluated and Newton's guard is checked) and
+    ``lowest_J_corners`` at the vertices, edge midpoints and centroids, each
+    ``{"J", "element", "rho_bar", "point"}`` (element index in NGSolve's order, its design
+    density, the kind of point); both None before any analysis."""
+    if "u" not in problem.values:
+        return {"lowest_J": None, "lowest_J_corners": None}
+    rho = problem.design_density()
+    out = {}
+    for key, points in (("lowest_J", "quadrature"), ("lowest_J_corners", "corners")):
+        low = problem.mech.lowest_jacobian(points)
+        out[key] = {"J": low["J"], "element": low["element"],
+                    "rho_bar": float(rho[low["element"]]), "point": low["point"]}
     return out
 
 

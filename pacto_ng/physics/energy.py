@@ -50,14 +50,27 @@ class EnergyTraits:
         once (:class:`~pacto_ng.physics.scatter.ElementMatrices`) and ``E`` per design from
         numpy.
         Verified against the energy's CF when the block is built (``ValueError`` if wrong).
+    guard_points : {"element", "quadrature"}
+        Where Newton's guard (``det F > 0``, or the model's own guard CF) must hold for the
+        energy to be defined: ``"quadrature"``, the points of the forms' quadrature rule, the
+        only points where the discrete energy, residual and tangent are evaluated (its
+        logarithm, say, is then defined wherever it is used); ``"element"`` (what an energy
+        that declares nothing gets), also the vertices, edge midpoints and centroid of every
+        element (:func:`~pacto_ng.physics.quadrature.guard_rules`).
     """
 
     reads: tuple[str, ...] | None = None
     quadratic: bool = False
     stress_free: bool = False
     modulus: Callable | None = None
+    guard_points: str = "element"
 
     def __post_init__(self):
+        from .quadrature import GUARD_POINTS
+
+        if self.guard_points not in GUARD_POINTS:
+            raise ValueError(f"guard_points must be one of {', '.join(GUARD_POINTS)} (got "
+                             f"'{self.guard_points}')")
         if self.reads is not None:
             object.__setattr__(self, "reads", tuple(self.reads))
         if self.quadratic and not self.stress_free:
@@ -126,8 +139,10 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
         E, d = simp_np(values[fields[0]], params.E0, params.E1, p)
         return E, {fields[0]: d}
 
+    # the discrete energy is evaluated at the quadrature points only: the guard holds there
+    # (docs/guide.md "Newton and failures", docs/benchmarks.md "The Newton guard")
     declare(energy, reads=fields, quadratic=mat.linear, stress_free=mat.stress_free,
-            modulus=modulus_np if mat.proportional_to_E else None)
+            modulus=modulus_np if mat.proportional_to_E else None, guard_points="quadrature")
     guard = (lambda G, c: jacobian(G)) if mat.needs_positive_J else None
     return energy, guard, mat.linear
 

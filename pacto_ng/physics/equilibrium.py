@@ -64,7 +64,8 @@ class Equilibrium:
         self._gtrial = GridFunction(self.fes)
         if guard is not None:
             self._guard_cf = guard(Grad(self._gtrial), self.coeffs).Compile()
-            self._guard_pts = self.mesh.MapToAllElements(guard_rules(self.rules), VOL)
+            self._guard_pts = self.mesh.MapToAllElements(
+                guard_rules(self.rules, self._traits.guard_points), VOL)
         self._rhs = self.gfu.vec.CreateVector()
         self._ext = self.gfu.vec.CreateVector()
         # with only design-independent loads the load vector is fixed: its norm is computed once
@@ -144,6 +145,35 @@ class Equilibrium:
         self._gtrial.vec.data = vec
         vals = self._guard_cf(self._guard_pts)
         return bool(np.all(np.isfinite(vals)) and np.min(vals) > 0.0)
+
+    def lowest_jacobian(self, points: str = "quadrature") -> dict:
+        """Where ``det F`` (of the in-plane deformation, ``F = I + ∇u`` of the current
+        displacement) is lowest: ``{"J", "element", "point"}`` with the element's index (NGSolve's
+        order) and the kind of point (``"quadrature point"``, ``"vertex"``, ``"edge midpoint"``
+        or ``"centroid"``).  ``points``: ``"quadrature"`` (the points of the forms' rule) or
+        ``"corners"`` (vertices, edge midpoints and centroid only)."""
+        from ngsolve import QUAD, VOL, Grad
+
+        from .materials import jacobian
+
+        if points not in ("quadrature", "corners"):
+            raise ValueError(f"points must be 'quadrature' or 'corners' (got '{points}')")
+        rules = guard_rules(self.rules, "element")
+        vals = np.asarray(jacobian(Grad(self.gfu))(self.mesh.MapToAllElements(rules, VOL))).ravel()
+        best = (np.inf, -1, "")
+        start = 0
+        for el in self.mesh.Elements(VOL):
+            n_quad = len(self.rules[el.type].points)
+            n_vert = 4 if el.type == QUAD else 3
+            kinds = (["quadrature point"] * n_quad + ["vertex"] * n_vert
+                     + ["edge midpoint"] * n_vert + ["centroid"])
+            own = vals[start:start + len(kinds)]
+            start += len(kinds)
+            sel = slice(0, n_quad) if points == "quadrature" else slice(n_quad, None)
+            j = int(np.argmin(own[sel])) + (0 if points == "quadrature" else n_quad)
+            if own[j] < best[0]:
+                best = (float(own[j]), el.nr, kinds[j])
+        return {"J": best[0], "element": best[1], "point": best[2]}
 
     def load_norm(self, load):
         """Norm of the external load vector (the residual at u = 0) at load factor ``load``."""

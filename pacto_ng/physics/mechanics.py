@@ -119,7 +119,9 @@ class Mechanics(Equilibrium, Adjoint):
         (:class:`~pacto_ng.physics.energy.DeclarationError`); ``linear_in = None`` takes the
         general route.
     guard : callable ``(G, coeffs) -> CF`` or None
-        A CF that must stay positive at every integration point (``det F``), or None.
+        A CF that must stay positive (``det F``), or None: at the points the energy declares
+        (:attr:`~pacto_ng.physics.energy.EnergyTraits.guard_points`: the quadrature points,
+        or also every element's vertices, edge midpoints and centroid; :attr:`guard_points`).
     linear : bool
         The whole residual (residual density and terms included) is linear in u (one Newton
         step; the tangent does not depend on u).
@@ -282,6 +284,12 @@ class Mechanics(Equilibrium, Adjoint):
     def energy_traits(self) -> EnergyTraits:
         """What the energy declares (:class:`~pacto_ng.physics.energy.EnergyTraits`)."""
         return self._traits
+
+    @property
+    def guard_points(self) -> str | None:
+        """Where the guard is checked: ``"quadrature"`` or ``"element"`` (declared by the
+        energy, :class:`~pacto_ng.physics.energy.EnergyTraits`), None without a guard."""
+        return None if self._guard is None else self._traits.guard_points
 
     @property
     def energy_fields(self) -> dict:

@@ -19,8 +19,9 @@ differentiates through it.  Defaults β1 = 100, η1 = 0.001 (thesis App. D); Wan
 β1 = 500, η1 = 0.01.
 
 The logarithm of the Neo-Hookean energy sees the deformation ``I + γ G``: the Newton guard is
-``det(I + γ G) > 0`` (:meth:`WangModel.guard`); in void (``γ = 0``) any ``det(I + G)`` is
-admissible.
+``det(I + γ G) > 0`` (:meth:`WangModel.guard`) at the quadrature points, where the energy is
+evaluated (declared in :attr:`WangModel.traits`); in void (``γ = 0``) any ``det(I + G)`` is
+admissible, and an element folded at a corner is not refused.
 
 Output measures (thesis eqs 5.3–5.5), all from the same ``G``:
 
@@ -155,11 +156,12 @@ class WangModel:
     def traits(self):
         """The energy's declaration (:class:`~pacto_ng.physics.energy.EnergyTraits`): the fields
         it reads; stress-free at ``G = 0`` for a named ``φ_H`` (``∂φ_W/∂G = γ P_H(0) - γ σ_L(0)
-        + σ_L(0) = 0``); not quadratic (the general route)."""
+        + σ_L(0) = 0``); not quadratic (the general route); its guard holds at the quadrature
+        points, the only points where ``φ_H(γG)`` is evaluated."""
         from .energy import EnergyTraits
 
         named = isinstance(self.hyper, str)
-        return EnergyTraits(reads=self.reads, stress_free=named)
+        return EnergyTraits(reads=self.reads, stress_free=named, guard_points="quadrature")
 
     def __call__(self, G, coeffs):
         """The model as an energy density ``(G, coeffs) -> CF`` (same as :meth:`energy`)."""
