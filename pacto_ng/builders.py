@@ -181,10 +181,11 @@ class Builder:
 
         return Model(*make_energy(self.params, design.penal, design.names))
 
-    def pressure(self, model: Model, design: DesignChain) -> PressureLoad:
+    def pressure(self, model: Model, design: DesignChain, suffix: str = "") -> PressureLoad:
         """The Darcy pressure of the set-up's inlet and zero-pressure boundaries, and its load:
         fixed (a body force) or follower (a residual density, SPEC §4); empty for a set-up
-        without pressure."""
+        without pressure.  ``suffix`` names its output ``p`` + suffix (several realisations of
+        the design in one chain, :mod:`pacto_ng.robust`)."""
         from .case import Pressure
 
         params, setup, name = self.params, self.setup, self.case.name
@@ -213,7 +214,8 @@ class Builder:
             gamma = model.energy.gamma if params.model == "wang" and params.follower_wang else None
             block, pfield, body = darcy_load.for_case(self.mesh, params.darcy, params.load,
                                                       pressure, design.names[0],
-                                                      order=params.order, gamma=gamma)
+                                                      order=params.order, output="p" + suffix,
+                                                      gamma=gamma)
         except ValueError as err:
             raise InputError(str(err)) from None
         if params.load_type == "follower":
@@ -222,9 +224,10 @@ class Builder:
             return PressureLoad(block, pfield, None, body)
         return PressureLoad(block, pfield, body, None)
 
-    def mechanics(self, model: Model, design: DesignChain, pressure: PressureLoad):
-        """The mechanics block ``(ρ̄, [p]) -> u`` with the set-up's supports, loads and
-        springs."""
+    def mechanics(self, model: Model, design: DesignChain, pressure: PressureLoad,
+                  suffix: str = ""):
+        """The mechanics block ``(ρ̄, [p]) -> u`` (``u`` + ``suffix``) with the set-up's
+        supports, loads and springs."""
         from .physics.loads import PointLoad
         from .physics.mechanics import Mechanics
 
@@ -237,20 +240,22 @@ class Builder:
                              supports=setup.supports, loads=loads, springs=setup.all_springs,
                              body=pressure.body, thickness=params.thickness, guard=model.guard,
                              linear=model.linear, newton=params.newton.settings(),
-                             residual_density=pressure.follower, realcompile=params.realcompile)
+                             residual_density=pressure.follower, realcompile=params.realcompile,
+                             output="u" + suffix)
         except ValueError as err:
             raise InputError(str(err)) from None
 
-    def responses(self, mech, pressure: PressureLoad) -> Responses:
+    def responses(self, mech, pressure: PressureLoad, suffix: str = "") -> Responses:
         """The blocks of the set-up's objective (or ``--set objective``): compliance, strain
         energy, or an output displacement (alone, over the strain energy, or under a
-        strain-energy limit)."""
+        strain-energy limit).  ``suffix`` is appended to the name of every value they make."""
         from . import responses as R
 
         params, setup = self.params, self.setup
         obj = params.objective or setup.objective
         if obj not in OBJECTIVES:
             raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{obj}')")
+        n = {k: k + suffix for k in ("compliance", "se", "delta", "objective", "se_limit")}
         if obj == "compliance":
             if pressure.follower is not None:
                 raise InputError("objective: compliance is not defined for a follower load (the "
@@ -259,26 +264,29 @@ class Builder:
             if pressure.body is not None:
                 from .physics import darcy_load
 
-                return Responses([darcy_load.Compliance(mech, pressure.block)], "compliance")
-            return Responses([R.compliance(mech)], "compliance")
+                return Responses([darcy_load.Compliance(mech, pressure.block,
+                                                        output=n["compliance"])], n["compliance"])
+            return Responses([R.compliance(mech, output=n["compliance"])], n["compliance"])
         if obj == "energy":
-            return Responses([R.StrainEnergy(mech)], "se")
+            return Responses([R.StrainEnergy(mech, output=n["se"])], n["se"])
         if not setup.ports:
             raise InputError(f"objective '{obj}' needs an output port")
-        blocks = [R.output_displacement(mech, setup.output)]
+        blocks = [R.output_displacement(mech, setup.output, output=n["delta"])]
         if obj == "output":
-            return Responses(blocks + [R.Scale(-1.0, ("delta",), "objective")], "objective",
-                             ["delta"])
+            return Responses(blocks + [R.Scale(-1.0, (n["delta"],), n["objective"])],
+                             n["objective"], [n["delta"]])
         if obj == "output_se":  # max Δ subject to SE <= se_max
             se_max = params.se_max or setup.se_max
             if not se_max > 0:
                 raise InputError(f"se_max: objective output_se needs a positive limit (case "
                                  f"'{self.case.name}' has no default; --set se_max=...)")
-            blocks += [R.Scale(-1.0, ("delta",), "objective"), R.StrainEnergy(mech),
-                       Bound(se_max, ("se",), "se_limit")]
-            return Responses(blocks, "objective", ["delta", "se"], ["se_limit"])
-        blocks += [R.StrainEnergy(mech), R.MechanismRatio()]
-        return Responses(blocks, "objective", ["delta", "se"])
+            blocks += [R.Scale(-1.0, (n["delta"],), n["objective"]),
+                       R.StrainEnergy(mech, output=n["se"]),
+                       Bound(se_max, (n["se"],), n["se_limit"])]
+            return Responses(blocks, n["objective"], [n["delta"], n["se"]], [n["se_limit"]])
+        blocks += [R.StrainEnergy(mech, output=n["se"]),
+                   R.MechanismRatio(inputs=(n["delta"], n["se"]), output=n["objective"])]
+        return Responses(blocks, n["objective"], [n["delta"], n["se"]])
 
     def volume(self, design: DesignChain) -> Responses:
         """``V(ρ̄)/V* - 1 <= 0`` on the (total) solid, and on the stiff material where

@@ -381,13 +381,27 @@ class Problem:
     model_choice: dict | None = None  # what --model auto decided, and why
     #: the netgen.occ shape the mesh was made from (None: a mesh file or structured quads)
     shape: object = None
+    #: a worst-case objective (:mod:`pacto_ng.robust`): the names of the terms whose maximum
+    #: is the objective (the optimiser takes them one by one); empty: the objective itself
+    objective_terms: tuple = ()
+    #: further mechanics blocks of the chain (the robust realisations), under the same load
+    extra_mechanics: list = field(default_factory=list)
+    #: ``f(k, history)`` called at the start of iteration k (the robust formulation's volume
+    #: target), or None
+    before_iteration: Callable | None = None
 
     # -- schedules ----------------------------------------------------------------------------
     def apply_schedule(self, penal: float, beta: float, load: float) -> None:
         self.penal.Set(penal)
         for pr in self.projections:
             pr.beta = beta
-        self.mech.target = load
+        for mech in [self.mech] + list(self.extra_mechanics):
+            mech.target = load
+
+    def start_iteration(self, k: int, history: list) -> None:
+        """What changes with the iteration besides the schedules (:attr:`before_iteration`)."""
+        if self.before_iteration is not None:
+            self.before_iteration(k, history)
 
     def describe(self) -> list[str]:
         """The chain as text: one line per block (its kind, what it reads and makes), then the
@@ -409,6 +423,20 @@ class Problem:
         df0 = np.asarray(self.chain.gradient(self.objective))
         df = np.array([np.asarray(self.chain.gradient(c)) for c in self.constraints])
         return f0, f, df0, df
+
+    def evaluate_terms(self, x: np.ndarray, gradients: bool = True):
+        """Like :meth:`evaluate`, with the objective as its terms: ``F0`` (K values, whose
+        maximum is the objective; K = 1 without :attr:`objective_terms`), ``f`` and, with
+        ``gradients``, ``dF0`` (shape (K, n)) and ``df`` (shape (m, n))."""
+        names = self.objective_terms or (self.objective,)
+        vals = self.chain.forward(x=x)
+        F0 = np.array([vals[t] for t in names], dtype=float)
+        f = np.array([vals[c] for c in self.constraints], dtype=float)
+        if not gradients:
+            return F0, f
+        dF0 = np.array([np.asarray(self.chain.gradient(t)) for t in names])
+        df = np.array([np.asarray(self.chain.gradient(c)) for c in self.constraints])
+        return F0, f, dF0, df
 
     @property
     def values(self) -> dict:
@@ -469,4 +497,12 @@ def build_problem(case: Case, params: Parameters) -> Problem:
     if setup.pressure is not None:
         check_inlet_touches_design(meshed.mesh, setup.pressure.inlet, setup.void)
 
-    return case.make_problem(Builder(case, params, meshed, setup))
+    builder = Builder(case, params, meshed, setup)
+    if params.robust:
+        if case.chain is not standard_chain:
+            raise InputError(f"robust: case '{case.name}' builds its own chain; the robust "
+                             "formulation replaces the standard chain only")
+        from .robust import robust_chain
+
+        return robust_chain(builder)
+    return case.make_problem(builder)

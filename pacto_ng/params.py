@@ -23,6 +23,7 @@ part              settings                                    defined in
                   realcompile
 ``optimization``  iterations, optimizer, move, tol,           :mod:`pacto_ng.optimize.driver`
                   obj_tol, load_adapt
+``robustness``    robust, robust_deta, robust_every           :mod:`pacto_ng.robust`
 ``case``          the case's own options (e.g. the            the case's file
                   cantilever's load_width)
 ================  ==========================================  ==================================
@@ -55,12 +56,13 @@ def parts() -> tuple:
         from .physics.energy import MaterialSettings
         from .physics.loads import LoadSettings
         from .physics.newton import NewtonParameters
+        from .robust import RobustSettings
 
         _PARTS = (("mesh", MeshSettings), ("material", MaterialSettings),
                   ("design", DesignSettings), ("schedule", ScheduleSettings),
                   ("loads", LoadSettings), ("darcy", DarcySettings),
                   ("responses", ObjectiveSettings), ("newton", NewtonParameters),
-                  ("optimization", OptimizerSettings))
+                  ("optimization", OptimizerSettings), ("robustness", RobustSettings))
     return _PARTS
 
 

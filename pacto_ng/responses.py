@@ -17,10 +17,12 @@ class LinearFunctional:
     port (ℓ = the port functional) are both of this form.
     """
 
-    def __init__(self, mech, terms, inputs=("u",), output="J"):
+    def __init__(self, mech, terms, inputs=None, output="J"):
         from ngsolve import LinearForm
 
-        self.inputs, self.output = tuple(inputs), output
+        # default input: the mechanics block's displacement
+        self.inputs = tuple(inputs) if inputs is not None else (mech.output,)
+        self.output = output
         v = mech.fes.TestFunction()
         lf = LinearForm(mech.fes)
         lf += terms(v)
@@ -65,7 +67,7 @@ class StrainEnergy:
         from .physics.sensitivities import FieldGradient
 
         self.mech = mech
-        self.inputs = ("u",) + mech.inputs
+        self.inputs = (mech.output,) + mech.inputs
         self.output = output
         self.gfu = GridFunction(mech.fes)
         dens = mech.thickness * mech.energy(Grad(self.gfu), mech.coeffs)

@@ -129,13 +129,20 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
     # problem instead was slower where MMA does not zigzag (SoRoTop's set-up: Δ 75.6 after 200
     # iterations against 91.6 at convergence in 99; docs/benchmarks.md, "Convergence at
     # defaults")
-    opt = Optimizer(n, m, method="mma" if method == "mma-gcmma" else method, move=move)
+    # optional parts of the problem's protocol (the robust formulation, pacto_ng.robust): the
+    # terms of a worst-case objective, for MMA's bound formulation, and what changes with the
+    # iteration besides the schedules
+    terms = len(getattr(problem, "objective_terms", ())) or 1
+    evaluate = problem.evaluate_terms if terms > 1 else problem.evaluate
+    start_iteration = getattr(problem, "start_iteration", None)
+    opt = Optimizer(n, m, method="mma" if method == "mma-gcmma" else method, move=move,
+                    terms=terms)
     opt.state = state.opt_state
     x = state.x.copy()
 
     def values_only(xt):
-        f0, f = problem.evaluate(xt, gradients=False)
-        return f0 * state.scale, f
+        F0, f = evaluate(xt, gradients=False)
+        return np.asarray(F0) * state.scale, f
 
     while state.k < iterations:
         k = state.k
@@ -144,11 +151,13 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         penal, beta, scheduled = schedule.values(k)
         load = min(scheduled, state.load_cap)
         problem.apply_schedule(penal, beta, load)
+        if start_iteration is not None:
+            start_iteration(k, state.history)
         # ---- analysis and sensitivities ---------------------------------------------------
         failed_newton = 0  # Newton iterations of an attempt that adaptive continuation cut short
         try:
             try:
-                f0, f, df0, df = problem.evaluate(x)
+                F0, f, dF0, df = evaluate(x)
             except NewtonFailure as err:
                 reached = err.result.load_reached
                 failed_newton = err.result.iterations
@@ -162,7 +171,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                     load = state.load_cap = reached
                     problem.apply_schedule(penal, beta, load)
                     try:
-                        f0, f, df0, df = problem.evaluate(x)
+                        F0, f, dF0, df = evaluate(x)
                         break
                     except NewtonFailure as again:
                         failed_newton += again.result.iterations
@@ -178,6 +187,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                     "no design could be analysed at this load; the initial design is saved")
             return LoopResult(state, False, "newton", f"iteration {k}: {err}; {kept}")
         state.last_good = x.copy()
+        f0 = float(np.max(F0))  # the objective (the worst of its terms)
         if state.scale is None:  # fix the objective normalisation once (kept on resume)
             state.scale = 10.0 / max(abs(f0), 1e-300)
         # ---- design update (MMA / GCMMA with move limit) ------------------------------------
@@ -186,7 +196,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                      if schedule.settled(r["iteration"]) and r["load"] >= 1.0] + [f0]
             if zigzag_at(final) is not None:
                 opt.method = "gcmma"
-        xnew = opt.update(k + 1, x, f0 * state.scale, df0 * state.scale, f, df,
+        xnew = opt.update(k + 1, x, np.asarray(F0) * state.scale, dF0 * state.scale, f, df,
                           evaluate=values_only if opt.method == "gcmma" else None)
         change = float(np.max(np.abs(xnew - x)))
         # ---- record ----------------------------------------------------------------------

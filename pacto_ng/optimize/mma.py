@@ -4,6 +4,15 @@ Problem form: ``min f0(x)`` s.t. ``f_i(x) <= 0`` (i = 1..m), ``0 <= x <= 1``.  T
 ``|x_new - x| <= move`` is imposed through the bounds handed to the subproblem.  The state
 (previous iterates, asymptotes, GCMMA's ``raa``) is a plain dict of arrays so that a checkpoint
 restores it exactly.
+
+A worst-case objective ``min max_k f0_k(x)`` (``terms`` = K > 1, the robust formulation) is
+solved in Svanberg's bound form: ``min z`` s.t. ``f0_k(x) + c - z <= 0`` (k = 1..K) and the
+``f_i(x) <= 0``, i.e. mmapy's problem with objective 0, ``a0 = 1`` and ``a_i = 1`` for the K
+bound constraints (``a_i = 0`` for the others).  MMA's ``z`` is non-negative, so the terms are
+shifted by a constant ``c = 2 max_k |f0_k(x)| + 1`` of the current iterate (the same for
+GCMMA's inner evaluations): the approximations of the shifted terms differ only in their
+constant part, so the step is that of the unshifted problem as long as the worst term stays
+above ``-c`` in the step (a drop of more than twice its size).
 """
 from __future__ import annotations
 
@@ -16,16 +25,21 @@ class Optimizer:
     ``evaluate(x) -> (f0, fvals)`` (values only) is needed by GCMMA's inner loop.
     """
 
-    def __init__(self, n: int, m: int, method: str = "mma", move: float = 0.1):
+    def __init__(self, n: int, m: int, method: str = "mma", move: float = 0.1, terms: int = 1):
         if method not in ("mma", "gcmma"):
             raise ValueError(f"optimizer must be 'mma' or 'gcmma' (got '{method}')")
         if not 0 < move <= 1:
             raise ValueError("move limit must lie in (0, 1]")
-        self.n, self.m, self.method, self.move = n, m, method, move
+        if terms < 1:
+            raise ValueError(f"terms: the objective needs at least one term (got {terms})")
+        self.terms = int(terms)
+        bound = self.terms if self.terms > 1 else 0  # the bound constraints f0_k + c - z <= 0
+        self.n, self.m, self.method, self.move = n, m + bound, method, move
         self.a0 = 1.0
-        self.a = np.zeros((m, 1))
-        self.c = 1000.0 * np.ones((m, 1))
-        self.d = np.ones((m, 1))
+        self.a = np.zeros((self.m, 1))
+        self.a[:bound] = 1.0
+        self.c = 1000.0 * np.ones((self.m, 1))
+        self.d = np.ones((self.m, 1))
         self.state: dict | None = None
         self.inner_evaluations = 0
 
@@ -34,8 +48,34 @@ class Optimizer:
 
     def update(self, it: int, x: np.ndarray, f0: float, df0: np.ndarray, f: np.ndarray,
                df: np.ndarray, evaluate=None) -> np.ndarray:
-        """Return the next design.  ``it`` counts from 1; ``df`` has shape (m, n)."""
+        """Return the next design.  ``it`` counts from 1; ``df`` has shape (m, n).  With
+        ``terms`` K > 1, ``f0`` holds the K terms of the worst case and ``df0`` has shape (K, n);
+        ``evaluate`` then returns the K terms as its first value."""
         import mmapy
+
+        if self.terms > 1:
+            F0 = np.asarray(f0, dtype=float).reshape(self.terms)
+            shift = 2.0 * float(np.max(np.abs(F0))) + 1.0
+            f = np.concatenate([F0 + shift, np.asarray(f, dtype=float).ravel()])
+            df = np.vstack([np.asarray(df0, dtype=float).reshape(self.terms, self.n),
+                            np.asarray(df, dtype=float).reshape(-1, self.n)])
+            f0, df0 = 0.0, np.zeros(self.n)
+            if evaluate is not None:
+                inner = evaluate
+
+                def evaluate(xt):
+                    F0t, ft = inner(xt)
+                    return 0.0, np.concatenate([np.asarray(F0t, dtype=float).ravel() + shift,
+                                                np.asarray(ft, dtype=float).ravel()])
+        else:
+            f0 = float(np.asarray(f0, dtype=float).ravel()[0])
+            df0 = np.asarray(df0, dtype=float).reshape(self.n)
+            if evaluate is not None:
+                inner = evaluate
+
+                def evaluate(xt):
+                    f0t, ft = inner(xt)
+                    return float(np.asarray(f0t, dtype=float).ravel()[0]), ft
 
         xval = x[:, None].astype(float)
         xmin, xmax = self._bounds(x)

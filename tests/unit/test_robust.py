@@ -1,0 +1,132 @@
+"""The robust formulation's parts (pacto_ng.robust): MMA's bound formulation of a worst case on
+problems with a known minimax, the worst-case block, the dilated design's volume target and the
+refused set-ups; and a short robust run through the driver."""
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from pacto_ng.case import build_problem, get_case
+from pacto_ng.core import check_gradient
+from pacto_ng.optimize.mma import Optimizer
+from pacto_ng.params import InputError
+from pacto_ng.robust import VolumeTarget, WorstCase
+
+
+def _terms(x, offset):
+    # f1 = (x0 - 0.2)² + (x1 - 0.3)², f2 = (x0 - 0.8)² + (x1 - 0.3)² (+ offset):
+    # max(f1, f2) is least at x = (0.5, 0.3), where f1 = f2 = 0.09 (+ offset)
+    t1, t2 = np.array([0.2, 0.3]), np.array([0.8, 0.3])
+    F0 = np.array([((x - t1) ** 2).sum(), ((x - t2) ** 2).sum()]) + offset
+    dF0 = np.array([2 * (x - t1), 2 * (x - t2)])
+    f = np.array([x.sum() - 1.5])  # inactive at the minimax
+    return F0, f, dF0, np.ones((1, 2))
+
+
+def _minimax(method, offset, iterations=40):
+    opt = Optimizer(2, 1, method=method, move=0.2, terms=2)
+    x = np.array([0.1, 0.9])
+    for it in range(1, iterations):
+        F0, f, dF0, df = _terms(x, offset)
+        x = opt.update(it, x, F0, dF0, f, df, evaluate=lambda z: _terms(z, offset)[:2])
+    return x
+
+
+@pytest.mark.parametrize("offset", [0.0, -5.0, 40.0])
+def test_bound_formulation_gcmma_finds_the_minimax(offset):
+    x = _minimax("gcmma", offset)
+    assert np.allclose(x, [0.5, 0.3], atol=1e-4)
+    assert max(_terms(x, offset)[0]) == pytest.approx(0.09 + offset, abs=1e-8)
+
+
+def test_bound_formulation_mma_balances_the_terms(offset=-5.0):
+    # the terms are balanced (x0 = 0.5) exactly; along x1, where both terms have one gradient,
+    # MMA ends in its 2-cycle at the asymptotes' least distance 0.01 (the standard formulation
+    # of min (x0-0.5)² + (x1-0.3)² ends in the same kind of cycle, 0.0074 from the optimum)
+    x = _minimax("mma", offset)
+    assert x[0] == pytest.approx(0.5, abs=1e-6)
+    assert abs(x[1] - 0.3) < 0.01
+    assert max(_terms(x, offset)[0]) - (0.09 + offset) < 1e-4
+
+
+def test_bound_formulation_respects_the_move_limit():
+    opt = Optimizer(2, 1, method="mma", move=0.05, terms=2)
+    x = np.array([0.1, 0.9])
+    F0, f, dF0, df = _terms(x, 0.0)
+    assert np.max(np.abs(opt.update(1, x, F0, dF0, f, df) - x)) <= 0.05 + 1e-12
+
+
+def test_worst_case_block_value_and_gradient():
+    blk = WorstCase(("a", "b", "c"))
+    assert blk.forward(1.0, 3.0, 2.0) == 3.0
+    assert blk.backward(2.0) == (0.0, 2.0, 0.0)
+    # where the maximum is unique, the block's gradient is that of max(a·x) (FD check)
+    A = np.array([[1.0, 2.0], [3.0, -1.0], [0.5, 0.5]])
+
+    def fun(x):
+        return blk.forward(*(A @ x))
+
+    def grad(x):
+        blk.forward(*(A @ x))
+        return np.array(blk.backward(1.0)) @ A
+
+    res = check_gradient(fun, grad, np.array([0.7, 0.2]), h=1e-6, directions=3)
+    assert res.rel_error < 1e-8
+
+
+class _Vol:
+    volfrac = 0.2
+
+
+def test_volume_target_follows_the_history_every_so_many_iterations():
+    rows = [dict(iteration=i, vol_d=0.2 + 0.01 * i, vol_i=0.2) for i in range(45)]
+    tgt = VolumeTarget(_Vol(), 0.2, 20)
+    assert tgt.target(0, rows) == 0.2                 # before the first update: V*
+    assert tgt.target(19, rows) == 0.2
+    assert tgt.target(20, rows) == pytest.approx(0.2 * 0.39 / 0.2)  # row 19: V_d 0.39
+    assert tgt.target(39, rows) == pytest.approx(0.39)
+    assert tgt.target(44, rows) == pytest.approx(0.2 * 0.59 / 0.2)  # row 39: V_d 0.59
+    tgt(44, rows)
+    assert tgt.block.volfrac == pytest.approx(0.59)
+
+
+def test_refused_set_ups():
+    pa = get_case("pa-inverter")
+    with pytest.raises(InputError, match="robust_deta"):
+        build_problem(pa, pa.defaults.replace(robust=1, robust_deta=0.45, eta=0.6, nelx=12,
+                                              nely=6))
+    mm = get_case("mm-gripper")
+    with pytest.raises(InputError, match="^robust: case 'mm-gripper' has two design fields"):
+        build_problem(mm, mm.defaults.replace(robust=1, maxh=0.02))
+    jaw = get_case("jaw-gripper")
+    with pytest.raises(InputError, match="^robust: case 'jaw-gripper' builds its own chain"):
+        build_problem(jaw, jaw.defaults.replace(robust=2))
+    with pytest.raises(InputError, match="^robust: must be one of 0, 1, 2"):
+        pa.defaults.replace(robust=3)
+
+
+def test_cli_refuses_a_bad_robust_setting_in_one_line():
+    out = subprocess.run([sys.executable, "-m", "pacto_ng.cli", "run", "pa-inverter", "--set",
+                          "robust_deta=0.7", "--iterations", "1", "--out", "/nonexistent/x"],
+                         capture_output=True, text=True)
+    assert out.returncode == 2
+    assert out.stderr.strip().count("\n") == 0 and "robust_deta" in out.stderr
+
+
+def test_a_short_robust_run_reports_the_worst_case_and_updates_the_target(tmp_path):
+    from pacto_ng.runner import optimise_case
+
+    pa = get_case("pa-inverter")
+    params = pa.defaults.replace(robust=1, robust_every=2, nelx=12, nely=6, iterations=5,
+                                 penal_start=3.0, beta=4.0, beta_max=4.0)
+    run = optimise_case(pa, params, tmp_path / "r", quiet=True)
+    assert run.exit_code == 0
+    rows = run.history
+    assert len(rows) == 5
+    for r in rows:
+        assert r["objective"] == max(r["objective_e"], r["objective_i"], r["objective_d"])
+        assert r["vol_d"] > r["volume"] and r["vol_i"] == pytest.approx(r["volume"], rel=1e-12)
+    # the dilated design's volume target at the last iteration (4): V* V_d/V_i of iteration 3
+    vol_d = next(b for b in run.problem.chain.blocks if b.output == "volume_d")
+    assert vol_d.volfrac == pytest.approx(0.2 * rows[3]["vol_d"] / rows[3]["vol_i"], rel=1e-12)
