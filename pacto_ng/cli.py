@@ -11,9 +11,9 @@
     pacto sweep CASE --loads L1,L2,... [--models M1,M2] [--scheduler ADDRESS] [--workers N]
                 [run options but --model/--load]
     pacto analyse DIR [--pressures P1,P2,...] [--threshold T|volume] [--keep-threshold]
-                  [--maxh H] [--order K]
+                  [--threshold2 T2] [--maxh H] [--order K]
                   [--kinds darcy,fixed,follower] [--quiet]
-    pacto export DIR --format stl|vtk|msh [--out FILE] [--threshold T] [--maxh H]
+    pacto export DIR --format stl|vtk|msh [--out FILE] [--threshold T] [--threshold2 T2] [--maxh H]
     pacto compare DIR1 DIR2 ... [--out FILE.png]
 
 Bad input gives a one-line error on stderr and exit code 2; a run stopped by a Newton failure
@@ -133,9 +133,10 @@ def _post_parsers(sub):
                        "pressure sweep: the Darcy pressure of the thresholded design and the "
                        "pressure on the wetted boundary, fixed and follower; writes DIR/analysis/ "
                        "(analysis.json, analysis.png, deformed.png, report.md, design.stl, "
-                       "remeshed.vtu, deformed.vtu).  Pressure cases with one material only: for "
-                       "the other cases (cantilever, inverter, mm-gripper) it stops with a one-line "
-                       "error; 'pacto export' writes their part.")
+                       "remeshed.vtu, deformed.vtu).  Pressure cases only (a two-material run "
+                       "keeps both materials: regions soft and stiff, materials.png): for the "
+                       "force cases (cantilever, inverter) it stops with a one-line error; "
+                       "'pacto export' writes their part.")
     a.add_argument("dir", help="a finished run folder")
     a.add_argument("--pressures", help="comma-separated inlet pressures in Pa (default: 5 "
                    "log-spaced values from load/100 to the run's load)")
@@ -144,6 +145,9 @@ def _post_parsers(sub):
     a.add_argument("--keep-threshold", action="store_true", help="do not lower the threshold "
                    "when the part kept on the clamp does not contain the output point (by "
                    "default it is lowered, to at least 0.1, until it does)")
+    a.add_argument("--threshold2", default="0.5", help="two materials: the stiff material is "
+                   "where the stiff-material density rho_bar2 >= this, inside the part (default "
+                   "0.5)")
     a.add_argument("--maxh", type=float, help="element size of the new mesh (default: half the "
                    "run's)")
     a.add_argument("--order", type=int, default=2, help="displacement order of the re-analysis")
@@ -158,6 +162,8 @@ def _post_parsers(sub):
     x.add_argument("--out", help="output file (default DIR/export/design.FORMAT)")
     x.add_argument("--threshold", type=float, help="density threshold in (0, 1) (default: the "
                    "analysis's, else 0.5)")
+    x.add_argument("--threshold2", help="two materials: threshold of rho_bar2 (stiff) in (0, 1) "
+                   "(default: the analysis's, else 0.5)")
     x.add_argument("--maxh", type=float, help="element size (default: the analysis's, else half "
                    "the run's)")
     x.add_argument("--quiet", action="store_true")
@@ -175,10 +181,10 @@ def _post_command(args) -> int:
         kinds = tuple(k.strip() for k in args.kinds.split(",") if k.strip())
         return pc.analyse_run(args.dir, pressures=pressures, threshold_value=args.threshold,
                               maxh=args.maxh, order=args.order, kinds=kinds, quiet=args.quiet,
-                              connect=not args.keep_threshold)
+                              connect=not args.keep_threshold, threshold2=args.threshold2)
     if args.command == "export":
         return pc.export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
-                             maxh=args.maxh, quiet=args.quiet)
+                             maxh=args.maxh, quiet=args.quiet, threshold2=args.threshold2)
     from .post.compare import compare_runs
 
     return compare_runs(args.dirs, out=args.out, quiet=args.quiet)

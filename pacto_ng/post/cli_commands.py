@@ -51,9 +51,10 @@ import numpy as np
 from ..files import atomic_path, atomic_write_text
 from ..params import InputError
 from ..threads import compute
+from .materials import material_areas
 from .report import analysis_dict, fmt_value, report_md, short_table
-from .runs import (check_part_mesh, copy_gridfunction, domain_of, load_run, part_of_run, rebuild,
-                   thresholded_elements)
+from .runs import (check_part_mesh, copy_gridfunction, design_density, domain_of, load_run,
+                   materials_of, part_of_run, rebuild, thresholded_elements)
 
 KINDS = ("darcy", "fixed", "follower")
 
@@ -76,22 +77,22 @@ def parse_pressures(text: str) -> list[float]:
     return sorted(set(out))
 
 
-def check_threshold(value, *, allow_volume: bool = False):
+def check_threshold(value, *, allow_volume: bool = False, name: str = "--threshold"):
     """A threshold in (0, 1), or (with ``allow_volume``) the word ``volume``: the
     volume-preserving threshold of :func:`~pacto_ng.post.threshold_choice.volume_threshold`."""
     if isinstance(value, str):
         if value.strip().lower() == "volume":
             if not allow_volume:
-                raise InputError("--threshold: 'volume' is an option of 'pacto analyse' only; "
-                                 "give a number in (0, 1)")
+                raise InputError(f"{name}: 'volume' is an option of 'pacto analyse' "
+                                 f"--threshold only; give a number in (0, 1)")
             return "volume"
         try:
             value = float(value)
         except ValueError:
-            raise InputError(f"--threshold: expected a number in (0, 1)"
+            raise InputError(f"{name}: expected a number in (0, 1)"
                              f"{' or volume' if allow_volume else ''}, got '{value}'") from None
     if not (0.0 < float(value) < 1.0) or not math.isfinite(float(value)):
-        raise InputError(f"--threshold: must lie in (0, 1), got {value:g}")
+        raise InputError(f"{name}: must lie in (0, 1), got {value:g}")
     return float(value)
 
 
@@ -174,14 +175,20 @@ def load_path_note(rebuilt, summary, rtol: float = 1e-4):
 
 
 def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
-                order: int = 2, kinds=KINDS, quiet: bool = False, connect: bool = True) -> int:
-    """``pacto analyse``: see the module docstring.  Returns the exit code (0)."""
+                order: int = 2, kinds=KINDS, quiet: bool = False, connect: bool = True,
+                threshold2=0.5) -> int:
+    """``pacto analyse``: see the module docstring.  Returns the exit code (0).
+
+    A two-material run (mm-gripper): ρ̄1 is thresholded as above, ρ̄2 at ``threshold2``
+    inside the part (:mod:`~pacto_ng.post.materials`); the part has regions ``soft`` (E1) and
+    ``stiff`` (E2) and every analysis uses each region's modulus."""
     from .remesh import pressure_sampler
     from .report import post_analyse
     from .threshold import threshold
     from .threshold_choice import choose_threshold
 
     threshold_value = check_threshold(threshold_value, allow_volume=True)
+    threshold2 = check_threshold(threshold2, name="--threshold2")
     if maxh is not None and not maxh > 0:
         raise InputError(f"--maxh: must be positive, got {maxh:g}")
     if order not in (1, 2, 3):
@@ -194,9 +201,6 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     if setup.pressure is None:
         raise InputError(f"analyse: case '{run.case.name}' has no pressure load; the re-analysis "
                          f"applies to pressure cases only ('pacto export {folder}' writes its part)")
-    if setup.materials != 1:
-        raise InputError(f"analyse: case '{run.case.name}' has two materials; the re-analysis "
-                         f"handles one material only ('pacto export {folder}' writes its part)")
     if setup.port is None:
         raise InputError(f"analyse: case '{run.case.name}' has no output port")
     ports = case_ports(setup)
@@ -207,7 +211,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     with compute():
         problem = rebuild(run)
     p = run.params
-    rho = np.asarray(problem.values["rho_bar"], dtype=float).copy()
+    rho = design_density(problem).copy()  # ρ̄; with two materials the solid field ρ̄1
     maxh = 0.5 * problem.h if maxh is None else float(maxh)
     # the part's mesh and its Neo-Hookean sweeps (the follower's tangent is unsymmetric)
     check_part_mesh(run, problem, rho, maxh, order=order,
@@ -242,6 +246,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
                                   [port.region for port in ports],
                                   supports.clamp, connect=connect, exclude=exclude)
     threshold_value = choice["used"]
+    stiff, E = materials_of(problem, setup, p, threshold2, exclude)
     # (a part that still misses the output is reported once the part is built: the warning on
     # the output port's shift below; a design with no solid on the clamp is an error there)
     _say(quiet, "  " + choice["note"])
@@ -267,14 +272,15 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
         _say(quiet, f"  threshold {thr:g}, remesh (maxh {maxh:g}), "
                     f"Neo-Hookean sweeps {', '.join(kinds)} at {len(pressures)} pressures ...")
         try:
-            res = post_analyse(problem.mesh, rho, out_dir, pressures=pressures, E=p.E1, nu=p.nu,
+            res = post_analyse(problem.mesh, rho, out_dir, pressures=pressures, E=E, nu=p.nu,
                                thickness=p.thickness, output=ports, clamp=supports.clamp,
                                supports=supports, threshold_value=thr, thresholded=th,
                                maxh=maxh,
                                pressure=p_final, p_in=run.load,
                                wet_boundaries=setup.pressure.inlet, kinds=tuple(kinds),
                                darcy_pressure=p_thr, darcy_p_in=run.load, expected=exp_pair,
-                               order=order, newton=newton, domain=shape, exclude=exclude)
+                               order=order, newton=newton, domain=shape, exclude=exclude,
+                               stiff=stiff)
             break
         except ValueError as err:
             # no solid on the clamp, nothing solid, no wetted boundary: the design cannot be
@@ -361,18 +367,24 @@ def _boundary_names(mesh) -> list[str]:
 
 
 def write_msh(path, mesh):
-    """Gmsh 2.2 file of a 2D NGSolve mesh through meshio: the triangles (physical ``solid``)
-    and every boundary edge as a line whose physical group is its boundary name."""
+    """Gmsh 2.2 file of a 2D NGSolve mesh through meshio: the triangles, whose physical group
+    is their material (``solid``; ``soft`` and ``stiff`` for a two-material part), and every
+    boundary edge as a line whose physical group is its boundary name (the materials are
+    groups 1, 2, ..., the boundaries follow)."""
     import meshio
     from ngsolve import BND
 
+    from .export import material_ids
+
     pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
-    tris, quads = [], []
-    for el in mesh.ngmesh.Elements2D():
+    mat_ids, mat_groups = material_ids(mesh)
+    tris, quads, tri_ids, quad_ids = [], [], [], []
+    for el, mid in zip(mesh.ngmesh.Elements2D(), mat_ids):
         vs = [v.nr - 1 for v in el.vertices]
         (tris if len(vs) == 3 else quads).append(vs)
+        (tri_ids if len(vs) == 3 else quad_ids).append(mid)
     names = _boundary_names(mesh)
-    tag = {n: i + 2 for i, n in enumerate(names)}
+    tag = {n: i + 1 + len(mat_groups) for i, n in enumerate(names)}
     lines, ltag = [], []
     for el in mesh.Elements(BND):
         lines.append([v.nr for v in el.vertices])
@@ -381,11 +393,11 @@ def write_msh(path, mesh):
     if lines:
         cells.append(("line", np.array(lines, dtype=np.int64)))
         phys.append(np.array(ltag, dtype=np.int64))
-    for kind, block in (("triangle", tris), ("quad", quads)):
+    for kind, block, ids in (("triangle", tris, tri_ids), ("quad", quads, quad_ids)):
         if block:
             cells.append((kind, np.array(block, dtype=np.int64)))
-            phys.append(np.ones(len(block), dtype=np.int64))
-    field_data = {"solid": np.array([1, 2])}
+            phys.append(np.array(ids, dtype=np.int64))
+    field_data = dict(mat_groups)
     field_data.update({n: np.array([t, 1]) for n, t in tag.items()})
     m = meshio.Mesh(np.c_[pts, np.zeros(len(pts))], cells,
                     cell_data={"gmsh:physical": phys, "gmsh:geometrical": phys},
@@ -396,33 +408,42 @@ def write_msh(path, mesh):
 
 
 def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
-               quiet: bool = False) -> int:
+               quiet: bool = False, threshold2=None) -> int:
     """``pacto export``: the thresholded, remeshed part of a run as stl | vtk | msh.
 
     Without ``--threshold``/``--maxh`` the settings of ``DIR/analysis/analysis.json`` are used
     when it exists (the exported part is then the analysed one), else 0.5 and half the run's
     element size.  STL: extruded by the thickness (closed); VTK: the 2D triangles (meshio, from
     the VTU the analysis writes); MSH: Gmsh 2.2 with the boundary names as physical groups.
+    A two-material part (``threshold2``: ρ̄2's, default the analysis's, else 0.5) has the
+    regions ``soft`` and ``stiff``: the STL is the whole part; the VTK has cell data
+    ``material`` (named in its field data) and ``E``; the MSH the materials as physical
+    groups of the triangles.
     """
-    from .export import convert, write_stl, write_vtu
+    from .export import write_stl, write_vtu
 
     if fmt not in EXPORT_FORMATS:
         raise InputError(f"--format: choose from {', '.join(EXPORT_FORMATS)} (got '{fmt}')")
     if threshold_value is not None:
         check_threshold(threshold_value)
+    if threshold2 is not None:
+        threshold2 = check_threshold(threshold2, name="--threshold2")
     if maxh is not None and not maxh > 0:
         raise InputError(f"--maxh: must be positive, got {maxh:g}")
     run = load_run(folder, "export")
     prev = run.path / "analysis" / "analysis.json"
-    if prev.exists() and (threshold_value is None or maxh is None):
+    if prev.exists() and (threshold_value is None or maxh is None or threshold2 is None):
         try:
             s = json.loads(prev.read_text())["settings"]
             threshold_value = s["threshold"] if threshold_value is None else threshold_value
             maxh = s["maxh"] if maxh is None else maxh
+            threshold2 = s.get("threshold2") if threshold2 is None else threshold2
         except (ValueError, KeyError):
             pass
     threshold_value = 0.5 if threshold_value is None else threshold_value
-    th, rm, problem = part_of_run(run, threshold_value, maxh)
+    threshold2 = 0.5 if threshold2 is None else threshold2
+    th, rm, problem = part_of_run(run, threshold_value, maxh, threshold2)
+    two = rm.materials is not None
     dst = Path(out) if out else run.path / "export" / f"design.{fmt}"
     if dst.suffix.lower() != f".{fmt}":
         raise InputError(f"--out: '{dst}' must end in .{fmt}")
@@ -435,14 +456,20 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
     elif fmt == "msh":
         write_msh(dst, rm.mesh)
     else:
+        import meshio
+
+        E = {"soft": run.params.E1, "stiff": run.params.E2} if two else None
         with tempfile.TemporaryDirectory() as tmp:
-            src = Path(tmp) / "remeshed.vtu"
-            write_vtu(src, rm.mesh)
-            convert(src, dst)
+            m = write_vtu(Path(tmp) / "remeshed.vtu", rm.mesh, E=E)
+        with atomic_path(dst) as tmp:
+            meshio.write(str(tmp), m, file_format="vtk")
     _say(quiet, f"{dst}: {run.case.name} part, threshold {th.threshold:g}, {rm.mesh.ne} "
                 f"triangles, area {rm.area:.6g} m² (thresholded {th.area:.6g}), boundaries "
                 f"{', '.join(_boundary_names(rm.mesh))}"
                 + (f", extruded by {run.params.thickness:g} m" if fmt == "stl" else "")
+                + ("; materials " + ", ".join(f"{k} {v:.6g} m²" for k, v in
+                                              material_areas(rm.mesh).items())
+                   + f" (ρ̄2 at {threshold2:g}, {rm.materials})" if two else "")
                 + {"domain": ", on the case's own geometry", "traced": ""}.get(
                     rm.geometry, f"; {rm.geometry}"))
     return 0

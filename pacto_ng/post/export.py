@@ -74,10 +74,11 @@ def write_stl(path, source, thickness: float):
 
 
 # ---------------------------------------------------------------------------------------
-def deformation_fields(mesh, u, E: float, nu: float) -> tuple[np.ndarray, dict]:
+def deformation_fields(mesh, u, E, nu: float) -> tuple[np.ndarray, dict]:
     """Vertex displacements and element-centroid ``J``, Cauchy stress and von Mises stress.
 
-    The first Piola–Kirchhoff stress is ``∂φ/∂F`` of the Neo-Hookean energy, by automatic
+    ``E`` is a number, or ``{material: E}`` (a part of two materials).  The first
+    Piola–Kirchhoff stress is ``∂φ/∂F`` of the Neo-Hookean energy, by automatic
     differentiation; ``σ = P Fᵀ / J`` in plane, and ``σ_zz = λ ln J / J`` (F33 = 1).
 
     Returns
@@ -89,7 +90,9 @@ def deformation_fields(mesh, u, E: float, nu: float) -> tuple[np.ndarray, dict]:
     from ngsolve import Grad, Id, log
 
     from ..physics.materials import first_piola_kirchhoff, jacobian, lame, neohookean_energy
+    from .materials import modulus_cf
 
+    E = modulus_cf(mesh, E)
     pts, _ = _mesh_arrays(mesh)
     uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy()))).reshape(-1, 2)
     cen = []
@@ -117,6 +120,11 @@ def deformation_fields(mesh, u, E: float, nu: float) -> tuple[np.ndarray, dict]:
 def write_vtu(path, mesh, u=None, *, E: float | None = None, nu: float | None = None,
               deformed: bool = False):
     """Write a 2D NGSolve mesh (and its displacement fields) as VTU with meshio.
+
+    A mesh of named materials other than ``solid`` (a two-material part) gets cell data
+    ``material`` (1, 2, ... in the order of the sorted names: ``soft``, ``stiff``), one
+    indicator array ``material_<name>`` per material (1 in its cells, else 0) and, with ``E``
+    a dict, ``E`` (Pa).
 
     Parameters
     ----------
@@ -149,11 +157,41 @@ def write_vtu(path, mesh, u=None, *, E: float | None = None, nu: float | None = 
             pts = pts + uv
     elif deformed:
         raise ValueError("a deformed configuration needs the displacement u")
+    names = material_names(mesh)
+    if len(names) > 1 or names[0] != "solid":
+        # the material of every cell: its number in the sorted names, and (VTK and VTU keep no
+        # names of their own) one indicator array per material, material_<name>; with E given
+        # as {material: E}, its Young's modulus
+        ids, _ = material_ids(mesh)
+        order = _block_order(mesh)
+        cell_data["material"] = [ids[idx] for idx in order]
+        for i, n in enumerate(names):
+            cell_data[f"material_{n}"] = [(ids[idx] == i + 1).astype(np.int64) for idx in order]
+        if isinstance(E, dict):
+            mod = np.array([E[n] for n in names], dtype=float)[ids - 1]
+            cell_data["E"] = [mod[idx] for idx in order]
     out = meshio.Mesh(np.c_[pts, np.zeros(len(pts))], blocks, point_data=point_data,
                       cell_data=cell_data)
     with atomic_path(path) as tmp:
         out.write(str(tmp), file_format="vtu")
     return out
+
+
+def material_names(mesh) -> list[str]:
+    """The distinct materials of a 2D NGSolve mesh (several faces may share a name), sorted."""
+    return sorted(set(mesh.GetMaterials()))
+
+
+def material_ids(mesh) -> tuple[np.ndarray, dict]:
+    """``(ids, field_data)``: every element's material as its 1-based number in
+    :func:`material_names` (NGSolve element order) and ``{name: [id, 2]}`` (the Gmsh convention
+    of named physical groups)."""
+    names = material_names(mesh)
+    region = mesh.GetMaterials()  # region index - 1 -> name
+    number = {n: i + 1 for i, n in enumerate(names)}
+    ids = np.array([number[region[el.index - 1]] for el in mesh.ngmesh.Elements2D()],
+                   dtype=np.int64)
+    return ids, {n: np.array([i, 2]) for n, i in number.items()}
 
 
 def _block_order(mesh):
@@ -301,6 +339,61 @@ def plot_sweeps(path, sweeps, *, expected=None, title: str | None = None, dpi: i
     ax.grid(True, alpha=0.3)
     ax.legend()
     ax.set_title(title or "output displacement against pressure")
+    with atomic_path(path) as tmp:
+        fig.savefig(str(tmp), dpi=dpi)
+    return path
+
+
+_MATERIAL_COLOURS = {"soft": "#ee8c2c", "stiff": "#2a4fb0"}
+
+
+def plot_materials(path, mesh, *, title: str | None = None, dpi: int = 150, mirror=True):
+    """``materials.png``: the remeshed part's elements coloured by material (soft orange,
+    stiff blue, the colours of the run's ``materials.png``), the part's boundary in black and
+    the ``interface`` between the materials in red; mirrored like :func:`plot_deformed`."""
+    from matplotlib.collections import LineCollection, PolyCollection
+    from matplotlib.patches import Patch
+    from ngsolve import BND
+
+    from .materials import INTERFACE
+    from .plots import mirror_line
+
+    pts, _ = _mesh_arrays(mesh)
+    ids, names = material_ids(mesh)
+    name_of = {int(v[0]): k for k, v in names.items()}
+    polys = [pts[[v.nr - 1 for v in el.vertices]] for el in mesh.ngmesh.Elements2D()]
+    colours = [_MATERIAL_COLOURS.get(name_of[i], "0.6") for i in ids]
+    outline = np.array([[mesh[v].point for v in el.vertices] for el in mesh.Elements(BND)
+                        if el.mat != INTERFACE]).reshape(-1, 2, 2)
+    inner = np.array([[mesh[v].point for v in el.vertices] for el in mesh.Elements(BND)
+                      if el.mat == INTERFACE]).reshape(-1, 2, 2)
+    line = mirror_line(mesh, mirror)
+    if line is not None:
+        polys = polys + [line.reflect(p) for p in polys]
+        colours = colours + colours
+        outline = np.concatenate([outline, line.reflect(outline)])
+        inner = np.concatenate([inner, line.reflect(inner)])
+    allp = np.vstack(polys)
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
+    fig = _figure((7.0, float(np.clip(5.6 * aspect + 1.4, 3.0, 9.0))))
+    ax = fig.add_subplot()
+    ax.add_collection(PolyCollection(polys, facecolors=colours, edgecolors="none"))
+    ax.add_collection(LineCollection(outline, colors="k", linewidths=0.8))
+    if len(inner):
+        ax.add_collection(LineCollection(inner, colors="r", linewidths=0.8))
+    ax.set_aspect("equal")
+    pad = 0.03 * (hi - lo).max()
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    handles = [Patch(color=_MATERIAL_COLOURS.get(n, "0.6"), label=n) for n in names]
+    if len(inner):
+        handles.append(Patch(color="r", label=INTERFACE))
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.14), frameon=False,
+              ncol=len(handles))
+    ax.set_title(title or "the remeshed part's materials")
     with atomic_path(path) as tmp:
         fig.savefig(str(tmp), dpi=dpi)
     return path

@@ -40,6 +40,7 @@ from ..physics.materials import jacobian, neohookean_energy
 from ..physics.mechanics import Mechanics, Supports
 from ..physics.newton import NewtonSettings
 from .boundary import named_points
+from .materials import modulus_cf
 
 KINDS = ("fixed", "follower", "darcy")
 
@@ -212,8 +213,11 @@ class Reanalysis:
     mesh : ngsolve.Mesh
         The remeshed solid (see :func:`~pacto_ng.post.remesh.remesh`).
     kind : {"fixed", "follower", "darcy"}
-    E, nu : float
-        Young's modulus (Pa) and Poisson's ratio of the solid.
+    E : float or dict
+        Young's modulus (Pa) of the solid, or ``{material: E}`` for a mesh of several
+        materials (two-material parts: ``{"soft": E1, "stiff": E2}``, :mod:`.materials`).
+    nu : float
+        Poisson's ratio.
     thickness : float
         Out-of-plane thickness (m).
     supports : Supports
@@ -232,7 +236,7 @@ class Reanalysis:
     newton : NewtonSettings
     """
 
-    def __init__(self, mesh, kind: str, *, E: float, nu: float, thickness: float,
+    def __init__(self, mesh, kind: str, *, E: float | dict, nu: float, thickness: float,
                  supports: Supports, output: Port | tuple[Port, ...], order: int = 2,
                  boundary: str = "pressure", body: Callable | None = None,
                  body_pressure: float = 1.0, newton: NewtonSettings = NewtonSettings()):
@@ -246,7 +250,9 @@ class Reanalysis:
             raise ValueError("the darcy analysis needs a body-force callable "
                              "(see pressure_body_force)")
         self.mesh, self.kind, self.ports = mesh, kind, output_ports(output)
-        self.E, self.nu, self.thickness = float(E), float(nu), float(thickness)
+        self.E = {k: float(v) for k, v in E.items()} if isinstance(E, dict) else float(E)
+        self.nu, self.thickness = float(nu), float(thickness)
+        modulus = modulus_cf(mesh, self.E)
         self.P = Parameter(0.0)
         points = named_points(mesh)
         for port in self.ports:
@@ -266,7 +272,7 @@ class Reanalysis:
             b = body(mesh)
             self.body_pressure = float(body_pressure)
             bodyf = lambda u, coeffs: (self.P / self.body_pressure) * InnerProduct(b, u)
-        energy = declare(lambda G, coeffs: neohookean_energy(G, self.E, self.nu, "strain"),
+        energy = declare(lambda G, coeffs: neohookean_energy(G, modulus, self.nu, "strain"),
                          reads=(), stress_free=True)
         self.mech = Mechanics(mesh, order=order, energy=energy, fields=(), supports=supports,
                               loads=loads, springs=springs, body=bodyf, thickness=thickness,

@@ -33,6 +33,7 @@ import numpy as np
 
 from .boundary import BoundaryLocator, named_points, outer_boundary
 from .domain_part import domain_shape
+from .materials import INTERFACE, assign_elementwise, split_part
 from .threshold import Thresholded
 from .traced import build_geometry
 
@@ -73,6 +74,7 @@ class Remeshed:
     wetted_length: float = 0.0
     p_in: float | None = None
     geometry: str = "traced"
+    materials: str | None = None
 
 
 def _unmeshed_edges(ngm) -> int:
@@ -103,6 +105,21 @@ def _generate(shape, maxh: float, threshold: float):
         what = f"{bad} boundary edges have no triangle (a face of the traced geometry was left empty)"
     raise ValueError(f"Netgen could not mesh the part: {what}; threshold {threshold:g}, maxh "
                      f"{maxh:g}: try another threshold or maxh")
+
+
+def _generate_part(part, maxh: float, threshold: float, stiff, domain, source):
+    """``(ngm, materials)``: the Netgen mesh of the part's shape; with a stiff region (two
+    materials) cut into ``soft`` and ``stiff`` faces, or, should that fail, the one-material
+    mesh with its elements assigned by ρ̄2 (see :mod:`.materials`)."""
+    if stiff is None:
+        return _generate(part, maxh, threshold), None
+    try:
+        return _generate(split_part(part, stiff, domain), maxh, threshold), "body-fitted"
+    except Exception as err:  # OCC's and Netgen's errors: materials element by element
+        what = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+    ngm = _generate(part, maxh, threshold)
+    assign_elementwise(ngm, stiff, source)
+    return ngm, f"element-wise (the interface as a boundary failed: {what})"
 
 
 # ---------------------------------------------------------------------------------------
@@ -145,7 +162,7 @@ def pressure_sampler(pressure, source):
 def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
            p_in: float | None = None, wet_fraction: float = 0.5, wet_boundaries=("inlet",),
            probe: float | None = None, min_spacing: float | None = None,
-           spline_tol: float | None = None, domain=None) -> Remeshed:
+           spline_tol: float | None = None, domain=None, stiff=None) -> Remeshed:
     """Mesh the thresholded solid with Netgen triangles and carry the names over.
 
     Parameters
@@ -179,6 +196,11 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
         void faces) are not part of the domain.  Should that geometry fail (an OCC error, or
         Netgen cannot mesh it) the traced geometry is used and :attr:`Remeshed.geometry` says
         why.
+    stiff : :class:`~.materials.StiffRegion`, optional
+        Two materials: the part is cut into ``soft`` and ``stiff`` faces along an
+        ``interface`` (:func:`~.materials.split_part`); should that fail, the one-material part
+        is meshed and its elements are assigned by ρ̄2 (:func:`~.materials.assign_elementwise`).
+        The ``interface`` edges are never wetted.
 
     Returns
     -------
@@ -213,11 +235,11 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
     seg, names = outer_boundary(src)
     diam = float(np.ptp(seg.reshape(-1, 2), axis=0).max())
     locator = BoundaryLocator(seg, names, 1e-8 * max(diam, th.h))
-    ngm, geometry = None, "traced"
+    ngm, geometry, materials = None, "traced", None
     if domain is not None:
         try:
-            ngm = _generate(domain_shape(th, kept, domain, min_spacing, spline_tol), maxh,
-                            th.threshold)
+            part = domain_shape(th, kept, domain, min_spacing, spline_tol)
+            ngm, materials = _generate_part(part, maxh, th.threshold, stiff, domain, src)
             geometry = "domain"
         except Exception as err:  # OCC's and Netgen's errors: the traced part instead
             what = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
@@ -225,7 +247,7 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
     if ngm is None:
         shape = build_geometry(kept, th.h, min_spacing=min_spacing, spline_tol=spline_tol,
                                locator=locator)
-        ngm = _generate(shape, maxh, th.threshold)
+        ngm, materials = _generate_part(shape, maxh, th.threshold, stiff, None, src)
 
     # -- the wetting rule, segment by segment ----------------------------------------------
     coords = np.asarray(ngm.Coordinates(), dtype=float)
@@ -249,6 +271,7 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
     flip = np.einsum("ij,ij->i", normal, inner - mid) > 0
     normal[flip] *= -1.0  # outward from the solid
     current = [ngm.GetBCName(s.index - 1) for s in segs]
+    internal = np.array([c == INTERFACE for c in current])
     if geometry == "domain":
         # names are the domain's: wetted by name wherever the part runs along a wetted edge
         # (an outer inlet, or a chamber's wall); everywhere else by the pressure beyond it (a
@@ -265,6 +288,7 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
         if sample is not None and p_in is not None and p_in > 0:
             pv = sample(mid + probe * normal)
             wet |= (~on_outer) & (pv >= wet_fraction * p_in)
+    wet &= ~internal  # the interface between two materials lies inside the part
     if wet.any():
         idx = ngm.AddRegion(PRESSURE, dim=1)
         for s, w in zip(segs, wet):
@@ -280,5 +304,5 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
     mesh = ngsolve.Mesh(ngm)
     area = ngsolve.Integrate(ngsolve.CF(1.0), mesh)
     return Remeshed(mesh, float(area), th.area, float(dropped), ports,
-                    float(length[wet].sum()), p_in, geometry)
+                    float(length[wet].sum()), p_in, geometry, materials)
 

@@ -34,7 +34,8 @@ from ..files import atomic_write_text
 from ..physics.loads import Port
 from ..physics.mechanics import Supports
 from ..physics.newton import NewtonSettings
-from .export import plot_deformed, plot_sweeps, write_stl, write_vtu
+from .export import plot_deformed, plot_materials, plot_sweeps, write_stl, write_vtu
+from .materials import interface_length, material_areas
 from .plots import mirror_line
 from .reanalysis import Reanalysis, output_ports, pressure_body_force
 from .remesh import remesh
@@ -61,7 +62,7 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
                  wet_boundaries=("inlet",), kinds=("fixed", "follower"), darcy_pressure=None,
                  darcy_p_in: float | None = None, expected=None, order: int = 2,
                  newton: NewtonSettings = NewtonSettings(), domain=None, exclude=(),
-                 mirror=True) -> PostResult:
+                 mirror=True, stiff=None) -> PostResult:
     """Threshold, remesh, re-analyse and export a design.
 
     Parameters
@@ -74,8 +75,11 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         Created if missing.
     pressures : sequence of float
         The sweep, increasing (Pa).
-    E, nu, thickness : float
-        Neo-Hookean solid and out-of-plane thickness.
+    E : float or dict
+        Young's modulus of the Neo-Hookean solid; ``{"soft": E1, "stiff": E2}`` with
+        ``stiff``.
+    nu, thickness : float
+        Poisson's ratio and out-of-plane thickness.
     output : Port or tuple of Port
         The output port(s): Δ = Σ weight · direction · u at named points, each port with its
         spring (:class:`~.reanalysis.Reanalysis`).
@@ -109,6 +113,10 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
     mirror : bool
         ``deformed.png`` shows the whole part of a case solved on a symmetric half (mirrored
         about ``mesh``'s straight ``symmetry`` boundary).  The files are of the half.
+    stiff : :class:`~.materials.StiffRegion`, optional
+        Two materials: ρ̄2 thresholded on ``mesh``; the part is remeshed with regions ``soft``
+        and ``stiff`` (:func:`~.remesh.remesh`), analysed with ``E[material]`` and drawn in
+        ``materials.png``.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -116,7 +124,8 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
     if th is None or th.threshold != threshold_value:
         th = threshold(mesh, rho, threshold_value, exclude=exclude)
     rm = remesh(th, th.h if maxh is None else maxh, clamp=clamp, pressure=pressure, p_in=p_in,
-                wet_fraction=wet_fraction, wet_boundaries=wet_boundaries, domain=domain)
+                wet_fraction=wet_fraction, wet_boundaries=wet_boundaries, domain=domain,
+                stiff=stiff)
     supports = Supports(clamp=tuple(clamp)) if supports is None else supports
     supports = _present(supports, rm.mesh)
     kw = dict(E=E, nu=nu, thickness=thickness, supports=supports, output=output, order=order,
@@ -149,6 +158,10 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         write_vtu(files["remeshed"], rm.mesh)
         for k in ("deformed", "deformed_png"):
             files.pop(k)
+    if stiff is not None:
+        files["materials_png"] = out / "materials.png"
+        plot_materials(files["materials_png"], rm.mesh, mirror=mirror_line(mesh, mirror) or False,
+                       title=f"the part's materials (ρ̄2 thresholded at {stiff.threshold:g})")
     plot_sweeps(files["analysis_png"], sweeps, expected=expected)
     rows = [row for sw in sweeps.values() for row in sw.table()]
     buf = io.StringIO(newline="")
@@ -163,6 +176,9 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         "wetted_length": rm.wetted_length, "p_in": rm.p_in,
         "ports": {k: {"source": list(map(float, a)), "new": list(map(float, b))}
                   for k, (a, b) in rm.ports.items()},
+        "materials": None if stiff is None else {
+            "threshold2": stiff.threshold, "mode": rm.materials,
+            "areas": material_areas(rm.mesh), "interface_length": interface_length(rm.mesh)},
         "elements": rm.mesh.ne, "geometry": rm.geometry, "order": order, "E": E, "nu": nu, "thickness": thickness,
         "supports": dataclasses.asdict(supports),
         "wet_boundaries": list(wet_boundaries),
@@ -223,6 +239,14 @@ DARCY_DEFINITION = (
     "force -grad p, interpolated onto the remeshed solid")
 
 
+MATERIALS_DEFINITION = (
+    "two materials: the solid is where the nodal rho_bar1 >= threshold (the part); inside it, "
+    "'stiff' (E2) where the nodal rho_bar2 >= threshold2, 'soft' (E1) elsewhere; the remeshed "
+    "part has the regions 'soft' and 'stiff' ('body-fitted': glued along an 'interface' "
+    "boundary; 'element-wise': each element by rho_bar2 at its centroid) and every analysis "
+    "uses each region's own modulus")
+
+
 def num_or_none(v):
     if v is None:
         return None
@@ -237,6 +261,7 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
     rm, th = res.remeshed, res.thresholded
     p = run.params
     kept = th.polygon_area - rm.dropped_area
+    mats = res.summary.get("materials")
     rows = []
     for i, P in enumerate(pressures):
         row = {"pressure": P, "expected": num_or_none(expected[i]["delta"]),
@@ -269,7 +294,9 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
                 "load_path_note": path_note},
         "settings": {"threshold": choice["used"],
                      "threshold_choice": dict(choice), "maxh": maxh,
-                     "order": order, "kinds": list(kinds), "E": p.E1, "nu": p.nu,
+                     "order": order, "kinds": list(kinds),
+                     "E": p.E1 if mats is None else {"soft": p.E1, "stiff": p.E2},
+                     "threshold2": None if mats is None else mats["threshold2"], "nu": p.nu,
                      "thickness": p.thickness, "material": "Neo-Hookean, plane strain",
                      "supports": dataclasses.asdict(supports),
                      "supports_used": res.summary.get("supports"),
@@ -286,14 +313,18 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
                        f"or where the run's final Darcy pressure one source element size "
                        f"outside it is at least 0.5 P_in",
             "gap": "(analysed - expected) / |expected|, at the largest and at the smallest "
-                   "pressure (there: the effect of thresholding and remeshing alone)"},
+                   "pressure (there: the effect of thresholding and remeshing alone)",
+            "materials": None if mats is None else MATERIALS_DEFINITION},
         "areas": {"thresholded": th.area, "polygons": th.polygon_area,
                   "removed_specks": th.removed_area, "dropped_floating": rm.dropped_area,
                   "kept": kept, "remeshed": rm.area,
                   "remeshed_vs_kept": (rm.area - kept) / kept if kept else None,
+                  "materials": None if mats is None else mats["areas"],
                   "darcy_elements_solid": float(np.sum(rho_thr * problem.field.areas)
                                                 if hasattr(problem.field, "areas") else np.nan)},
         "remesh": {"elements": rm.mesh.ne, "geometry": rm.geometry,
+                   "materials": None if mats is None else mats["mode"],
+                   "interface_length": None if mats is None else mats["interface_length"],
                    "wetted_length": rm.wetted_length, "p_in": rm.p_in,
                    "ports": {k: {"source": list(map(float, a)), "new": list(map(float, b))}
                              for k, (a, b) in rm.ports.items()},
@@ -377,6 +408,20 @@ def report_md(d) -> str:
     L.append(f"| polygons (specks removed: {a['removed_specks']:.3g}) | {a['polygons']:.6g} |")
     L.append(f"| kept (floating pieces dropped: {a['dropped_floating']:.3g}) | {a['kept']:.6g} |")
     L.append(f"| remeshed | {a['remeshed']:.6g} ({100 * a['remeshed_vs_kept']:+.2f} % of kept) |")
+    if a.get("materials"):
+        L.append("")
+        L.append(f"**Two materials**: {d['definitions']['materials']}.  ρ̄2 thresholded at "
+                 f"{s['threshold2']:g}; the regions: {rm['materials']}, interface "
+                 f"{rm['interface_length']:.4g} m long.")
+        L.append("")
+        L.append("| material | E (Pa) | area (m²) | share of the part |")
+        L.append("|---|---|---|---|")
+        total = sum(a["materials"].values())
+        for name, area in a["materials"].items():
+            L.append(f"| {name} | {s['E'].get(name, float('nan')):g} | {area:.6g} | "
+                     f"{100 * area / total:.1f} % |")
+        L.append("")
+        L.append("![materials](materials.png)")
     L.append("")
     L.append(f"Wetted (`pressure`) boundary: {rm['wetted_length']:.4g} m.  Rule: "
              f"{d['definitions']['wetting']}.")
@@ -397,7 +442,9 @@ def report_md(d) -> str:
     L.append("")
     L.append("## Re-analysis (Neo-Hookean, plane strain)")
     L.append("")
-    L.append(f"E = {s['E']:g} Pa, ν = {s['nu']:g}, t = {s['thickness']:g} m, displacement order "
+    E_text = (f"{s['E']:g} Pa" if not isinstance(s["E"], dict) else
+              ", ".join(f"{v:g} Pa ({k})" for k, v in s["E"].items()))
+    L.append(f"E = {E_text}, ν = {s['nu']:g}, t = {s['thickness']:g} m, displacement order "
              f"{s['order']}.")
     L.append("")
     L.append(f"* **expected** — {d['definitions']['expected']};")
@@ -449,6 +496,8 @@ def report_md(d) -> str:
     L.append("")
     L.append("`analysis.json` (every number above), `analysis.csv`, `post.json`, `design.stl` "
              "(the part, extruded by t), `remeshed.vtu` / `deformed.vtu` (u, p, J, stress, "
-             "von_mises; reference / deformed configuration), `analysis.png`, `deformed.png`.")
+             "von_mises" + ("; material, E" if a.get("materials") else "") +
+             "; reference / deformed configuration), `analysis.png`, `deformed.png`" +
+             (", `materials.png`." if a.get("materials") else "."))
     L.append("")
     return "\n".join(L)

@@ -126,10 +126,23 @@ def copy_gridfunction(gf):
     return out
 
 
-def _design_density(problem) -> np.ndarray:
+def design_density(problem) -> np.ndarray:
     """ρ̄ of the design; for two materials the total solid ρ̄1."""
     vals = problem.values
     return np.asarray(vals["rho_bar"] if "rho_bar" in vals else vals["rho_bar1"], dtype=float)
+
+
+def materials_of(problem, setup, params, threshold2: float, exclude=()):
+    """``(stiff, E)`` of a run's part: one material, ``(None, E1)``; two materials, the stiff
+    region of ρ̄2 thresholded at ``threshold2`` (:func:`~pacto_ng.post.materials.stiff_region`)
+    and ``{"soft": E1, "stiff": E2}``."""
+    from .materials import SOFT, STIFF, stiff_region
+
+    if setup.materials == 1:
+        return None, float(params.E1)
+    rho2 = np.asarray(problem.values["rho_bar2"], dtype=float)
+    return (stiff_region(problem.mesh, rho2, threshold2, exclude=exclude),
+            {SOFT: float(params.E1), STIFF: float(params.E2)})
 
 
 def check_part_mesh(run: Run, problem, rho: np.ndarray, maxh: float, *,
@@ -148,8 +161,9 @@ def check_part_mesh(run: Run, problem, rho: np.ndarray, maxh: float, *,
                     longer="the run's setting")
 
 
-def part_of_run(run: Run, threshold_value: float, maxh: float | None):
-    """Threshold and remesh the final design of a run (the wetting rule for pressure cases).
+def part_of_run(run: Run, threshold_value: float, maxh: float | None, threshold2: float = 0.5):
+    """Threshold and remesh the final design of a run (the wetting rule for pressure cases;
+    two materials: the regions ``soft`` and ``stiff``, ρ̄2 thresholded at ``threshold2``).
     Returns ``(Thresholded, Remeshed, problem)``; InputError when there is no part."""
     from .remesh import remesh
     from .threshold import threshold
@@ -157,7 +171,7 @@ def part_of_run(run: Run, threshold_value: float, maxh: float | None):
     setup = run.case.make_setup(run.params)
     with compute():
         problem = rebuild(run)
-    rho = _design_density(problem)
+    rho = design_density(problem)
     shape, exclude = domain_of(problem, setup)
     kw = {}
     if setup.pressure is not None and problem.pressure_block is not None:
@@ -167,7 +181,8 @@ def part_of_run(run: Run, threshold_value: float, maxh: float | None):
     check_part_mesh(run, problem, rho, h)
     try:
         th = threshold(problem.mesh, rho, threshold_value, exclude=exclude)
-        rm = remesh(th, h, clamp=setup.supports.clamp, domain=shape, **kw)
+        stiff, _ = materials_of(problem, setup, run.params, threshold2, exclude)
+        rm = remesh(th, h, clamp=setup.supports.clamp, domain=shape, stiff=stiff, **kw)
     except ValueError as err:
         raise InputError(f"{err}") from None
     return th, rm, problem
