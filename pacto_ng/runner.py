@@ -260,22 +260,23 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     problem.mech.expect_many_designs()
     if problem.pressure_block is not None:
         problem.pressure_block.expect_many_designs()
-    # after the problem is built: a run refused while building it leaves the folder as it was
-    info = {"case": case.name, "case_file": case.file, "params": params.to_dict(),
-            "model_choice": model_choice}
-    _write_params(path / "params.json", info)
     ckpt = path / "checkpoint.npz"
-    if resume and ckpt.exists():
+    resumed = resume and ckpt.exists()
+    if resumed:
         state = load_checkpoint(ckpt, problem)
         progress.saved = state.k
-        if not quiet:
-            print(f"resuming {case.name} at iteration {state.k}")
     else:
-        if resume and not quiet:
-            print(f"resuming {case.name}: no checkpoint yet, starting at iteration 0")
         ref = problem.setup.objective_ref
         state = LoopState(k=0, x=initial_design(problem), opt_state=None,
                           scale=10.0 / ref if ref > 0 else None)
+    # once the problem is built and the checkpoint read: a run refused while building it, or a
+    # resume refused for its checkpoint, leaves the folder as it was
+    info = {"case": case.name, "case_file": case.file, "params": params.to_dict(),
+            "model_choice": model_choice}
+    _write_params(path / "params.json", info)
+    if resume and not quiet:
+        print(f"resuming {case.name} at iteration {state.k}" if resumed else
+              f"resuming {case.name}: no checkpoint yet, starting at iteration 0")
     if not quiet:
         print(f"{case.name}: model {params.model}, {problem.mesh.ne} elements, order {params.order}, "
               f"{problem.mech.fes.ndof} displacement dofs, {problem.field.n} design variables")

@@ -141,7 +141,12 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
     x = state.x.copy()
 
     def values_only(xt):
-        F0, f = evaluate(xt, gradients=False)
+        # GCMMA's inner loop: a trial design Newton cannot analyse ends the loop (None), and
+        # the step of the last approximation is taken, as MMA would
+        try:
+            F0, f = evaluate(xt, gradients=False)
+        except NewtonFailure:
+            return None
         return np.asarray(F0) * state.scale, f
 
     while state.k < iterations:

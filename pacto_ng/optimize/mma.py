@@ -114,7 +114,10 @@ class Optimizer:
                              np.array([[f0]]), df0dx, fval, dfdx, *args)
         xmma, f0app, fapp = out[0], out[9], out[10]
         for _ in range(15):
-            f0new, fnew = evaluate(xmma.ravel())
+            trial = evaluate(xmma.ravel())
+            if trial is None:  # the trial design could not be analysed: keep this step
+                break
+            f0new, fnew = trial
             self.inner_evaluations += 1
             f0new = np.array([[f0new]])
             fnew = np.asarray(fnew, dtype=float).reshape(self.m, 1)

@@ -334,7 +334,9 @@ def overwrite_scenarios() -> list[Scenario]:
                  names=("mine.py",), prepare=_user_file, quick=True),
         Scenario("new-in-missing-folder", ["new", "{work}/no/such/dir/case.py"], exits=(2,),
                  names=("case.py", "no/such/dir"), quick=True),
+        # the base run is 3 iterations old: grey, no solid at 0.5; 0.2 keeps a part
         Scenario("export-into-missing-folder", ["export", "{work}/run", "--format", "stl",
+                                                "--threshold", "0.2",
                                                 "--out", "{work}/no/such/dir/part.stl"],
                  exits=(0, 2), names=("part.stl", "no/such/dir"), prepare=_existing_run),
     ]
