@@ -379,6 +379,7 @@ class Problem:
     pressure_block: object = None
     n_design_fields: int = 1
     model_choice: dict | None = None  # what --model auto decided, and why
+    load_ramp_choice: dict | None = None  # what load_ramp=-1 decided, and why
     #: the netgen.occ shape the mesh was made from (None: a mesh file or structured quads)
     shape: object = None
     #: a worst-case objective (:mod:`pacto_ng.robust`): the names of the terms whose maximum
@@ -485,7 +486,7 @@ def build_problem(case: Case, params: Parameters) -> Problem:
         raise InputError(f"case '{case.name}' is an analysis, not an optimisation")
     params = case.resolve(params)
     if params.model == "auto":
-        raise InputError("model: 'auto' is chosen by 'pacto run' (pacto_ng.auto.choose_model), "
+        raise InputError("model: 'auto' is chosen by 'pacto run' (pacto_ng.auto.choose), "
                          "not by build_problem")
     setup = case.make_setup(params)
     if params.volfrac2 > 0 and setup.materials == 1:

@@ -71,7 +71,8 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
                  "displacement_dofs": problem.mech.fes.ndof,
                  "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely},
         "element_order": p.order,
-        "model_choice": getattr(problem, "model_choice", None),
+        "model_choice": problem.model_choice,
+        "load_ramp_choice": problem.load_ramp_choice,
         "darcy_solve": problem.pressure_block is not None,
         "symmetric_half_domain": any(n == "symmetry" for n in problem.mesh.GetBoundaries()),
         # the mechanics adjoints of this process: solved, and skipped because the adjoint was

@@ -26,6 +26,7 @@ from .case import Case, Problem, build_problem, read_run_params
 from .files import WriteError, atomic_path, atomic_write_text, claim_folder
 from .optimize.driver import LoopResult, LoopState, optimize
 from .params import InputError, Parameters
+from .physics.energy import WHEN_NEWTON_FAILS
 from .physics.equilibrium import NewtonFailure, WarmState
 from .outputs import write_outputs
 
@@ -216,7 +217,7 @@ class _Progress:
 
 def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
               resume: bool = False, overwrite: bool = False,
-              model_choice: dict | None = None) -> Finished:
+              model_choice: dict | None = None, ramp_choice: dict | None = None) -> Finished:
     path = prepare_output(out)
     if overwrite and params.init_design and Path(params.init_design).resolve() == path.resolve():
         raise InputError("run --overwrite: init_design is the --out folder, whose checkpoint it "
@@ -227,7 +228,7 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         progress.saved = _checkpoint_k(path / "checkpoint.npz")
     try:
         return _optimise(case, params, path, progress, quiet=quiet, resume=resume,
-                         model_choice=model_choice)
+                         model_choice=model_choice, ramp_choice=ramp_choice)
     except KeyboardInterrupt as err:  # SIGINT, and SIGTERM/SIGHUP through pacto's handlers
         err.pacto_note = progress.note()
         raise
@@ -239,22 +240,25 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
 
 
 def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *, quiet: bool,
-              resume: bool, model_choice: dict | None) -> Finished:
+              resume: bool, model_choice: dict | None, ramp_choice: dict | None) -> Finished:
     t_start = time.perf_counter()
     if resume and (path / "summary.json").exists():  # a finished run continued: add its time
         try:
             t_start -= float(json.loads((path / "summary.json").read_text())["wall_time_s"])
         except (ValueError, KeyError, TypeError):
             pass
-    if params.model == "auto":
-        from .auto import choose_model
+    if params.model == "auto" or params.load_ramp < 0:
+        from .auto import choose
 
-        params, model_choice = choose_model(case, params)
-        if not quiet:
+        params, model_choice, ramp_choice = choose(case, params)
+        if not quiet and model_choice is not None:
             print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
+        if not quiet and ramp_choice is not None and ramp_choice["chosen"] > 0:
+            print(f"load ramp -> {ramp_choice['chosen']} iterations: {ramp_choice['reason']}")
     params = case.resolve(params)  # order 0: the case's order for the (chosen) model
     problem = build_problem(case, params)
     problem.model_choice = model_choice
+    problem.load_ramp_choice = ramp_choice
     # an optimisation: every design assembled one way, from the process's first on (a resumed
     # run would otherwise take the single-analysis way for its first design)
     problem.mech.expect_many_designs()
@@ -272,7 +276,7 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     # once the problem is built and the checkpoint read: a run refused while building it, or a
     # resume refused for its checkpoint, leaves the folder as it was
     info = {"case": case.name, "case_file": case.file, "params": params.to_dict(),
-            "model_choice": model_choice}
+            "model_choice": model_choice, "load_ramp_choice": ramp_choice}
     _write_params(path / "params.json", info)
     if resume and not quiet:
         print(f"resuming {case.name} at iteration {state.k}" if resumed else
@@ -327,6 +331,8 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
             result.message += (f"; iteration {result.best['iteration']} had a lower objective "
                                f"({result.best['objective']:.6g}, feasible, at the final "
                                "schedule) than the reported design")
+    if failed and params.model in WHEN_NEWTON_FAILS:
+        result.message += "; " + WHEN_NEWTON_FAILS[params.model]
     wall = time.perf_counter() - t_start
     summary = write_outputs(path, problem, final_x, state.history, result, wall)
     if not quiet or failed:
@@ -359,4 +365,5 @@ def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int |
 
     with compute():
         return _run_case(case, params, path, quiet=quiet, resume=True,
-                         model_choice=info.get("model_choice")).exit_code
+                         model_choice=info.get("model_choice"),
+                         ramp_choice=info.get("load_ramp_choice")).exit_code

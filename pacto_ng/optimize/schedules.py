@@ -48,6 +48,13 @@ class Schedule:
         steps = math.ceil((self.penal - self.penal_start) / self.penal_step - 1e-9)
         return steps * self.penal_every
 
+    def final_at(self) -> int:
+        """First iteration at which the penalty and β have their final values."""
+        k = self.penal_done()
+        if self.beta_max is not None and self.beta_start > 0 and self.beta_max > self.beta_start:
+            k += self.beta_every * math.ceil(math.log2(self.beta_max / self.beta_start) - 1e-9)
+        return k
+
     def penalty(self, k: int) -> float:
         if self.penal_start is None:
             return self.penal
@@ -96,8 +103,10 @@ class ScheduleSettings(Settings):
     beta_max: float = setting(0.0, "", "final β of the doubling schedule (0: constant β)",
                               range="[0, 1e4]")
     beta_every: int = setting(10, "", "iterations between β doublings", range="[1, 100000]")
-    load_ramp: int = setting(0, "", "iterations over which the load rises to full (0: none)",
-                             range="[0, 100000]")
+    load_ramp: int = setting(-1, "", "iterations over which the load rises to full (0: none; "
+                             "-1: chosen from the load, one iteration per 1 % of linear strain "
+                             "the load causes, ending no later than the penalty and β "
+                             "continuation)", range="[-1, 100000]")
 
     def check(self):
         if self.penal_start > self.penal:
@@ -105,9 +114,11 @@ class ScheduleSettings(Settings):
                              f"{self.penal:g})")
 
     def schedule(self) -> Schedule:
-        """The schedule these settings describe."""
+        """The schedule these settings describe.  ``load_ramp=-1`` is resolved by ``pacto
+        run`` (:func:`pacto_ng.auto.choose`); unresolved (a single analysis), it means the
+        full load."""
         return Schedule(penal=self.penal,
                         penal_start=self.penal_start if self.penal_start > 0 else None,
                         penal_step=self.penal_step, penal_every=self.penal_every,
                         beta_start=self.beta, beta_max=self.beta_max if self.beta_max > 0 else None,
-                        beta_every=self.beta_every, load_ramp=self.load_ramp)
+                        beta_every=self.beta_every, load_ramp=max(self.load_ramp, 0))

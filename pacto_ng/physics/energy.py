@@ -147,6 +147,15 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
     return energy, guard, mat.linear
 
 
+#: what carries a load that a model's Newton cannot reach, said in the last line of a run that
+#: stopped below its full load (measured and tested: docs/benchmarks.md "Extreme pressures at
+#: defaults", tests/cases/test_extreme_defaults.py)
+WHEN_NEWTON_FAILS = {
+    "neohookean": "--model wang carries such loads (Neo-Hookean where there is material, "
+                  "linear in the void, whose crushed elements stop plain Neo-Hookean)",
+}
+
+
 @dataclass(frozen=True)
 class MaterialSettings(Settings):
     """The mechanics model and the material: moduli, Poisson's ratio, plane model, thickness,
