@@ -148,8 +148,7 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
 
 
 #: what carries a load that a model's Newton cannot reach, said in the last line of a run that
-#: stopped below its full load (measured and tested: docs/benchmarks.md "Extreme pressures at
-#: defaults", tests/cases/test_extreme_defaults.py)
+#: stopped below its full load (measured: docs/benchmarks.md "Extreme pressures at defaults")
 WHEN_NEWTON_FAILS = {
     "neohookean": "--model wang carries such loads (Neo-Hookean where there is material, "
                   "linear in the void, whose crushed elements stop plain Neo-Hookean)",
