@@ -23,7 +23,7 @@ class Options(Settings):
 
     load_width: float = setting(0.0, "m", "height of the input the force is spread over (0: 2 "
                                 "element sizes, the case's definition)", range="[0, 7.5e-5]")
-    k_in: float = setting(4000.0, "N/m", "input spring stiffness", range="[0, inf)")
+    k_in: float = setting(4000.0, "N/m", "input spring stiffness", range="[0, 1e30]")
 
     def check(self):
         if 0 < self.load_width < 1e-12:
