@@ -14,7 +14,7 @@ from pacto_ng.optimize.schedules import Schedule
 def _choice(tmp_path, load, model="auto"):
     out = tmp_path / f"{model}-{load}"
     assert main(["run", "cantilever", "--model", model, "--load", str(load), "--maxh", "0.03",
-                 "--iterations", "1", "--out", str(out), "--quiet"]) == 0
+                 "--iterations", "1", "--set", "load_ramp=-1", "--out", str(out), "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
     return s
 
