@@ -76,19 +76,23 @@ RAMP_STRAIN = STRAIN_THRESHOLD
 def choose_ramp(strain: float, schedule, iterations: int) -> tuple[int, str]:
     """``(n, reason)``: the load ramp for a nonlinear run whose full load strains the material
     by ``strain`` in a linear analysis: ``ceil(strain / RAMP_STRAIN)`` iterations, none below
-    ``RAMP_STRAIN``, and ending no later than the penalty and β continuation (so that the ramp
-    never delays the convergence test, which waits for that continuation anyway), or than
-    half the iterations where there is none."""
+    ``RAMP_STRAIN``, ending no later than the penalty and β continuation (so that the ramp
+    never delays the convergence test, which waits for that continuation anyway), or than half
+    the iterations where there is none, and before the run's last iteration (a short run ends
+    at its full load)."""
     want = int(np.ceil(strain / RAMP_STRAIN - 1e-12))
     if want <= 1:
         return 0, (f"material strain of the first linear analysis {strain:.3g} < {RAMP_STRAIN:g}: "
                    f"full load from the first iteration")
     end = schedule.final_at() or iterations // 2
-    n = min(want, end)
+    n = min(want, end, iterations - 1)
     why = (f"material strain of the first linear analysis {strain:.3g}, {RAMP_STRAIN:g} per "
            f"iteration: {want} iterations")
+    if n <= 1:
+        return 0, why + f", but a run of {iterations} iteration(s) has no room for a ramp"
     if n < want:
-        why += (", cut to where the penalty and beta continuation ends" if schedule.final_at()
+        why += (", cut to before the last iteration" if n == iterations - 1 else
+                ", cut to where the penalty and beta continuation ends" if schedule.final_at()
                 else ", cut to half the iterations")
     return n, why
 

@@ -193,15 +193,22 @@ def check_same_parameters(folder: str | os.PathLike, params: Parameters, status:
     """
     path = Path(folder)
     if status == "done":
-        stored = (_read_json(path / "summary.json") or {}).get("parameters")
+        record = _read_json(path / "summary.json") or {}
+        stored = record.get("parameters")
     elif status == "resume":
-        stored = (_read_json(path / "params.json") or {}).get("params")
+        record = _read_json(path / "params.json") or {}
+        stored = record.get("params")
     else:
         return
+    stored = dict(stored) if isinstance(stored, dict) else {}
+    # the run stores what ``--model auto`` and ``load_ramp=-1`` resolved to; compare what it
+    # was asked for
+    for name, choice in (("model", "model_choice"), ("load_ramp", "load_ramp_choice")):
+        if isinstance(record.get(choice), dict) and "requested" in record[choice]:
+            stored[name] = record[choice]["requested"]
     want = _as_json(params)
     if stored == want:
         return
-    stored = stored if isinstance(stored, dict) else {}
     diff = next((k for k in want if stored.get(k) != want[k]), "parameters")
     raise InputError(f"sweep: '{path}' holds a run with {diff} = {stored.get(diff)!r}, this sweep "
                      f"has {diff} = {want.get(diff)!r}: use another --out or remove that folder")

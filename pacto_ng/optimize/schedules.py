@@ -103,7 +103,7 @@ class ScheduleSettings(Settings):
     beta_max: float = setting(0.0, "", "final β of the doubling schedule (0: constant β)",
                               range="[0, 1e4]")
     beta_every: int = setting(10, "", "iterations between β doublings", range="[1, 100000]")
-    load_ramp: int = setting(0, "", "iterations over which the load rises to full (0: none; "
+    load_ramp: int = setting(-1, "", "iterations over which the load rises to full (0: none; "
                              "-1: chosen from the load, one iteration per 1 % of linear strain "
                              "the load causes, ending no later than the penalty and β "
                              "continuation)", range="[-1, 100000]")

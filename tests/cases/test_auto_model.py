@@ -11,17 +11,17 @@ from pacto_ng.cli import main
 from pacto_ng.optimize.schedules import Schedule
 
 
-def _choice(tmp_path, load, model="auto"):
+def _choice(tmp_path, load, model="auto", iterations=1):
     out = tmp_path / f"{model}-{load}"
     assert main(["run", "cantilever", "--model", model, "--load", str(load), "--maxh", "0.03",
-                 "--iterations", "1", "--set", "load_ramp=-1", "--out", str(out), "--quiet"]) == 0
+                 "--iterations", str(iterations), "--out", str(out), "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
     return s
 
 
 def test_auto_picks_by_strain(tmp_path):
     small = _choice(tmp_path, 1e3)
-    big = _choice(tmp_path, 1e4)
+    big = _choice(tmp_path, 1e4, iterations=24)  # room for its ramp
     for s in (small, big):
         assert s["model"] == s["model_choice"]["chosen"]
     small, big_ramp, big = small["model_choice"], big["load_ramp_choice"], big["model_choice"]
@@ -63,6 +63,8 @@ def test_choose_ramp():
     assert choose_ramp(0.3, pa, 160)[0] == 30
     assert choose_ramp(4.2, pa, 160)[0] == 100  # ends with the continuation
     assert choose_ramp(4.2, Schedule(), 160)[0] == 80  # none: half the iterations
+    assert choose_ramp(4.2, pa, 40)[0] == 39  # a short run ends at its full load
+    assert choose_ramp(4.2, pa, 2)[0] == 0 and choose_ramp(4.2, pa, 1)[0] == 0  # no room
 
 
 @pytest.mark.parametrize("rho_right, expected", [(1e-3, "left"), (0.1, "right")])

@@ -164,7 +164,8 @@ def test_other_models_at_extreme_void_work_or_stop_cleanly(model, tmp_path):
 
 @pytest.mark.parametrize("iterations, code", [(3, 0), (4, 1)])
 def test_adaptive_load_continuation_goes_on_past_a_newton_failure(iterations, code, tmp_path, capsys):
-    """1e9 Pa on a coarse Neo-Hookean pa-inverter: without ``load_adapt`` the first analysis
+    """1e9 Pa on a coarse Neo-Hookean pa-inverter, at the full load from the first iteration
+    (``load_ramp=0``, not the ramp chosen from the load): without ``load_adapt`` the first analysis
     fails and the run stops at iteration 0 (measured; the far-past-the-limit test above checks
     such a stop); with ``load_adapt=1.5`` every iteration runs at the load factor Newton reached
     (history.csv: all below 1) and the run finishes its iterations.  The final design is then
@@ -174,7 +175,8 @@ def test_adaptive_load_continuation_goes_on_past_a_newton_failure(iterations, co
     out = tmp_path / "run"
     args = ["run", "pa-inverter", "--maxh", "0.02", "--model", "neohookean",
             "--iterations", str(iterations), "--set", "load=1e9", "--set", "newton_max_iter=8",
-            "--set", "newton_min_increment=0.0625", "--out", str(out), "--quiet"]
+            "--set", "newton_min_increment=0.0625", "--set", "load_ramp=0", "--out", str(out),
+            "--quiet"]
     proc = run_cli(*args, "--set", "load_adapt=1.5", capsys=capsys)
     assert proc.returncode == code, (proc.stdout[-1000:], proc.stderr[-2000:])
     summ = check_run(proc, out, iterations)
