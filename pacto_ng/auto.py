@@ -97,25 +97,26 @@ def choose_ramp(strain: float, schedule, iterations: int) -> tuple[int, str]:
     return n, why
 
 
-def choose(case, params):
-    """Resolve ``model=auto`` and ``load_ramp=-1`` from one linear analysis of the initial
-    design at the full load.  Returns ``(params, model_choice, ramp_choice)``; a record is None
-    where nothing was chosen."""
+def first_linear_strain(case, params) -> tuple[float, float]:
+    """:func:`material_strain` of one linear analysis of the initial design at the full load."""
     from .case import build_problem
     from .runner import initial_design
 
-    auto_model, auto_ramp = params.model == "auto", params.load_ramp < 0
-    if not auto_model and (not auto_ramp or params.model == "linear"):
-        return (params.replace(load_ramp=0) if auto_ramp else params), None, (
-            {"requested": -1, "chosen": 0, "reason": "linear model: the load only scales the "
-             "state, no ramp needed"} if auto_ramp else None)
     lin = params.replace(model="linear", load_ramp=0)
     problem = build_problem(case, lin)
     problem.apply_schedule(*lin.schedule.schedule().values(0))
     problem.evaluate(initial_design(problem), gradients=False)
-    strain, largest = material_strain(problem.mech)
+    return material_strain(problem.mech)
+
+
+def choose(case, params):
+    """Resolve ``model=auto`` and ``load_ramp=-1`` from one linear analysis of the initial
+    design at the full load (none where only a linear run's ramp is to be chosen).  Returns
+    ``(params, model_choice, ramp_choice)``; a record is None where nothing was chosen."""
     model_choice = ramp_choice = None
-    if auto_model:
+    if params.model == "auto" or (params.load_ramp < 0 and params.model != "linear"):
+        strain, largest = first_linear_strain(case, params)
+    if params.model == "auto":
         chosen = "linear" if strain < STRAIN_THRESHOLD else "wang"
         reason = (f"Green-Lagrange strain of the first linear analysis (99th percentile of the "
                   f"material) is {strain:.3g} {'<' if chosen == 'linear' else '>='} "
@@ -127,11 +128,12 @@ def choose(case, params):
                         "strain_max_solid": largest, "threshold": STRAIN_THRESHOLD,
                         "reason": reason}
         params = params.replace(model=chosen)
-    if auto_ramp:
+    if params.load_ramp < 0:
         if params.model == "linear":
-            n, why = 0, "linear model: the load only scales the state, no ramp needed"
+            ramp_choice = {"requested": -1, "chosen": 0, "reason": "linear model: the load "
+                           "only scales the state, no ramp needed"}
         else:
             n, why = choose_ramp(strain, params.schedule.schedule(), params.iterations)
-        ramp_choice = {"requested": -1, "chosen": n, "strain_p99": strain, "reason": why}
-        params = params.replace(load_ramp=n)
+            ramp_choice = {"requested": -1, "chosen": n, "strain_p99": strain, "reason": why}
+        params = params.replace(load_ramp=ramp_choice["chosen"])
     return params, model_choice, ramp_choice
