@@ -196,7 +196,8 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         if state.scale is None:  # fix the objective normalisation once (kept on resume)
             state.scale = 10.0 / max(abs(f0), 1e-300)
         # ---- design update (MMA / GCMMA with move limit) ------------------------------------
-        if method == "mma-gcmma" and schedule.settled(k) and load >= 1.0:
+        if (method == "mma-gcmma" and opt.method != "gcmma" and schedule.settled(k)
+                and load >= 1.0):  # the switch once (a resumed run scans its history again)
             final = [r["objective"] for r in state.history
                      if schedule.settled(r["iteration"]) and r["load"] >= 1.0] + [f0]
             if zigzag_at(final) is not None:
