@@ -244,6 +244,20 @@ def _figure(figsize):
     return fig
 
 
+def _framed(lo, hi):
+    """A figure and axes sized to the box ``[lo, hi]`` (m), equal aspect, a 3 % margin."""
+    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
+    fig = _figure((7.0, float(np.clip(5.6 * aspect + 1.4, 3.0, 9.0))))
+    ax = fig.add_subplot()
+    ax.set_aspect("equal")
+    pad = 0.03 * (hi - lo).max()
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    return fig, ax
+
+
 def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mirror=True):
     """``deformed.png``: the deformed solid coloured by |u| over the undeformed outline.
 
@@ -279,18 +293,10 @@ def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mi
         def_pts = np.vstack([def_pts, line.reflect(def_pts)])
     lo = np.minimum(pts.min(axis=0), def_pts.min(axis=0))
     hi = np.maximum(pts.max(axis=0), def_pts.max(axis=0))
-    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
-    fig = _figure((7.0, float(np.clip(5.6 * aspect + 1.4, 3.0, 9.0))))
-    ax = fig.add_subplot()
+    fig, ax = _framed(lo, hi)
     tc = ax.tripcolor(Triangulation(def_pts[:, 0], def_pts[:, 1], tri), mag, shading="gouraud",
                       cmap="viridis")
     ax.add_collection(LineCollection(segs, colors="k", linewidths=0.8, label="undeformed"))
-    ax.set_aspect("equal")
-    pad = 0.03 * (hi - lo).max()
-    ax.set_xlim(lo[0] - pad, hi[0] + pad)
-    ax.set_ylim(lo[1] - pad, hi[1] + pad)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), frameon=False)
     fig.colorbar(tc, ax=ax, label="|u| (m), deformed solid", shrink=0.9)
     ax.set_title(title or "deformed solid (true scale) over the undeformed outline")
@@ -375,19 +381,11 @@ def plot_materials(path, mesh, *, title: str | None = None, dpi: int = 150, mirr
         inner = np.concatenate([inner, line.reflect(inner)])
     allp = np.vstack(polys)
     lo, hi = allp.min(axis=0), allp.max(axis=0)
-    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
-    fig = _figure((7.0, float(np.clip(5.6 * aspect + 1.4, 3.0, 9.0))))
-    ax = fig.add_subplot()
+    fig, ax = _framed(lo, hi)
     ax.add_collection(PolyCollection(polys, facecolors=colours, edgecolors="none"))
     ax.add_collection(LineCollection(outline, colors="k", linewidths=0.8))
     if len(inner):
         ax.add_collection(LineCollection(inner, colors="r", linewidths=0.8))
-    ax.set_aspect("equal")
-    pad = 0.03 * (hi - lo).max()
-    ax.set_xlim(lo[0] - pad, hi[0] + pad)
-    ax.set_ylim(lo[1] - pad, hi[1] + pad)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
     handles = [Patch(color=_MATERIAL_COLOURS.get(n, "0.6"), label=n) for n in names]
     if len(inner):
         handles.append(Patch(color="r", label=INTERFACE))
