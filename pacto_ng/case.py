@@ -455,6 +455,15 @@ class Problem:
         vol = next(b for b in self.chain.blocks if b.output == "volume")
         return vol.fraction(self.values[vol.inputs[0]])
 
+    def greyness(self) -> float:
+        """Sigmund's (2007) measure of non-discreteness of the reported design: 4 ρ̄ (1 - ρ̄)
+        averaged by area over the design domain (ρ̄1, the material-or-void density, with two
+        materials): 0 for a solid-void design, 1 where every element sits at 0.5."""
+        vol = next(b for b in self.chain.blocks if b.output == "volume")
+        rho = np.clip(np.asarray(self.values.get("rho_bar", self.values.get("rho_bar1"))),
+                      0.0, 1.0)
+        return float(vol.w @ (4.0 * rho * (1.0 - rho)) / vol.total)
+
 
 def domain_size(params: Parameters, width: float, height: float) -> tuple[float, float]:
     """``(width, height)``, or ``(nelx, nely)`` with ``unit_elements`` (1 x 1 elements, the

@@ -52,6 +52,7 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "objective_name": problem.objective,
         "objective_history": [h["objective"] for h in history],
         "volume_fraction": problem.volume_fraction(),
+        "greyness": problem.greyness(),
         "output_displacement": val("delta") if "delta" in vals else output_displacement(problem),
         "output_displacement_at": output_displacement_at(problem),
         "compliance": val("compliance") if "compliance" in vals else compliance(problem),

@@ -92,3 +92,23 @@ def test_a_follower_load_has_no_compliance(tmp_path):
     assert s["compliance"] is None
     assert s["strain_energy"] > 0 and np.isfinite(s["output_displacement"])
     assert s["output_displacement_at"]["kind"] == "port"
+
+
+def test_greyness_is_the_area_mean_of_4_rho_1_minus_rho_over_the_design_domain(one_thread):
+    """Sigmund's measure of non-discreteness: 1 for ρ̄ = 0.5 everywhere (the mbb beam, no
+    passive elements: x = 0.5 stays 0.5 through the filter), and on a random pa-inverter
+    design the mean of 4 ρ̄ (1 - ρ̄) over the design elements (all of one area on a structured
+    mesh; the passive block not counted)."""
+    from pacto_ng.case import build_problem, get_case
+
+    case = get_case("mbb")
+    problem = build_problem(case, case.parameters({"nelx": 12, "nely": 4}))
+    problem.evaluate(np.full(problem.field.n, 0.5), gradients=False)
+    assert problem.greyness() == pytest.approx(1.0, abs=1e-12)
+    case = get_case("pa-inverter")
+    problem = build_problem(case, case.parameters({"nelx": 12, "nely": 8}))
+    x = np.random.default_rng(3).uniform(0.0, 1.0, problem.field.n)
+    problem.evaluate(x, gradients=False)
+    rho = np.asarray(problem.values["rho_bar"])[problem.field.design]
+    assert rho.size < problem.mesh.ne
+    assert problem.greyness() == pytest.approx(float(np.mean(4 * rho * (1 - rho))), rel=1e-12)
