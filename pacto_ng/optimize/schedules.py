@@ -106,7 +106,8 @@ class ScheduleSettings(Settings):
     load_ramp: int = setting(-1, "", "iterations over which the load rises to full (0: none; "
                              "-1: chosen from the load, one iteration per 1 % of linear strain "
                              "the load causes, ending no later than the penalty and β "
-                             "continuation)", range="[-1, 100000]")
+                             "continuation and before the last iteration; none for the "
+                             "linear model)", range="[-1, 100000]")
 
     def check(self):
         if self.penal_start > self.penal:
