@@ -7,11 +7,11 @@ and the soft one where it must bend.
 
 Layout, supports, pressure and output as pa-gripper (half 0.2 x 0.1 m, Δ = -u_y at the jaw pad
 corner, k_ss = 1e4 N/m).  E1 = 3e8 Pa (soft), E2 = 3e9 Pa (stiff), E0 = 1e-6 E1; ν = 0.4,
-plane strain, t = 1e-3 m.  Volume constraints: the total solid ρ̄1 <= 0.2 (CASES.md) and, by
-default, the stiff-material field ρ̄2 <= 0.1 of the design domain (``volfrac2``).  The thesis
-lists only the first; without the second the optimum is stiff material everywhere but a few
-hinge elements (measured at the thesis mesh: soft material 0.1 % of the domain, stiff 19.7 %),
-so "two materials" would show nothing.  ``--set volfrac2=0`` gives the thesis formulation.
+plane strain, t = 1e-3 m.  Volume constraints: the total solid ρ̄1 <= 0.2 (docs/theory.md §6)
+and, by default, the stiff-material field ρ̄2 <= 0.1 of the design domain (``volfrac2``).  The
+thesis lists only the first; without the second the optimum is stiff material everywhere but a
+few hinge elements (measured at the thesis mesh: soft material 0.1 % of the domain, stiff
+19.7 %), so "two materials" would show nothing.  ``--set volfrac2=0`` gives the thesis formulation.
 The Darcy pressure sees the total solid ρ̄1.  Passive solids (clamp block, jaw pad) are of the
 stiff material.  Load 5e5 Pa by default (the thesis limit of its Neo-Hookean model).
 Triangles of 0.002 m: the thesis mesh (0.004 m, ``--maxh 0.004``) is 1.9 % from the finest

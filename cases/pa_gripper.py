@@ -1,8 +1,8 @@
 """Pressure-actuated compliant gripper (thesis §6.2; Kumar, Frouws & Langelaar 2020).
 
 What it shows: a pressure-driven gripper whose jaw closes on an object.  The Darcy method
-(SPEC §2) decides where the pressure acts; the optimiser turns the inlet pressure into a jaw
-motion towards the symmetry line.
+(docs/theory.md §2) decides where the pressure acts; the optimiser turns the inlet pressure
+into a jaw motion towards the symmetry line.
 
 The pa-inverter domain (half 0.2 x 0.1 m, inlet on the left edge, zero pressure on the top and
 right edges, clamp and passive solid block at the top-left corner) with a passive void

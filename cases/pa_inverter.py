@@ -1,8 +1,8 @@
 """Pressure-actuated inverter (thesis §6.1; Kumar, Frouws & Langelaar 2020).
 
 What it shows: a compliant mechanism driven by a design-dependent pressure load.  The Darcy
-method (SPEC §2) finds where the pressure acts on the evolving design; the optimiser builds a
-pressurised cavity at the inlet whose walls push the output *against* the pressure.
+method (docs/theory.md §2) finds where the pressure acts on the evolving design; the optimiser
+builds a pressurised cavity at the inlet whose walls push the output *against* the pressure.
 
 Half domain 0.2 x 0.1 m (symmetry at y = 0).  Pressure inlet P_in on the left edge, zero pressure
 on the top (clamp included) and right edges, no flux through the symmetry line.  Clamp on the

@@ -1,8 +1,8 @@
 """One member of a pneumatic network, PneuNet (thesis §6.3; Kumar 2023).
 
 What it shows: an *internal* pressure load.  A chamber inside the member is pressurised; the
-Darcy method (SPEC §2) carries the pressure from the chamber wall to wherever the design lets
-it go, and the optimiser shapes the member so that its free end bends down.
+Darcy method (docs/theory.md §2) carries the pressure from the chamber wall to wherever the
+design lets it go, and the optimiser shapes the member so that its free end bends down.
 
 Domain 0.1 x 0.05 m (no symmetry).  A passive void chamber x ∈ [0.02, 0.08], y ∈ [0.01, 0.02]
 whose boundary is the pressure inlet; zero pressure on the whole outer boundary (the clamped

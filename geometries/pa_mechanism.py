@@ -1,4 +1,4 @@
-"""Pressure-actuated inverter and gripper, half domain (symmetry at y = 0), CASES.md.
+"""Pressure-actuated inverter and gripper, half domain (symmetry at y = 0), docs/theory.md §6.
 
 Boundaries: "inlet" (the left edge), "fixed" (the first ``clamp`` of the top edge, default
 L/20, next to the left corner), "zero_pressure" (the rest of the top edge and the right edge),
@@ -6,8 +6,9 @@ L/20, next to the left corner), "zero_pressure" (the rest of the top edge and th
 L/20 x H/20) under the clamp.  The gripper adds a passive void "jaw_void" (the gripped object's
 place) over x ∈ [0.8L, L], y ∈ [0, 0.2H] and a passive solid "jaw_pad" over x ∈ [0.8L, L],
 y ∈ [0.2H, 0.25H].  Port "output": the bottom-right corner (inverter) or the inner right corner
-of the jaw pad (L, 0.2H) (gripper).  CASES.md puts zero pressure on the whole top edge: the
-cases list "fixed" among the zero-pressure boundaries as well.
+of the jaw pad (L, 0.2H) (gripper).  The cases put zero pressure on the whole top edge
+(docs/theory.md §6, "pa-inverter"): they list "fixed" among the zero-pressure boundaries as
+well.
 """
 from pacto_ng.mesh import Layout, Region, Segment
 

@@ -1,9 +1,9 @@
-"""One member of a pneumatic network (CASES.md "pneunet"): an internal chamber (passive void
-"chamber", default x ∈ [0.02, 0.08], y ∈ [0.01, 0.02]) whose boundary is the pressure inlet
-"inlet"; the left edge "fixed" (clamped), the rest of the outer boundary "zero_pressure"; port
-"output" at the bottom-right corner.  CASES.md puts zero pressure on the *whole* outer
-boundary: a boundary has one name, so the case lists both "zero_pressure" and "fixed" as
-zero-pressure boundaries."""
+"""One member of a pneumatic network (docs/theory.md §6, "pneunet"): an internal chamber
+(passive void "chamber", default x ∈ [0.02, 0.08], y ∈ [0.01, 0.02]) whose boundary is the
+pressure inlet "inlet"; the left edge "fixed" (clamped), the rest of the outer boundary
+"zero_pressure"; port "output" at the bottom-right corner.  The case puts zero pressure on the
+*whole* outer boundary (docs/theory.md §6): a boundary has one name, so the case lists both
+"zero_pressure" and "fixed" as zero-pressure boundaries."""
 from pacto_ng.mesh import Layout, Region, Segment
 
 

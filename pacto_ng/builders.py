@@ -183,9 +183,9 @@ class Builder:
 
     def pressure(self, model: Model, design: DesignChain, suffix: str = "") -> PressureLoad:
         """The Darcy pressure of the set-up's inlet and zero-pressure boundaries, and its load:
-        fixed (a body force) or follower (a residual density, SPEC §4); empty for a set-up
-        without pressure.  ``suffix`` names its output ``p`` + suffix (several realisations of
-        the design in one chain, :mod:`pacto_ng.robust`)."""
+        fixed (a body force) or follower (a residual density, docs/theory.md §4); empty for a
+        set-up without pressure.  ``suffix`` names its output ``p`` + suffix (several
+        realisations of the design in one chain, :mod:`pacto_ng.robust`)."""
         from .case import Pressure
 
         params, setup, name = self.params, self.setup, self.case.name

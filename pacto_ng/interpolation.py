@@ -1,7 +1,7 @@
 """Material and flow interpolations as pure factories: numpy versions and NGSolve CF versions.
 
 * smoothed Heaviside ``H(ρ; η, β) = (tanh(βη) + tanh(β(ρ-η))) / (tanh(βη) + tanh(β(1-η)))``
-  (SPEC §1 projection, §2 flow/drainage, §3 Wang γ);
+  (docs/theory.md §1 projection, §2 flow/drainage, §3 Wang γ);
 * SIMP ``E(ρ) = E0 + ρ^p (E1 - E0)`` (thesis eq. A.23) and the two-material law (thesis eq. 6.1);
 * Darcy flow coefficient ``K(ρ) = Kv - (Kv - Ks) H(ρ; ηk, βk)`` and drainage
   ``D(ρ) = (ln r / Δs)^2 Ks H(ρ; ηh, βh)`` (thesis eqs 3.2–3.4).

@@ -1,4 +1,4 @@
-"""Script-level analyses that are not optimisations: the C-beam load limit (SPEC §6, CASES.md).
+"""Script-level analyses that are not optimisations: the C-beam load limit (docs/theory.md §6).
 
 The C-beam (Yoon et al. 2005; Wang et al. 2014 §2; thesis §5.2.1 and App. C) is a 10 x 10 m
 square whose C-shaped solid (1 m thick top, bottom and left arms; ``ρ = γ = 1``) surrounds a

@@ -1,4 +1,4 @@
-r"""Design-dependent pressure by the Darcy–drainage method (SPEC §2, thesis ch. 3).
+r"""Design-dependent pressure by the Darcy–drainage method (docs/theory.md §2, thesis ch. 3).
 
 Every element is treated as a porous medium.  With the smoothed Heaviside
 ``H(ρ; η, β) = (tanh(βη) + tanh(β(ρ-η))) / (tanh(βη) + tanh(β(1-η)))``:
@@ -49,7 +49,7 @@ __all__ = ["DarcySettings", "DarcyPressure"]
 
 @dataclass(frozen=True)
 class DarcySettings(Settings):
-    """The Darcy–drainage pressure model (SPEC §2, thesis Table 6.1) and its load."""
+    """The Darcy–drainage pressure model (docs/theory.md §2, thesis Table 6.1) and its load."""
 
     Kv: float = setting(1.0, "m^2/(Pa s)", "flow coefficient of void", range="[1e-30, 1e30]")
     Ks: float = setting(1e-7, "m^2/(Pa s)", "flow coefficient of solid", range="[1e-30, 1e30]")

@@ -21,10 +21,10 @@ def leakage(block: DarcyPressure, rho, h: float, *, solid: float = 0.9, void: fl
     * **wet skin**: the elements whose centroid lies within ``skin`` of a vertex of the cavity
       or of the inlet boundary.  Default ``skin = h + 2 max(Δs, h)``: one transition element
       plus the depth at which the solid has brought the pressure down to about 1 %: ``2 Δs``
-      for the exact decay ``exp(-|ln r| x / Δs)`` (``r² = 1 %``, SPEC §2), but two elements on
-      meshes coarser than the decay length ``Δs / |ln r|``, where the P1 solution falls only by
-      a factor of about 0.16–0.2 per element (0.16 at h = 2 Δs, the thesis mesh).  In this
-      skin the pressure is expected to drop, not leaked;
+      for the exact decay ``exp(-|ln r| x / Δs)`` (``r² = 1 %``, docs/theory.md §2), but two
+      elements on meshes coarser than the decay length ``Δs / |ln r|``, where the P1 solution
+      falls only by a factor of about 0.16–0.2 per element (0.16 at h = 2 Δs, the thesis
+      mesh).  In this skin the pressure is expected to drop, not leaked;
     * **outside the cavity**: the elements with ``ρ̄ >= solid`` (0.9) that are not in the skin.
 
     The leakage is the largest element pressure (the mean of its vertex values) found outside

@@ -5,13 +5,13 @@ The pressure ``p`` is the output of :class:`~pacto_ng.physics.darcy.DarcyPressur
 (:meth:`~pacto_ng.physics.darcy.DarcyPressure.field`) through one of two loads:
 
 * fixed load (thesis eq. 3.8): body force ``b = -∇p``, external work ``t ∫ -∇p·u dΩ``
-  (``f = -H p``), deformation independent (SPEC §4).  :func:`darcy_body` gives it to
+  (``f = -H p``), deformation independent (docs/theory.md §4).  :func:`darcy_body` gives it to
   :class:`~pacto_ng.physics.mechanics.Mechanics`, whose load factor multiplies it; the pressure
   is linear in ``(P_in, p_out)``, so the load factor scales the pressure itself.
-* follower load (SPEC §4, beyond the thesis): the spatial body force ``-∇_x p`` acting on the
-  deformed body, pulled back to the reference configuration, ``-J F⁻ᵀ ∇_X p`` per unit
-  reference volume (:func:`darcy_follower`).  It has no potential: it is a residual term of
-  :class:`~pacto_ng.physics.mechanics.Mechanics` with an unsymmetric tangent (the load
+* follower load (docs/theory.md §4, beyond the thesis): the spatial body force ``-∇_x p``
+  acting on the deformed body, pulled back to the reference configuration, ``-J F⁻ᵀ ∇_X p``
+  per unit reference volume (:func:`darcy_follower`).  It has no potential: it is a residual
+  term of :class:`~pacto_ng.physics.mechanics.Mechanics` with an unsymmetric tangent (the load
   stiffness) and enters the sensitivity through ``λᵀ ∂R/∂p``.
 
 :class:`Compliance` is the end compliance of the deformation-independent load, and
@@ -29,7 +29,7 @@ def darcy_body(p_name: str = "p"):
     r"""The ``body`` callable of :class:`~pacto_ng.physics.mechanics.Mechanics` for the Darcy load.
 
     Returns ``(u, coeffs) -> -∇p · u``: the body-force potential density of ``b = -∇p``
-    (thesis eq. 3.8), deformation independent (SPEC §4).  Mechanics multiplies it by the
+    (thesis eq. 3.8), deformation independent (docs/theory.md §4).  Mechanics multiplies it by the
     thickness and the load factor, so the external work is ``s t ∫ -∇p·u dΩ``.
     """
     def body(u, coeffs):
@@ -46,7 +46,7 @@ def darcy_body(p_name: str = "p"):
 
 def darcy_follower(p_name: str = "p", gamma=None):
     r"""The ``residual_density`` of :class:`~pacto_ng.physics.mechanics.Mechanics` for the
-    Darcy pressure as a follower load (SPEC §4).
+    Darcy pressure as a follower load (docs/theory.md §4).
 
     The body force ``b = -∇_x p`` acts in the deformed configuration; per unit reference
     volume it is ``b₀ = J b = -J F⁻ᵀ ∇_X p = -cof(F) ∇_X p`` with ``F = I + ∇u`` (``p`` is

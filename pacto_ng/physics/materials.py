@@ -1,4 +1,4 @@
-"""Strain-energy densities φ(∇u; E, ν) as NGSolve CoefficientFunctions (SPEC §3).
+"""Strain-energy densities φ(∇u; E, ν) as NGSolve CoefficientFunctions (docs/theory.md §3).
 
 Every model is a pure function of the 2x2 displacement gradient ``G = ∇u`` (a CF), the
 Young's modulus ``E`` (a CF, e.g. SIMP of the density) and Poisson's ratio ``ν``.  Plane strain

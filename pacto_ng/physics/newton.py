@@ -1,4 +1,5 @@
-"""Newton's method with a J > 0 guard, step cutting and adaptive load increments (SPEC §3).
+"""Newton's method with a J > 0 guard, step cutting and adaptive load increments
+(docs/theory.md §3).
 
 The problem object supplies ``residual(vec, out, load)``, ``assemble_tangent(vec, load)``,
 ``solve_tangent(rhs, out)``, ``admissible(vec)``, ``load_norm(load)`` and ``free`` (a numpy

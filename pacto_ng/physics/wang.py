@@ -3,7 +3,7 @@
 Wang, Lazarov, Sigmund and Jensen (2014) model void with small-strain theory and solid with
 finite-strain theory, so that the crushed void elements of a large-displacement optimisation
 do not stop Newton.  With ``G = ∇u`` and an element-wise interpolation factor ``γ``
-(thesis eq. 5.1, SPEC §3)
+(thesis eq. 5.1, docs/theory.md §3)
 
     φ_W(G) = φ_H(γ G) - φ_L(γ G) + φ_L(G),
 

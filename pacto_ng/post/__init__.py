@@ -1,4 +1,4 @@
-"""Post-analysis of a result (SPEC §7, thesis ch. 6): from a density field to a part.
+"""Post-analysis of a result (docs/theory.md §7, thesis ch. 6): from a density field to a part.
 
 threshold → polygons (:mod:`.threshold`; the smoothed densities :mod:`.grid`, the boundary
 names :mod:`.boundary`, the threshold's choice :mod:`.threshold_choice`) → body-fitted Netgen

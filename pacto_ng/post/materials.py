@@ -1,5 +1,5 @@
-"""Two materials in the part: the soft and the stiff region of a two-material design (SPEC §1,
-thesis eq. 6.1: ``E = (1-ρ̄1^p) E0 + ρ̄1^p [(1-ρ̄2^p) E1 + ρ̄2^p E2]``).
+"""Two materials in the part: the soft and the stiff region of a two-material design
+(docs/theory.md §1, thesis eq. 6.1: ``E = (1-ρ̄1^p) E0 + ρ̄1^p [(1-ρ̄2^p) E1 + ρ̄2^p E2]``).
 
 The rule: ρ̄1 is thresholded as for one material (:func:`~.threshold.threshold`: the solid is
 where the nodal ρ̄1 >= t1, the part kept on the clamp); inside that part, the *stiff* region

@@ -15,8 +15,8 @@ configuration Ω0, boundary ``pressure`` with outward unit normal N0 and unit ta
     unsymmetric tangent, solved with UMFPACK);
 ``darcy``
     the Darcy pressure of the thresholded design as a fixed body load ``t ∫ -∇p · v dΩ0``
-    (SPEC §4), given as a callable ``body(mesh) -> CF`` (see :func:`pressure_body_force`), scaled
-    linearly with the swept inlet pressure.
+    (docs/theory.md §4), given as a callable ``body(mesh) -> CF`` (see
+    :func:`pressure_body_force`), scaled linearly with the swept inlet pressure.
 
 With ``N0`` the outward normal of the solid, ``+P N0`` in the residual is the traction
 ``-P N0``: the pressure pushes into the solid.  Each pressure of a sweep is solved by Newton with

@@ -1,4 +1,4 @@
-"""One call for the whole post-analysis of a density field (SPEC §7), writing its files.
+"""One call for the whole post-analysis of a density field (docs/theory.md §7), writing its files.
 
 :func:`post_analyse` chains :func:`~.threshold.threshold`, :func:`~.remesh.remesh`, the
 sweeps of :mod:`.reanalysis` and the writers of :mod:`.export`, and writes into ``out_dir``:
