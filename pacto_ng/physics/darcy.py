@@ -29,8 +29,8 @@ forward solve.  Because ρ̄ is constant on each element, so are ``K`` and ``D``
 evaluated in numpy and handed to NGSolve as L2-order-0 GridFunctions (no Heaviside CF at every
 quadrature point), and the last term is ``-(K'(ρ̄_e) ∫_e ∇p·∇λ + D'(ρ̄_e) ∫_e (p - p_out) λ)``,
 one LinearForm on the L2-order-0 space with the element-wise derivatives ``K'``, ``D'`` as
-coefficients, integrated with the same quadrature rule as ``A`` (NGSOLVE_NOTES, "one quadrature
-rule everywhere").
+coefficients, integrated with the same quadrature rule as ``A`` (one rule everywhere: the
+derivative is then that of the discrete functional, to round-off).
 """
 from __future__ import annotations
 

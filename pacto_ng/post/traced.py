@@ -1,5 +1,4 @@
-"""The part's geometry traced from the thresholded polygons (the recipe of
-``shared/NGSOLVE_NOTES.md``).
+"""The part's geometry traced from the thresholded polygons, as Netgen OCC faces.
 
 Every loop of :mod:`.threshold` is cut at its *break points* — where the name of the source
 boundary it runs along changes, and at the corners of that boundary.  A run along the source
