@@ -21,7 +21,8 @@ every port's own ``d_k·u(x_k)`` is recorded beside it.  It writes into ``DIR/an
 ``post.json``      the summary of ``post_analyse``
 =================  ====================================================================
 
-The three Neo-Hookean analyses of the remeshed design (plane strain, the run's E1, ν, t):
+The three Neo-Hookean analyses of the remeshed design (plane strain, the run's ν and t, and
+its E1, or with two materials each material's own modulus on its part of the mesh):
 
 * ``darcy`` — thesis §6.1.1, "deformation-independent load analysis": the Darcy pressure of
   the *thresholded* design (element ρ = 1 where at least half of the element lies inside the
