@@ -50,16 +50,10 @@ def layered_top_displacement(P, E_bottom, E_top):
     return 0.5 * H * (_stretch(E_bottom, P) - 1) + 0.5 * H * (_stretch(E_top, P) - 1)
 
 
-@pytest.fixture(scope="module")
-def block(tmp_path_factory):
-    """The layered block's design on a structured quad mesh (the interface y = H/2 on element
-    edges, where the nodal ρ̄2 is exactly 0.5) and its post-analysis."""
+def _layered_design():
     from netgen.meshing import Element0D
     from ngsolve import Mesh
     from ngsolve.meshes import MakeStructured2DMesh
-
-    from pacto_ng.post.materials import stiff_region
-    from pacto_ng.post.report import post_analyse
 
     mesh = MakeStructured2DMesh(quads=True, nx=8, ny=8, mapping=lambda x, y: (W * x, H * y))
     ngm = mesh.ngmesh
@@ -68,8 +62,18 @@ def block(tmp_path_factory):
     mesh = Mesh(ngm)
     cen = np.array([np.mean([mesh[v].point for v in el.vertices], axis=0)
                     for el in mesh.Elements()])
+    return mesh, (cen[:, 1] > 0.5 * H).astype(float)
+
+
+@pytest.fixture(scope="module")
+def block(tmp_path_factory):
+    """The layered block's design on a structured quad mesh (the interface y = H/2 on element
+    edges, where the nodal ρ̄2 is exactly 0.5) and its post-analysis."""
+    from pacto_ng.post.materials import stiff_region
+    from pacto_ng.post.report import post_analyse
+
+    mesh, rho2 = _layered_design()
     rho1 = np.ones(mesh.ne)
-    rho2 = (cen[:, 1] > 0.5 * H).astype(float)
     stiff = stiff_region(mesh, rho2, 0.5)
     out = tmp_path_factory.mktemp("layered")
     res = post_analyse(mesh, rho1, out, pressures=PRESSURES, E={"soft": E1, "stiff": E2},
@@ -147,6 +151,57 @@ def test_layered_block_files_name_the_materials(block, tmp_path):
         a = 0.5 * np.abs(_cross(q[t[:, 1]] - q[t[:, 0]], q[t[:, 2]] - q[t[:, 0]]))
         got = {groups[i]: a[phys == i].sum() for i in np.unique(phys)}
         assert got == pytest.approx({"soft": 0.5 * W * H, "stiff": 0.5 * W * H}, rel=1e-6)
+
+
+@pytest.fixture(scope="module")
+def block_elementwise(tmp_path_factory):
+    """The layered block with the body-fitted cut made to fail: the fallback meshes the
+    one-material part and gives each element the material of ρ̄2 at its centroid."""
+    import importlib
+
+    from pacto_ng.post.materials import stiff_region
+    from pacto_ng.post.report import post_analyse
+
+    def fail(*args, **kwargs):
+        raise RuntimeError("forced for the test")
+
+    remesh = importlib.import_module("pacto_ng.post.remesh")  # the module, not the function
+    mesh, rho2 = _layered_design()
+    out = tmp_path_factory.mktemp("layered_elementwise")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(remesh, "split_part", fail)
+        res = post_analyse(mesh, np.ones(mesh.ne), out, pressures=PRESSURES,
+                           E={"soft": E1, "stiff": E2}, nu=NU, thickness=T,
+                           output=Port("output", (0.0, -1.0)), clamp=("bottom",),
+                           supports=Supports(clamp=("bottom",), fix_x=("left", "right")),
+                           maxh=H / 6, wet_boundaries=("top",), kinds=("fixed",), order=2,
+                           stiff=stiff_region(mesh, rho2, 0.5), mirror=False)
+    return res
+
+
+def test_elementwise_fallback_assigns_each_element_by_its_centroid(block_elementwise):
+    """The nodal ρ̄2 of the layered design is 0 up to y = 3H/8, 0.5 at y = H/2 and 1 from
+    y = 5H/8, linear between: ρ̄2 >= 0.5 at a centroid exactly where the centroid lies at or
+    above H/2.  No interface boundary; the staircase moves at most one element row (maxh H/6)
+    of area; the response lies between the soft-only and the stiff-only closed forms."""
+    from pacto_ng.post.materials import interface_length, material_areas
+
+    res = block_elementwise
+    rm = res.remeshed
+    assert rm.materials == "element-wise (the interface as a boundary failed: forced for the test)"
+    assert res.summary["materials"]["mode"] == rm.materials
+    for el in rm.mesh.Elements():
+        yc = np.mean([rm.mesh[v].point[1] for v in el.vertices])
+        assert el.mat == ("stiff" if yc >= 0.5 * H else "soft"), (yc, el.mat)
+    areas = material_areas(rm.mesh)
+    assert set(areas) == {"soft", "stiff"} and interface_length(rm.mesh) == 0.0
+    assert sum(areas.values()) == pytest.approx(W * H, rel=1e-9)
+    assert abs(areas["stiff"] - 0.5 * W * H) <= W * H / 6
+    sw = res.sweeps["fixed"]
+    assert sw.converged.all()
+    for P, delta in zip(sw.pressures, sw.delta):
+        stiff_only, soft_only = (-layered_top_displacement(P, E, E) for E in (E2, E1))
+        assert stiff_only < delta < soft_only
 
 
 # ------------------------------------------------------------------------------------------
