@@ -75,6 +75,23 @@ def test_run_status_and_parameter_check(tmp_path):
         sweep.check_same_parameters(tmp_path, Parameters(iterations=3, volfrac=0.3), "done")
 
 
+def test_parameter_check_compares_what_a_run_was_asked_for(tmp_path):
+    """A run stores what ``--model auto`` and ``load_ramp=-1`` resolved to (here wang and a
+    ramp of 37) and what was asked for (``model_choice``/``load_ramp_choice.requested``): the
+    same sweep again finds it its own; another request is refused naming the parameter."""
+    asked = Parameters(model="auto", load_ramp=-1, iterations=3)
+    resolved = asked.replace(model="wang", load_ramp=37)
+    (tmp_path / "summary.json").write_text(json.dumps({
+        "objective": 1.0, "parameters": resolved.to_dict(),
+        "model_choice": {"requested": "auto", "chosen": "wang"},
+        "load_ramp_choice": {"requested": -1, "chosen": 37}}))
+    sweep.check_same_parameters(tmp_path, asked, "done")
+    with pytest.raises(InputError, match="load_ramp = -1, this sweep has load_ramp = 0"):
+        sweep.check_same_parameters(tmp_path, asked.replace(load_ramp=0), "done")
+    with pytest.raises(InputError, match="model = 'auto', this sweep has model = 'wang'"):
+        sweep.check_same_parameters(tmp_path, asked.replace(model="wang"), "done")
+
+
 def _fake_summary(folder, **kw):
     folder.mkdir(parents=True, exist_ok=True)
     data = dict(objective=2.0, objective_name="output", output_displacement=-1e-4,
