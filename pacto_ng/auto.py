@@ -69,7 +69,7 @@ def material_strain(mech, q: float = 0.99) -> tuple[float, float]:
 
 #: the linear strain per iteration of a chosen load ramp: the first iteration's analysis is
 #: within the small-strain regime, and each iteration adds at most that much (measured,
-#: docs/benchmarks.md "Load continuation chosen from the load")
+#: docs/benchmarks.md "Extreme pressures at defaults")
 RAMP_STRAIN = STRAIN_THRESHOLD
 
 

@@ -451,15 +451,18 @@ class Problem:
             return np.asarray(vals["rho_bar"])
         return np.asarray(vals["rho_bar1"]) * (1 + np.asarray(vals["rho_bar2"])) / 2.0
 
+    def _volume_block(self):
+        return next(b for b in self.chain.blocks if b.output == "volume")
+
     def volume_fraction(self) -> float:
-        vol = next(b for b in self.chain.blocks if b.output == "volume")
+        vol = self._volume_block()
         return vol.fraction(self.values[vol.inputs[0]])
 
     def greyness(self) -> float:
         """Sigmund's (2007) measure of non-discreteness of the reported design: 4 ρ̄ (1 - ρ̄)
         averaged by area over the design domain (ρ̄1, the material-or-void density, with two
         materials): 0 for a solid-void design, 1 where every element sits at 0.5."""
-        vol = next(b for b in self.chain.blocks if b.output == "volume")
+        vol = self._volume_block()
         rho = np.clip(np.asarray(self.values.get("rho_bar", self.values.get("rho_bar1"))),
                       0.0, 1.0)
         return float(vol.w @ (4.0 * rho * (1.0 - rho)) / vol.total)
