@@ -1,18 +1,24 @@
-"""A case's domain: any 2D netgen.occ geometry, a CAD file, a mesh file, or a rectangle.
+"""A case's domain: any 2D or 3D netgen.occ geometry, a CAD file, a mesh file, a rectangle or a box.
 
-A case's ``geometry(params)`` returns one of
+The dimension comes from the geometry.  A case's ``geometry(params)`` returns one of
 
-* a **netgen.occ shape** (a ``Face``, or ``Glue([...])`` of several faces) whose faces and edges
-  carry netgen.occ's own names (``face.name``, ``edge.name``, ``vertex.name``, and ``.maxh``
-  for local refinement).  Faces name the design domain (``design``) and the passive regions;
-  edges name the boundaries (inlet, zero pressure, supports, symmetry, loads, ports); a named
-  vertex is a point port or a point load.  Unnamed edges are called ``default``;
+* a **2D netgen.occ shape** (a ``Face``, or ``Glue([...])`` of several faces) whose faces and
+  edges carry netgen.occ's own names (``face.name``, ``edge.name``, ``vertex.name``, and
+  ``.maxh`` for local refinement).  Faces name the design domain (``design``) and the passive
+  regions; edges name the boundaries (inlet, zero pressure, supports, symmetry, loads, ports);
+  a named vertex is a point port or a point load.  Unnamed edges are called ``default``;
+* a **3D netgen.occ shape** (a ``Solid``, or ``Glue([...])`` of solids), meshed with Netgen
+  tetrahedra: solids name the design domain (``solid.name = "design"``) and the passive
+  regions (a chamber), faces the boundaries, edges and vertices the points (``default``
+  where unnamed);
 * a :class:`~pacto_ng.mesh.Layout` (the rectangle helper: named segments, passive rectangles,
-  ports), which can also be meshed as structured quads (``nelx``, ``nely``);
+  ports), which can also be meshed as structured quads (``nelx``, ``nely``), or a
+  :class:`~pacto_ng.box.Box` (its 3D counterpart: named patches on its sides, passive blocks,
+  points), meshed as tetrahedra or structured hexahedra (``nelx``, ``nely``, ``nelz``);
 * a **CAD file** (``.step``, ``.stp``, ``.brep``, ``.iges``, ``.igs``) or a shape read from one by
-  :func:`load_cad` (then named in the case's script);
-* a **mesh file** (Gmsh ``.msh`` with physical groups as names, or Netgen ``.vol``), or an
-  ``ngsolve.Mesh``: used as it is (``maxh`` does not apply).
+  :func:`load_cad` (then named in the case's script): 3D where it holds solids;
+* a **mesh file** (Gmsh ``.msh`` with physical groups as names, or Netgen ``.vol``; 2D or 3D),
+  or an ``ngsolve.Mesh``: used as it is (``maxh`` does not apply).
 
 :func:`mesh_geometry` turns any of these into a :class:`Meshed` domain; the case's set-up then
 refers to the names, and :func:`check_setup_names` says which name is missing and which exist.
@@ -25,7 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import resources
+from . import resources, resources3d
+from .box import Box, box_shape, netgen_box_mesh, structured_box
 from .mesh import Layout, layout_shape, netgen_mesh, structured_mesh
 from .params import InputError
 from .settings import Settings, setting
@@ -38,10 +45,13 @@ MESH_SUFFIXES = (".msh", ".vol", ".vol.gz")
 class MeshSettings(Settings):
     """How the case's geometry is meshed, and the displacement's element order."""
 
-    maxh: float = setting(0.01, "m", "Netgen triangle size (used when nelx = 0)",
-                          range="(0, inf)")
-    nelx: int = setting(0, "", "structured quads in x (0: Netgen triangles)", range="[0, 100000]")
-    nely: int = setting(0, "", "structured quads in y", range="[0, 100000]")
+    maxh: float = setting(0.01, "m", "Netgen element size, triangles or tetrahedra (used when "
+                          "nelx = 0)", range="(0, inf)")
+    nelx: int = setting(0, "", "structured quads (hexahedra) in x (0: Netgen elements)",
+                        range="[0, 100000]")
+    nely: int = setting(0, "", "structured quads (hexahedra) in y", range="[0, 100000]")
+    nelz: int = setting(0, "", "structured hexahedra in z (a Box; 0 for a 2D domain)",
+                        range="[0, 100000]")
     order: int = setting(0, "", "element order of the displacement (1, 2, 3; 0: the case's "
                          "order for the model, see Case.model_orders)", choices=(0, 1, 2, 3))
     unit_elements: bool = setting(False, "", "structured mesh of unit square elements (domain "
@@ -53,6 +63,8 @@ class MeshSettings(Settings):
     def check(self):
         if (self.nelx > 0) != (self.nely > 0):
             raise InputError("nelx, nely: give both (positive) or neither")
+        if self.nelz > 0 and self.nelx == 0:
+            raise InputError("nelz: needs nelx and nely (a structured hexahedral mesh)")
         if self.unit_elements and self.nelx == 0:
             raise InputError("unit_elements: needs a structured mesh (give --nelx and --nely)")
 
@@ -60,7 +72,7 @@ class MeshSettings(Settings):
 @dataclass
 class Meshed:
     """A meshed domain: the ``ngsolve.Mesh``, its element size ``h``, and the netgen.occ
-    ``shape`` it was meshed from (``None`` for a mesh file or structured quads)."""
+    ``shape`` it was meshed from (``None`` for a mesh file or a structured grid)."""
 
     mesh: object
     h: float
@@ -92,7 +104,7 @@ def load_cad(path: str | os.PathLike):
 
 def load_mesh(path: str | os.PathLike):
     """An ``ngsolve.Mesh`` from a Gmsh ``.msh`` file (physical groups become the region and
-    boundary names) or a Netgen ``.vol`` file."""
+    boundary names: surface groups in 2D, volume groups in 3D) or a Netgen ``.vol`` file."""
     import ngsolve
 
     fp = Path(path)
@@ -107,7 +119,7 @@ def load_mesh(path: str | os.PathLike):
         elif name.endswith((".vol", ".vol.gz")):
             from netgen.meshing import Mesh as NGMesh
 
-            ngm = NGMesh(dim=2)
+            ngm = NGMesh()  # Load takes the file's dimension
             ngm.Load(str(fp))
         else:
             raise InputError(f"geometry: '{path}' is not a mesh file ({', '.join(MESH_SUFFIXES)})")
@@ -126,15 +138,24 @@ def _is_occ_shape(obj) -> bool:
     return isinstance(obj, occ.TopoDS_Shape)
 
 
+def _is_solid(shape) -> bool:
+    """A 3D shape: it holds solids (a 2D one holds faces only)."""
+    return len(shape.solids) > 0
+
+
 def _extent(shape) -> float:
+    """The smallest side of the shape's bounding box (x, y; and z for a 3D shape)."""
     lo, hi = shape.bounding_box
-    return float(min(hi[0] - lo[0], hi[1] - lo[1]))
+    axes = 3 if _is_solid(shape) else 2
+    return float(min(hi[a] - lo[a] for a in range(axes)))
 
 
 def extent(geometry) -> float | None:
-    """The smaller side of the geometry's bounding box (None for a mesh or a mesh file)."""
+    """The smallest side of the geometry's bounding box (None for a mesh or a mesh file)."""
     if isinstance(geometry, Layout):
         return min(geometry.width, geometry.height)
+    if isinstance(geometry, Box):
+        return float(geometry.size.min())
     if isinstance(geometry, (str, os.PathLike)) and str(geometry).lower().endswith(CAD_SUFFIXES):
         geometry = load_cad(geometry)
     if _is_occ_shape(geometry):
@@ -142,20 +163,21 @@ def extent(geometry) -> float | None:
     return None
 
 
-def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, order: int = 1,
-                  mesh_time_limit: float = resources.MESH_TIME_LIMIT,
+def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: int = 0,
+                  order: int = 1, mesh_time_limit: float = resources.MESH_TIME_LIMIT,
                   solver: str | None = None) -> Meshed:
     """Mesh a case's geometry (see the module docstring for what it may be).
 
-    Netgen triangles of size ``maxh``; with ``nelx, nely > 0`` structured quads, for a
-    :class:`~pacto_ng.mesh.Layout` only.
+    Netgen triangles (tetrahedra for a 3D shape or a Box) of size ``maxh``; with ``nelx, nely
+    > 0`` structured quads, for a :class:`~pacto_ng.mesh.Layout` only, and with ``nelx, nely,
+    nelz > 0`` structured hexahedra, for a :class:`~pacto_ng.box.Box` only.
 
     Before a mesh is made, its elements, its displacement dofs at ``order`` and a run's memory
-    are estimated (:mod:`pacto_ng.resources`; ``solver`` of the displacement system,
-    ``sparsecholesky`` or ``umfpack``, None for the larger estimate): a mesh that would not
-    fit this machine's memory, or would take Netgen (or the grid builder) longer than
-    ``mesh_time_limit`` seconds to make, is refused with one line.  A mesh file or an
-    ``ngsolve.Mesh`` is checked on its own counts."""
+    are estimated (:mod:`pacto_ng.resources`, :mod:`pacto_ng.resources3d`; ``solver`` of the
+    displacement system, ``sparsecholesky`` or ``umfpack``, None for the larger estimate): a
+    mesh that would not fit this machine's memory, or would take Netgen (or the grid builder)
+    longer than ``mesh_time_limit`` seconds to make, is refused with one line.  A mesh file or
+    an ``ngsolve.Mesh`` is checked on its own counts."""
     import ngsolve
 
     source = "the mesh"
@@ -170,6 +192,11 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, order:
             raise InputError(f"geometry: '{geometry}' is neither a CAD file "
                              f"({', '.join(CAD_SUFFIXES)}) nor a mesh file "
                              f"({', '.join(MESH_SUFFIXES)})")
+    if isinstance(geometry, Box):
+        return _mesh_box(geometry, maxh, (nelx, nely, nelz), order, mesh_time_limit, solver)
+    if nelz > 0:
+        raise InputError("nelz: structured hexahedra need a box domain (a Box); this case's "
+                         "geometry is not one (give --maxh instead)")
     if nelx > 0 and not isinstance(geometry, Layout):
         raise InputError("nelx, nely: structured quads need a rectangular domain (a Layout); "
                          "this case's geometry is not one (give --maxh instead)")
@@ -195,25 +222,51 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, order:
              finer)
         return Meshed(netgen_mesh(geometry, maxh), maxh, layout_shape(geometry))
     if _is_occ_shape(geometry):
-        if len(geometry.solids) > 0:
-            raise InputError("geometry: a 3D solid; this version optimises 2D domains (faces) "
-                             "only")
+        solid = _is_solid(geometry)
         if len(geometry.faces) == 0:
             raise InputError("geometry: the shape has no face to mesh")
         _check_maxh(maxh, _extent(geometry))
-        triangles = resources.shape_triangles(geometry, maxh)
-        fits(resources.estimate_triangles(triangles, order, solver=solver), f"maxh = {maxh:g}",
-             finer)
+        if solid:
+            estimate = resources3d.estimate_tets(resources3d.shape_tets(geometry, maxh), order,
+                                                 solver=solver)
+        else:
+            estimate = resources.estimate_triangles(resources.shape_triangles(geometry, maxh),
+                                                    order, solver=solver)
+        fits(estimate, f"maxh = {maxh:g}", finer)
         from netgen import occ
 
         try:
-            ngm = occ.OCCGeometry(geometry, dim=2).GenerateMesh(maxh=maxh)
+            ngm = occ.OCCGeometry(geometry, dim=3 if solid else 2).GenerateMesh(maxh=maxh)
         except RuntimeError as err:
             raise InputError(f"geometry: Netgen could not mesh the shape at maxh = {maxh:g} "
                              f"({err})") from None
         return Meshed(_checked_mesh(ngsolve.Mesh(ngm)), maxh, geometry)
     raise InputError(f"geometry: got a {type(geometry).__name__}; a case's geometry must be a "
-                     "netgen.occ shape, a Layout, a CAD or mesh file path, or an ngsolve.Mesh")
+                     "netgen.occ shape, a Layout, a Box, a CAD or mesh file path, or an "
+                     "ngsolve.Mesh")
+
+
+def _mesh_box(box: Box, maxh, nel, order, mesh_time_limit, solver) -> Meshed:
+    """A Box as Netgen tetrahedra of ``maxh`` or, with ``nel`` = (nelx, nely, nelz) > 0,
+    structured hexahedra; checked against this machine's resources first."""
+    def fits(estimate, what, advice):
+        resources.check(estimate, what, mesh_time_limit=mesh_time_limit, advice=advice)
+
+    nelx, nely, nelz = nel
+    if nelx > 0:
+        if nelz == 0:
+            raise InputError("nelz: a box domain (3D) meshed as hexahedra needs nelx, nely and "
+                             "nelz")
+        fits(resources3d.estimate_hex_grid(nelx, nely, nelz, order, solver=solver),
+             f"nelx x nely x nelz = {nelx} x {nely} x {nelz}",
+             "give a smaller nelx, nely, nelz or order")
+        mesh = structured_box(box, nelx, nely, nelz)
+        return Meshed(mesh, float(min(box.size / np.array(nel))), None)
+    _check_maxh(maxh, float(box.size.min()))
+    tets = resources3d.netgen_tets(float(np.prod(box.size)), maxh)
+    fits(resources3d.estimate_tets(tets, order, solver=solver), f"maxh = {maxh:g}",
+         "give a larger maxh or a lower order")
+    return Meshed(netgen_box_mesh(box, maxh), maxh, box_shape(box))
 
 
 def _check_maxh(maxh: float, extent: float) -> None:
@@ -222,16 +275,20 @@ def _check_maxh(maxh: float, extent: float) -> None:
 
 
 def _checked_mesh(mesh):
-    if mesh.dim != 2:
-        raise InputError(f"geometry: a {mesh.dim}D mesh; this version optimises 2D domains only")
+    if mesh.dim not in (2, 3):
+        raise InputError(f"geometry: a {mesh.dim}D mesh; a domain is 2D or 3D")
     if mesh.ne == 0:
         raise InputError("geometry: the mesh has no element")
     return mesh
 
 
 def _mean_size(mesh) -> float:
+    """The side of the right isosceles triangle (2D) or the cube's sixth, a tetrahedron (3D),
+    of the mean element's area or volume."""
     from ngsolve import Integrate
 
+    if mesh.dim == 3:
+        return float((6.0 * Integrate(1.0, mesh) / mesh.ne) ** (1.0 / 3.0))
     return float(np.sqrt(2.0 * Integrate(1.0, mesh) / mesh.ne))
 
 
@@ -246,7 +303,9 @@ def check_setup_names(mesh, setup, *, extra_boundaries=()) -> None:
     InputError naming the role, the name and the names that exist."""
     regions = set(mesh.GetMaterials())
     boundaries = set(mesh.GetBoundaries())
-    points = set(mesh.GetBBoundaries()) - {""}
+    points = set(mesh.GetBBoundaries()) - {""}  # 2D: vertices; 3D: edges
+    if mesh.dim == 3:
+        points |= set(mesh.GetBBBoundaries()) - {""}  # and vertices
 
     def need(kind, role, name):
         have = {"region": regions, "boundary": boundaries,
@@ -257,8 +316,9 @@ def check_setup_names(mesh, setup, *, extra_boundaries=()) -> None:
             raise InputError(f"setup: {role} '{name}' is not a {kind} of the geometry ({listing})")
 
     if "design" not in regions:
-        raise InputError(f"geometry: no face is named 'design' (regions: {_names(regions)}); "
-                         "name the design domain, e.g. face.name = 'design'")
+        kind = "solid" if mesh.dim == 3 else "face"
+        raise InputError(f"geometry: no {kind} is named 'design' (regions: {_names(regions)}); "
+                         f"name the design domain, e.g. {kind}.name = 'design'")
     for name in setup.solid:
         need("region", "passive solid", name)
     for name in setup.void:
@@ -320,6 +380,8 @@ def check_inlet_touches_design(mesh, inlet: tuple[str, ...], passive_void: tuple
             if any(v.nr in verts for v in el.vertices):
                 touching.add(el.mat)
         if not touching & wet:
+            where = ("a face of the 'design' solid" if mesh.dim == 3 else
+                     "an edge of the 'design' face")
             raise InputError(f"setup: pressure inlet '{name}' touches no design domain (it "
-                             f"borders {_names(touching)}); put it on an edge of the 'design' "
-                             "face or of a chamber inside it")
+                             f"borders {_names(touching)}); put it on {where} or of a chamber "
+                             "inside it")

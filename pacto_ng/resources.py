@@ -10,7 +10,8 @@ or, for a mesh that exists (a mesh file after reading, an ``ngsolve.Mesh``),
 export``: :func:`pacto_ng.post.runs.check_part_mesh`) is checked on :func:`estimate_part`, and
 the C-beam analysis (``pacto run c-beam``) on the same estimates as a run's mesh.
 
-Estimates (2D; measured on this 2-core, 23 GB machine, ngsolve 6.2.2608)
+Estimates (2D; 3D meshes: :mod:`pacto_ng.resources3d`; measured on this 2-core, 23 GB
+machine, ngsolve 6.2.2608)
 --------------------------------------------------------------------------
 **Elements.**  Netgen triangles of size ``h`` on a face of area ``A``: ``(4/√3)·A/h²``, the
 count of equilateral triangles of side ``h`` (a 2 x 1 rectangle at h = 0.04 ... 0.005 gave
@@ -101,8 +102,9 @@ class Estimate:
     alone, no analysis on it), a run's peak
     ``memory`` (bytes above the process's start) and the ``mesh_seconds`` its ``mesher``
     (``Netgen``, ``the grid builder``; None for a mesh that exists) takes.  ``kind``:
-    ``triangles``, ``quads`` or ``elements`` (mixed); ``exact``: elements and dofs counted, not
-    estimated (a structured grid, a mesh that exists)."""
+    ``triangles``, ``quads``, ``tetrahedra``, ``hexahedra`` or ``elements`` (mixed);
+    ``exact``: elements and dofs counted, not estimated (a structured grid, a mesh that
+    exists)."""
 
     elements: float
     dofs: float
@@ -124,8 +126,16 @@ def run_memory(dofs: float, order: int, elements: float, *, quads: bool = False,
     a, b, q, o = _FIT[solver or "umfpack"]
     system = a * min(max(dofs, 1.0), 1e30) ** b * (q if quads else 1.0) * o ** k
     local = (k + 1) ** 2 if quads else (k + 1) * (k + 2) / 2  # scalar dofs per element
+    return run_overheads(system, elements, local, dim=2)
+
+
+def run_overheads(system: float, elements: float, local: float, *, dim: int) -> float:
+    """A run's memory around its displacement ``system`` (bytes, assembled and factorised):
+    the system times ``_RUN_FACTOR``, the mesh, and the linear fast paths' element matrices
+    for ``local`` scalar dofs per element (a ``dim``-vector displacement and the Darcy
+    pressure's two matrices; not built above ``_SCATTER_MAX`` entries)."""
     scatter = 0.0
-    for entries in (elements * (2 * local) ** 2, 2 * elements * local ** 2):  # u; Darcy K, D
+    for entries in (elements * (dim * local) ** 2, 2 * elements * local ** 2):  # u; Darcy K, D
         if entries <= _SCATTER_MAX:  # above it the fast path is not built
             scatter += _SCATTER_BYTES * entries
     return _RUN_FACTOR * system + _MESH_BYTES * elements + scatter
@@ -193,8 +203,14 @@ def estimate_grid(nelx: int, nely: int, order: int, *, solver: str | None = None
 
 
 def estimate_mesh(mesh, order: int, *, solver: str | None = None) -> Estimate:
-    """A mesh that exists (a 2D ``ngsolve.Mesh``): elements and dofs counted."""
+    """A mesh that exists (an ``ngsolve.Mesh``; a 3D one: :func:`pacto_ng.resources3d.
+    estimate_mesh`): elements and dofs counted."""
     import numpy as np
+
+    if mesh.dim == 3:
+        from .resources3d import estimate_mesh as estimate_mesh_3d
+
+        return estimate_mesh_3d(mesh, order, solver=solver)
 
     types = np.asarray(mesh.ngmesh.Elements2D().NumPy()["type"])
     quads = int(np.count_nonzero(types == 11))  # Netgen's QUAD; TRIG is 10

@@ -73,7 +73,7 @@ def test_a_netgen_vol_file(tmp_path):
     (42, {}, "got a int"),
     (None, {"nelx": 4, "nely": 2}, "structured quads need a rectangular domain"),
     (None, {"maxh": 5.0}, "maxh: 5 is too coarse"),
-    ("solid", {}, "a 3D solid"),
+    ("solid", {"nelx": 4, "nely": 2, "nelz": 2}, "structured hexahedra need a box domain"),
 ])
 def test_bad_geometries_are_one_line_errors(geometry, kwargs, message):
     from netgen import occ

@@ -1,0 +1,224 @@
+"""Resources of 3D meshes, estimated before meshing (the 3D half of :mod:`pacto_ng.resources`).
+
+:func:`pacto_ng.geometry.mesh_geometry` checks a 3D netgen.occ shape (a Solid, a Glue of
+solids, a CAD file holding solids) and a :class:`~pacto_ng.box.Box` meshed as tetrahedra on
+:func:`estimate_tets`, a Box meshed as hexahedra on :func:`estimate_hex_grid`, and a 3D mesh
+that exists on :func:`estimate_mesh` (:func:`pacto_ng.resources.estimate_mesh` passes 3D meshes
+here), each with :func:`pacto_ng.resources.check`: one line naming ``maxh`` or ``nelx x nely x
+nelz``, the elements, dofs and memory, before anything is meshed.
+
+Estimates (measured on this 2-core, 23 GB machine, ngsolve 6.2.2608)
+-------------------------------------------------------------------
+**Tetrahedra.**  Netgen tetrahedra of size ``h`` in a solid of volume ``V``: ``5·V/h³``
+(a regular tetrahedron of edge ``h`` fills ``h³/(6√2)``, i.e. 8.5 per h³; Netgen's interior
+elements grow larger).  Fitted on the probe shapes ``cube``, ``slab``, ``bar`` and ``holed``
+(a 2 x 1 x 1 box with a cylindrical hole of radius 0.25; :func:`test_shape`) at 2–4 sizes each,
+648 to 73 813 tetrahedra: ``n·h³/V`` = 4.27–8.03, geometric mean 5.12; 5 gives 0.62–1.17 of
+Netgen's count on them.  The spread is Netgen's: its count is not monotone in ``h`` (the slab:
+4.36 at h = 0.05, 6.33 at 0.035), and a curved face within a few elements of its radius is
+refined (the holed box at h = 0.2: 8.03).  On shapes not fitted (:func:`test_shape`
+``chamber``, ``sphere``, ``lbracket``, and the 2 x 1 x 1 box of the memory probes), the
+estimate is 0.59–1.53 of Netgen's count (tests/unit/test_resources_3d.py).  A solid's own
+``maxh`` replaces ``h`` in it; a face's or edge's smaller ``maxh`` is not counted.  Structured
+hexahedra: ``nelx·nely·nelz``.  Counts for a mesh still to be made: vertices ``n/5`` (4.9–5.0
+measured), edges ``vertices + n``, faces ``2n``.
+
+**Displacement dofs** (3-vector H1 of order k): ``3·(nv + (k−1)·nedge + (k−1)(k−2)/2·ntrig
++ (k−1)²·nquad + (k−1)(k−2)(k−3)/6·ntet + (k−1)³·nhex)`` (faces: ntrig, nquad); exact for a
+grid (``3·(k·nelx+1)(k·nely+1)(k·nelz+1)``) and a mesh that exists.
+
+**Meshing time**: Netgen took 0.18–0.31 ms of CPU per tetrahedron (up to 0.9 ms on coarse
+meshes of curved shapes), the hexahedral grid builder about 2 µs per hexahedron.
+
+MEMORY_DOCSTRING
+"""
+from __future__ import annotations
+
+import math
+import resource
+import sys
+
+from .resources import Estimate, run_overheads
+
+# the displacement system's memory fit in 3D (module docstring): (a, b, hexahedra, per order)
+_FIT = {"sparsecholesky": (400.0, 1.3, 1.0, 1.2), "umfpack": (800.0, 1.3, 1.0, 1.3)}
+_TETS_PER_VOLUME = 5.0      # Netgen tetrahedra per h³ of volume (module docstring)
+_NETGEN_SECONDS = 2.5e-4  # CPU seconds per Netgen tetrahedron
+_GRID_SECONDS = 2.0e-5    # CPU seconds per structured hexahedron
+_HUGE = 1e300                  # counts are capped here (a maxh of 1e-300 still gives one line)
+
+
+def run_memory(dofs: float, order: int, elements: float, *, hexes: bool = False,
+               solver: str | None = None) -> float:
+    """A 3D run's peak memory in bytes (above the process's start) for ``dofs`` displacement
+    dofs of ``order`` on ``elements`` tetrahedra (or hexahedra): the displacement system's fit
+    (``solver``: ``sparsecholesky``, ``umfpack`` or None for the larger, umfpack's) and the
+    same overheads as in 2D (:func:`pacto_ng.resources.run_overheads`)."""
+    k = max(int(order), 1)
+    a, b, q, o = _FIT[solver or "umfpack"]
+    system = a * min(max(dofs, 1.0), 1e30) ** b * (q if hexes else 1.0) * o ** k
+    local = (k + 1) ** 3 if hexes else (k + 1) * (k + 2) * (k + 3) / 6  # scalar dofs per element
+    return run_overheads(system, elements, local, dim=3)
+
+
+def vector_h1_dofs(order: int, *, vertices: float, edges: float, trig_faces: float = 0.0,
+                   quad_faces: float = 0.0, tets: float = 0.0, hexes: float = 0.0) -> float:
+    """Dofs of a 3-vector H1 space of ``order`` on a 3D mesh with these counts (NGSolve's
+    H1: full tensor-product polynomials on hexahedra)."""
+    k = max(int(order), 1)
+    return 3 * (vertices + (k - 1) * edges + (k - 1) * (k - 2) / 2 * trig_faces
+                + (k - 1) ** 2 * quad_faces + (k - 1) * (k - 2) * (k - 3) / 6 * tets
+                + (k - 1) ** 3 * hexes)
+
+
+def netgen_tets(volume: float, maxh: float) -> float:
+    """Netgen tetrahedra of size ``maxh`` in a solid of ``volume`` (module docstring)."""
+    return _TETS_PER_VOLUME * (volume / maxh) / maxh / maxh
+
+
+def shape_tets(shape, maxh: float) -> float:
+    """Netgen tetrahedra of a 3D netgen.occ ``shape`` at ``maxh``: each solid's volume at the
+    smaller of ``maxh`` and its own ``maxh`` (a face's or edge's smaller ``maxh`` is not
+    counted).  Cheap: volumes from OCC, no meshing."""
+    return sum(netgen_tets(solid.mass, min(maxh, solid.maxh)) for solid in shape.solids)
+
+
+def estimate_tets(tets: float, order: int, *, solver: str | None = None) -> Estimate:
+    """A Netgen tetrahedral mesh still to be made, of about ``tets`` tetrahedra: vertices
+    ``tets/5``, edges ``vertices + tets``, faces ``2·tets`` (module docstring)."""
+    n = min(float(tets), _HUGE)
+    dofs = vector_h1_dofs(order, vertices=n / 5, edges=1.2 * n, trig_faces=2 * n, tets=n)
+    return Estimate(n, dofs, run_memory(dofs, order, n, solver=solver), _NETGEN_SECONDS * n,
+                    max(int(order), 1), "tetrahedra", "Netgen")
+
+
+def estimate_hex_grid(nelx: int, nely: int, nelz: int, order: int, *,
+                      solver: str | None = None) -> Estimate:
+    """A structured ``nelx x nely x nelz`` hexahedral mesh (:func:`pacto_ng.box.
+    structured_box`): counted exactly."""
+    k = max(int(order), 1)
+    n = float(nelx) * float(nely) * float(nelz)
+    dofs = 3.0 * (k * nelx + 1) * (k * nely + 1) * (k * nelz + 1)
+    return Estimate(n, dofs, run_memory(dofs, k, n, hexes=True, solver=solver),
+                    _GRID_SECONDS * n, k, "hexahedra", "the grid builder", exact=True)
+
+
+def estimate_mesh(mesh, order: int, *, solver: str | None = None) -> Estimate:
+    """A 3D mesh that exists: elements and dofs counted (tetrahedra and hexahedra; a mixed
+    mesh's faces are counted one by one)."""
+    import numpy as np
+
+    types = np.asarray(mesh.ngmesh.Elements3D().NumPy()["type"])
+    hexes = int(np.count_nonzero(types == _NETGEN_HEX))
+    tets = int(np.count_nonzero(types == _NETGEN_TET))
+    if hexes == types.size:
+        trig_faces, quad_faces = 0, mesh.nface
+    elif tets == types.size:
+        trig_faces, quad_faces = mesh.nface, 0
+    else:
+        quad_faces = sum(1 for f in mesh.faces if len(f.vertices) == 4)
+        trig_faces = mesh.nface - quad_faces
+    dofs = vector_h1_dofs(order, vertices=mesh.nv, edges=mesh.nedge, trig_faces=trig_faces,
+                          quad_faces=quad_faces, tets=tets, hexes=hexes)
+    kind = ("hexahedra" if hexes == types.size else "tetrahedra" if tets == types.size
+            else "elements")
+    return Estimate(mesh.ne, dofs, run_memory(dofs, order, mesh.ne, hexes=hexes > tets,
+                                              solver=solver),
+                    0.0, max(int(order), 1), kind, None, exact=True)
+
+
+_NETGEN_TET, _NETGEN_HEX = 20, 25  # Netgen's element type codes (TET, HEX)
+
+
+# -- the measurements behind the fits ---------------------------------------------------------
+def _hwm() -> float:
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith("VmHWM:"):
+                return float(line.split()[1]) * 1024.0
+    raise OSError("no VmHWM in /proc/self/status")
+
+
+def probe_tets(shape_name: str, maxh: float) -> dict:
+    """Mesh a test shape with Netgen tetrahedra at ``maxh``; the count and the CPU time."""
+    from netgen import occ
+
+    shape = test_shape(shape_name)
+    cpu = resource.getrusage(resource.RUSAGE_SELF)
+    ngm = occ.OCCGeometry(shape).GenerateMesh(maxh=maxh)
+    cpu2 = resource.getrusage(resource.RUSAGE_SELF)
+    return {"shape": shape_name, "maxh": maxh, "volume": shape.mass,
+            "area": sum(f.mass for f in shape.faces), "tets": ngm.ne,
+            "mesh_cpu_s": (cpu2.ru_utime + cpu2.ru_stime) - (cpu.ru_utime + cpu.ru_stime)}
+
+
+def test_shape(name: str):
+    """The shapes of the tetrahedra fit and its check."""
+    from netgen import occ
+
+    if name == "cube":
+        return occ.Box((0, 0, 0), (1, 1, 1))
+    if name == "slab":
+        return occ.Box((0, 0, 0), (2, 1, 0.25))
+    if name == "bar":
+        return occ.Box((0, 0, 0), (3, 0.5, 0.5))
+    if name == "holed":
+        return occ.Box((0, 0, 0), (2, 1, 1)) - occ.Cylinder((1, 0.5, 0), occ.Z, r=0.25, h=1)
+    if name == "chamber":
+        body = occ.Box((0, 0, 0), (0.1, 0.02, 0.03))
+        return body - occ.Cylinder((0.02, 0.01, 0.015), occ.X, r=0.006, h=0.06)
+    if name == "sphere":
+        return occ.Sphere((0, 0, 0), 1.0)
+    if name == "lbracket":
+        return occ.Box((0, 0, 0), (2, 2, 0.5)) - occ.Box((1, 1, 0), (2, 2, 0.5))
+    raise ValueError(name)
+
+
+def probe_solve(size: float, order: int, solver: str, hexes: bool = False) -> dict:
+    """3D linear elasticity on a 2 x 1 x 1 box (Netgen tets of ``size``, or 2n x n x n
+    hexes for ``hexes``), assembled and factorised with ``solver``: counts, peak RSS."""
+    import time
+
+    from ngsolve import (BilinearForm, InnerProduct, Mesh, SetNumThreads, Sym, TaskManager,
+                         VectorH1, div, dx, Grad)
+    from netgen import occ
+
+    SetNumThreads(1)
+    with TaskManager():
+        start = _hwm()
+        if hexes:
+            from .box import Box, Patch, structured_box
+
+            n = int(size)
+            mesh = structured_box(Box(2.0, 1.0, 1.0, patches=(Patch("fixed", "xmin"),)),
+                                  2 * n, n, n)
+            dirichlet = "fixed"
+        else:
+            box = occ.Box((0, 0, 0), (2, 1, 1))
+            box.faces.Min(occ.X).name = "fixed"
+            mesh = Mesh(occ.OCCGeometry(box).GenerateMesh(maxh=size))
+            dirichlet = "fixed"
+        after_mesh = _hwm()
+        fes = VectorH1(mesh, order=order, dirichlet=dirichlet)
+        u, v = fes.TnT()
+        a = BilinearForm(fes, symmetric=solver == "sparsecholesky")
+        a += (InnerProduct(Sym(Grad(u)), Sym(Grad(v))) + div(u) * div(v)) * dx
+        a.Assemble()
+        t = time.perf_counter()
+        a.mat.Inverse(fes.FreeDofs(), inverse=solver)
+        t_fac = time.perf_counter() - t
+        peak = _hwm()
+    return {"hexes": hexes, "size": size, "order": order, "solver": solver,
+            "elements": mesh.ne, "dofs": fes.ndof, "mesh_bytes": after_mesh - start,
+            "factor_s": t_fac, "peak_bytes": peak - start}
+
+
+if __name__ == "__main__":
+    import json
+
+    kind = sys.argv[1]
+    if kind == "tets":
+        print(json.dumps(probe_tets(sys.argv[2], float(sys.argv[3]))))
+    else:
+        print(json.dumps(probe_solve(float(sys.argv[2]), int(sys.argv[3]), sys.argv[4],
+                                     hexes=kind == "hex")))
