@@ -79,12 +79,17 @@ def member_width(points: np.ndarray, triangles: np.ndarray, rho: np.ndarray, *,
 
 
 def member_width_of_run(folder, **kw) -> dict:
-    """:func:`member_width` of a run folder's design.vtu (its nodal ρ̄)."""
+    """:func:`member_width` of a run folder's design.vtu (its nodal ρ̄).  A 3D design (a file
+    of tetrahedra or hexahedra) is not measured: ``min`` and ``q05`` are None and ``reason``
+    says why (the method rasterises a 2D design)."""
     from pathlib import Path
 
     import meshio
 
     m = meshio.read(Path(folder) / "design.vtu")
+    if any(c.type in ("tetra", "hexahedron") for c in m.cells):
+        return {"min": None, "q05": None, "pixel": None, "threshold": None,
+                "reason": "a 3D design: the member width is measured on 2D designs only"}
     tris = np.vstack([c.data for c in m.cells if c.type == "triangle"])
     rho = np.asarray(m.point_data["rho_bar"], dtype=float).reshape(len(m.points))
     # the file holds each triangle's own corners (ρ̄ constant per element): merge the corners
@@ -107,6 +112,9 @@ if __name__ == "__main__":
 
     for folder in sys.argv[1:]:
         w = member_width_of_run(folder)
+        if w["min"] is None:
+            print(f"{folder}: {w['reason']}")
+            continue
         print(f"{folder}: smallest member width {w['min'] * 1e3:.2f} mm, 5 % quantile "
               f"{w['q05'] * 1e3:.2f} mm (pixel {w['pixel'] * 1e3:.3f} mm, threshold "
               f"{w['threshold']})")

@@ -5,9 +5,11 @@ DIR/summary.json       case, model, parameters, iterations, objective and its hi
                        wall time, mesh size and element order
 DIR/history.csv        one row per iteration
 DIR/design.vtu         x, rho_bar, u (and p) and the model's strain and stress measures
-DIR/design.png         the physical density (a half-domain case mirrored: the whole mechanism)
-DIR/pressure.png       pressure cases: p / P_in with the ρ̄ = 0.5 contour (leakage in summary.json)
-DIR/materials.png      two-material cases: where the soft and the stiff material are
+DIR/design.png         the physical density (a half-domain case mirrored: the whole mechanism;
+                       3D: the ρ̄ = 0.5 iso-surface and the mid-depth cut, pacto_ng/post/plots3d.py)
+DIR/pressure.png       pressure cases: p / P_in with the ρ̄ = 0.5 contour (leakage in summary.json;
+                       3D: on the mid-depth cut)
+DIR/materials.png      two-material cases in 2D: where the soft and the stiff material are
 DIR/convergence.png    objective and volume against iteration
 
 Each file is written whole or not at all (:mod:`pacto_ng.files`), summary.json last: a folder
@@ -70,7 +72,8 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "wall_time_s": wall,
         "mesh": {"elements": problem.mesh.ne, "h": problem.h, "order": p.order,
                  "displacement_dofs": problem.mech.fes.ndof,
-                 "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely},
+                 "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely, "nelz": p.nelz,
+                 "dim": problem.mesh.dim},
         "element_order": p.order,
         "model_choice": problem.model_choice,
         "load_ramp_choice": problem.load_ramp_choice,
@@ -229,7 +232,7 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
     if problem.pressure_block is not None:
         pressure_png(path / "pressure.png", problem, leakage=summ.get("leakage"),
                      leakage_any=summ["leakage_detail"]["leakage_any"])
-    if problem.n_design_fields == 2:
+    if problem.n_design_fields == 2 and problem.mesh.dim == 2:
         materials_png(path / "materials.png", problem)
     if history:
         convergence_png(path / "convergence.png", history, problem.objective)
@@ -266,7 +269,7 @@ def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
         coefs.append(pg)
         names.append("p")
     for name, cf in strain_stress_measures(problem).items():
-        for (i, j), comp in zip(((0, 0), (1, 1), (0, 1)), ("xx", "yy", "xy")):
+        for (i, j), comp in tensor_components(problem.mesh.dim):
             gf = GridFunction(mech.l2)
             gf.Set(cf[i, j])  # element mean (P0 projection)
             add_l2(f"{name}_{comp}", gf.vec.FV().NumPy().copy())
@@ -277,11 +280,21 @@ def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
         check_tail(tmp, b"</VTKFile>", target)  # VTKOutput does not report a failed write
 
 
+def tensor_components(dim: int) -> list:
+    """``((i, j), name)`` of a symmetric tensor's components written to design.vtu: xx, yy,
+    xy in 2D; xx, yy, zz, xy, yz, xz in 3D."""
+    if dim == 3:
+        return [((0, 0), "xx"), ((1, 1), "yy"), ((2, 2), "zz"), ((0, 1), "xy"),
+                ((1, 2), "yz"), ((0, 2), "xz")]
+    return [((0, 0), "xx"), ((1, 1), "yy"), ((0, 1), "xy")]
+
+
 def strain_stress_measures(problem: Problem) -> dict:
-    """In-plane 2x2 strain and stress CFs of the analysed state, by model: ``linear``: ε and
-    σ; ``gnl``/``neohookean``: Green–Lagrange ``E_GL`` and the second Piola–Kirchhoff ``S``
-    (``F⁻¹ ∂φ/∂F`` by automatic differentiation); ``wang``: ``E_W1``, ``E_W2`` (thesis eqs
-    5.4–5.5) and ``S`` (eq. 5.3).  design.vtu holds their xx, yy, xy element means."""
+    """The strain and stress CFs of the analysed state (2x2 in-plane in 2D, 3x3 in 3D: the
+    size of ``Grad(u)``), by model: ``linear``: ε and σ; ``gnl``/``neohookean``:
+    Green–Lagrange ``E_GL`` and the second Piola–Kirchhoff ``S`` (``F⁻¹ ∂φ/∂F`` by automatic
+    differentiation); ``wang``: ``E_W1``, ``E_W2`` (thesis eqs 5.4–5.5) and ``S`` (eq. 5.3).
+    design.vtu holds their element means (:func:`tensor_components`)."""
     from ngsolve import Grad
 
     from .physics.materials import first_piola_kirchhoff, green_lagrange, second_piola_kirchhoff

@@ -12,16 +12,19 @@ from __future__ import annotations
 import numpy as np
 
 def mesh_to_pyvista(mesh):
-    """The 2D volume elements of an NGSolve mesh as a pyvista UnstructuredGrid (z = 0).
+    """The volume elements of an NGSolve mesh as a pyvista UnstructuredGrid (z = 0 in 2D).
 
-    Cells follow NGSolve's element order; triangles and quadrilaterals (also mixed) are
-    supported.  Curved (high-order) geometry is ignored: only the vertices are used.
+    Cells follow NGSolve's element order; triangles and quadrilaterals (also mixed) in 2D,
+    tetrahedra and hexahedra in 3D (:func:`mesh_to_pyvista_3d`).  Curved (high-order)
+    geometry is ignored: only the vertices are used.
     """
     import pyvista as pv
 
+    if mesh.dim == 3:
+        return mesh_to_pyvista_3d(mesh)
     pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
     if pts.shape[1] != 2:
-        raise ValueError("only 2D meshes are supported")
+        raise ValueError("only 2D and 3D meshes are supported")
     cells = [[v.nr - 1 for v in el.vertices] for el in mesh.ngmesh.Elements2D()]
     sizes = np.array([len(c) for c in cells])
     if not np.all((sizes == 3) | (sizes == 4)):
@@ -31,6 +34,22 @@ def mesh_to_pyvista(mesh):
     return pv.UnstructuredGrid(flat, types, np.c_[pts, np.zeros(len(pts))])
 
 
+def mesh_to_pyvista_3d(mesh):
+    """The tetrahedra and hexahedra of a 3D NGSolve mesh as a pyvista UnstructuredGrid, in
+    NGSolve's element order (Netgen's vertex order of both is VTK's)."""
+    import pyvista as pv
+
+    pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
+    els = mesh.ngmesh.Elements3D().NumPy()
+    nodes = np.asarray(els["nodes"], dtype=np.int64) - 1  # 0: unused slot (now -1)
+    sizes = np.count_nonzero(nodes >= 0, axis=1)
+    if not np.all((sizes == 4) | (sizes == 8)):
+        raise ValueError("only tetrahedra and hexahedra are supported")
+    flat = np.concatenate([np.r_[n, row[:n]] for n, row in zip(sizes, nodes)])
+    types = np.where(sizes == 4, pv.CellType.TETRA, pv.CellType.HEXAHEDRON).astype(np.uint8)
+    return pv.UnstructuredGrid(flat.astype(np.int64), types, pts)
+
+
 def grid_and_densities(mesh, rho):
     """The mesh as a pyvista grid and ``rho`` as a flat float array, one value per element."""
     grid = mesh_to_pyvista(mesh)
@@ -38,6 +57,12 @@ def grid_and_densities(mesh, rho):
     if rho.shape[0] != grid.n_cells:
         raise ValueError(f"rho has {rho.shape[0]} values but the mesh has {grid.n_cells} elements")
     return grid, rho
+
+
+def cell_volumes(grid) -> np.ndarray:
+    """The volume of every cell of a 3D pyvista grid."""
+    return np.abs(np.asarray(grid.compute_cell_sizes(length=False, area=False, volume=True)
+                             .cell_data["Volume"], dtype=float))
 
 
 def cell_areas(grid) -> np.ndarray:

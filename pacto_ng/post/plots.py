@@ -1,5 +1,8 @@
 """Pictures of a run: the physical density (design.png) and the convergence history.
 
+A 3D run's design.png and pressure.png are drawn by :mod:`pacto_ng.post.plots3d` (off-screen
+pyvista: the ρ̄ = 0.5 iso-surface and a cut at mid-depth); convergence.png is the same.
+
 A case solved on a symmetric half (a straight boundary named ``symmetry``, any line: it is
 computed from that boundary's vertices, :func:`~pacto_ng.post.domain.symmetry_line`) is drawn
 whole: the half and its mirror image.  ``mirror=False`` draws the half alone; a mesh without a
@@ -76,13 +79,18 @@ def _size(allpts):
 
 def density_png(path, problem, field_name: str | None = None, title: str | None = None,
                 mirror=True):
+    rho = problem.design_density() if field_name is None else np.asarray(problem.values[field_name])
+    if problem.mesh.dim == 3:
+        from .plots3d import design_picture
+
+        design_picture(path, problem.mesh, rho, title=title or _title_3d(problem))
+        return
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
 
-    rho = problem.design_density() if field_name is None else np.asarray(problem.values[field_name])
     polys, rho, line = picture_polygons(problem.mesh, rho, mirror)
     allpts = np.concatenate(polys)
     fig, ax = plt.subplots(figsize=_size(allpts))
@@ -100,6 +108,11 @@ def density_png(path, problem, field_name: str | None = None, title: str | None 
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=120)
     plt.close(fig)
+
+
+def _title_3d(problem) -> str:
+    return (f"{problem.case.name} - {problem.params.model}, volume "
+            f"{problem.volume_fraction():.3f}")
 
 
 def convergence_png(path, history: list, objective_name: str):
@@ -153,17 +166,23 @@ def pressure_png(path, problem, title: str | None = None, leakage: float | None 
     """The Darcy pressure field with the ρ̄ = 0.5 contour of the design drawn on it (as thesis
     Figs 6.9 and 6.18): colours p / P_in at the vertices, black line the contour of the
     area-weighted nodal average of the element densities ρ̄ (the total solid for two
-    materials)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    materials); a 3D run: :func:`pacto_ng.post.plots3d.pressure_picture`."""
     block = problem.pressure_block
     mesh = problem.mesh
     rho = np.asarray(problem.values[block.inputs[0]])
     p_in = block.p_in  # the load factor scales the body force, not p
     pv = block.gfp.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
+    if mesh.dim == 3:
+        from .plots3d import pressure_picture
+
+        pressure_picture(path, mesh, pv, rho, title=title or f"{problem.case.name} (P_in = "
+                         f"{p_in:g} Pa)")
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     rho_n = nodal_average(mesh, rho, problem.field.areas)
     tri, both, line = picture_triangulation(mesh, np.c_[pv, rho_n], mirror)
     pv, rho_n = both[:, 0], both[:, 1]
