@@ -100,7 +100,9 @@ def declare(energy: Callable, **traits) -> Callable:
 
 def make_energy(params: Parameters, penal, fields=("rho_bar",)):
     """Strain-energy density ``(G, coeffs) -> CF`` and the J-guard for the chosen model; the
-    energy carries its :class:`EnergyTraits`."""
+    energy carries its :class:`EnergyTraits`.  The dimension is that of ``G`` (the mesh's):
+    ``params.plane`` applies in 2D; in 3D ``plane=stress`` raises ``ValueError`` when the
+    energy is evaluated (:func:`~pacto_ng.physics.materials.dimension`)."""
     from ..interpolation import simp2_cf, simp2_np, simp_cf, simp_np
     from .materials import get_material, jacobian
 
@@ -162,8 +164,10 @@ class MaterialSettings(Settings):
 
     model: str = setting("linear", "", "mechanics: " + " | ".join(MODELS + ("auto",)),
                          choices=MODELS + ("auto",))
-    plane: str = setting("strain", "", "strain | stress", choices=("strain", "stress"))
-    thickness: float = setting(1e-3, "m", "out-of-plane thickness t", range="[1e-9, 1e9]")
+    plane: str = setting("strain", "", "strain | stress (2D meshes; a 3D mesh takes strain and "
+                         "ignores it)", choices=("strain", "stress"))
+    thickness: float = setting(1e-3, "m", "out-of-plane thickness t (2D meshes; a 3D mesh is "
+                               "the body itself)", range="[1e-9, 1e9]")
     E1: float = setting(3e9, "Pa", "Young's modulus of the solid (soft material with two "
                         "materials)", range="[1e-12, 1e15]")
     E2: float = setting(3e9, "Pa", "Young's modulus of the stiff second material",

@@ -1,11 +1,16 @@
 """Strain-energy densities φ(∇u; E, ν) as NGSolve CoefficientFunctions (docs/theory.md §3).
 
-Every model is a pure function of the 2x2 displacement gradient ``G = ∇u`` (a CF), the
-Young's modulus ``E`` (a CF, e.g. SIMP of the density) and Poisson's ratio ``ν``.  Plane strain
-embeds ``F`` in 3x3 with ``F33 = 1``.  Plane stress uses the reduced Lamé constant
-``λ* = 2λμ/(λ+2μ)`` for the quadratic models (exact for linear elasticity; the usual
-plane-stress St Venant–Kirchhoff).  The residual and tangent come from ``Variation`` — nothing
+Every model is a pure function of the displacement gradient ``G = ∇u`` (a d x d CF; the
+dimension ``d = G.dims[0]`` is the mesh's), the Young's modulus ``E`` (a CF, e.g. SIMP of the
+density) and Poisson's ratio ``ν``.  The residual and tangent come from ``Variation`` — nothing
 is differentiated by hand.
+
+* 3D (``d = 3``): the full three-dimensional energies with the Lamé constants of :func:`lame`.
+  ``plane`` does not apply: ``"strain"`` (the default) is accepted and changes nothing,
+  ``"stress"`` raises ``ValueError`` (a solid has no plane-stress state).
+* 2D (``d = 2``): ``plane="strain"`` embeds ``F`` in 3x3 with ``F33 = 1``.  Plane stress uses
+  the reduced Lamé constant ``λ* = 2λμ/(λ+2μ)`` for the quadratic models (exact for linear
+  elasticity; the usual plane-stress St Venant–Kirchhoff).
 
 | name | φ |
 |---|---|
@@ -26,8 +31,27 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+PLANES = ("strain", "stress")
+
+
+def dimension(G, plane: str = "strain") -> int:
+    """The dimension ``d`` of the gradient ``G`` (d x d), after checking that ``plane`` applies
+    to it: ``"strain"`` or ``"stress"`` in 2D, only ``"strain"`` (no meaning, the default) in
+    3D; ``ValueError`` otherwise."""
+    if plane not in PLANES:
+        raise ValueError(f"plane must be 'strain' or 'stress' (got '{plane}')")
+    d = int(G.dims[0])
+    if d not in (2, 3):
+        raise ValueError(f"the displacement gradient must be 2x2 or 3x3 (got {d}x{d})")
+    if d == 3 and plane == "stress":
+        raise ValueError("plane=stress applies to 2D meshes only: a 3D mesh is the solid itself "
+                         "(use plane=strain, the default, which 3D ignores)")
+    return d
+
+
 def lame(E, nu, plane: str = "strain"):
-    """Lamé constants (μ, λ); plane stress returns the reduced λ*."""
+    """Lamé constants (μ, λ); ``plane="stress"`` returns the reduced λ* (2D only: the energies
+    check the dimension, :func:`dimension`)."""
     mu = E / (2.0 * (1.0 + nu))
     lam = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
     if plane == "stress":
@@ -36,35 +60,41 @@ def lame(E, nu, plane: str = "strain"):
 
 
 def linear_energy(G, E, nu, plane="strain"):
-    """Small-strain energy ``λ/2 tr(ε)² + μ ε:ε`` with ``ε = sym G``."""
+    """Small-strain energy ``λ/2 tr(ε)² + μ ε:ε`` with ``ε = sym G`` (2D or 3D)."""
     from ngsolve import InnerProduct, Trace
 
+    dimension(G, plane)
     mu, lam = lame(E, nu, plane)
     eps = 0.5 * (G + G.trans)
     return 0.5 * lam * Trace(eps) ** 2 + mu * InnerProduct(eps, eps)
 
 
 def green_lagrange(G):
+    """Green–Lagrange strain ``½ (FᵀF - I)`` with ``F = I + G`` (2D or 3D)."""
     from ngsolve import Id
 
-    F = Id(2) + G
-    return 0.5 * (F.trans * F - Id(2))
+    d = dimension(G)
+    F = Id(d) + G
+    return 0.5 * (F.trans * F - Id(d))
 
 
 def svk_energy(G, E, nu, plane="strain"):
-    """St Venant–Kirchhoff ``λ/2 tr(E)² + μ E:E`` on the Green–Lagrange strain (F33 = 1)."""
+    """St Venant–Kirchhoff ``λ/2 tr(E)² + μ E:E`` on the Green–Lagrange strain (3D; in 2D the
+    in-plane strain, F33 = 1)."""
     from ngsolve import InnerProduct, Trace
 
+    dimension(G, plane)
     mu, lam = lame(E, nu, plane)
     Eg = green_lagrange(G)
     return 0.5 * lam * Trace(Eg) ** 2 + mu * InnerProduct(Eg, Eg)
 
 
 def jacobian(G):
-    """``J = det F`` of the in-plane deformation (F33 = 1 in plane strain)."""
+    """``J = det F``, ``F = I + G`` (3D; in 2D of the in-plane deformation, F33 = 1 in plane
+    strain)."""
     from ngsolve import Det, Id
 
-    return Det(Id(2) + G)
+    return Det(Id(dimension(G)) + G)
 
 
 _PS_ITERATIONS = 8  # local Newton iterations for F33 (converged to round-off, see below)
@@ -87,6 +117,8 @@ def plane_stress_stretch(G, nu):
     ``ds/dJ2 = -h_J2 / h_s``.  Because ``∂φ/∂c = 0`` at ``s*``, the energy's gradient and
     Hessian need nothing more (``d²ψ = φ_FF + φ_Fc c' + φ_cc c'²``), so residual and tangent
     are exact.  Only ``ν`` enters (``E`` cancels).
+
+    2D only (plane stress).
 
     Parameters
     ----------
@@ -123,18 +155,21 @@ def plane_stress_stretch(G, nu):
 def neohookean_energy(G, E, nu, plane="strain"):
     """Compressible Neo-Hookean ``μ/2 (I1 - 3) - μ ln J + λ/2 (ln J)²`` (thesis eq. 4.4).
 
-    Plane strain embeds ``F`` with ``F33 = 1``: ``I1 = F:F + 1``, ``J = det F``.  Plane stress
-    uses ``F33 = c`` from ``S33 = 0`` (:func:`plane_stress_stretch`): ``I1 = F:F + c²``,
-    ``J = c det F``, with the 3-D Lamé constants (the reduced ``λ*`` of :func:`lame` is the
-    small-strain limit of this model, not an input to it).
+    3D: ``I1 = F:F``, ``J = det F``.  2D plane strain embeds ``F`` with ``F33 = 1``:
+    ``I1 = F:F + 1``, ``J = det F``.  2D plane stress uses ``F33 = c`` from ``S33 = 0``
+    (:func:`plane_stress_stretch`): ``I1 = F:F + c²``, ``J = c det F``, with the 3-D Lamé
+    constants (the reduced ``λ*`` of :func:`lame` is the small-strain limit of this model, not
+    an input to it).
     """
     from ngsolve import Id, InnerProduct, log
 
-    if plane not in ("strain", "stress"):
-        raise ValueError(f"plane must be 'strain' or 'stress' (got '{plane}')")
+    d = dimension(G, plane)
     mu, lam = lame(E, nu, "strain")
-    F = Id(2) + G
-    if plane == "strain":
+    F = Id(d) + G
+    if d == 3:
+        I1 = InnerProduct(F, F)
+        lnJ = log(jacobian(G))
+    elif plane == "strain":
         I1 = InnerProduct(F, F) + 1.0  # tr(FᵀF) with F33 = 1
         lnJ = log(jacobian(G))
     else:
@@ -148,7 +183,7 @@ def neohookean_energy(G, E, nu, plane="strain"):
 # Stresses for output, by automatic differentiation of an energy
 # ----------------------------------------------------------------------------------------
 def first_piola_kirchhoff(phi, G):
-    """First Piola–Kirchhoff stress ``P = ∂φ/∂F = ∂φ/∂(∇u)`` (2x2, in-plane).
+    """First Piola–Kirchhoff stress ``P = ∂φ/∂F = ∂φ/∂(∇u)`` (d x d: 3D, or in-plane in 2D).
 
     Parameters
     ----------
@@ -163,19 +198,21 @@ def first_piola_kirchhoff(phi, G):
 
 
 def second_piola_kirchhoff(phi, G):
-    """Second Piola–Kirchhoff stress ``S = F⁻¹ P = ∂φ/∂E_GL`` (thesis eq. 4.3), in-plane 2x2.
+    """Second Piola–Kirchhoff stress ``S = F⁻¹ P = ∂φ/∂E_GL`` (thesis eq. 4.3), d x d (3D, or
+    in-plane in 2D).
 
     ``P`` comes from :func:`first_piola_kirchhoff`; ``F⁻¹ P`` is the kinematic identity
     ``P = F S``.  For the small-strain ``linear`` energy use ``P`` itself (``σ = ∂φ/∂ε``).
     """
     from ngsolve import Id, Inv
 
-    return Inv(Id(2) + G) * first_piola_kirchhoff(phi, G)
+    return Inv(Id(dimension(G)) + G) * first_piola_kirchhoff(phi, G)
 
 
 @dataclass(frozen=True)
 class Material:
-    """A named strain-energy model ``energy(G, E, ν, plane)`` and what it declares:
+    """A named strain-energy model ``energy(G, E, ν, plane)`` (2D or 3D ``G``) and what it
+    declares:
 
     * ``needs_positive_J``: a state with ``det F <= 0`` is outside the model's domain (the
       Newton guard checks it);

@@ -9,8 +9,9 @@ do not stop Newton.  With ``G = ∇u`` and an element-wise interpolation factor 
 
 where ``φ_H`` is a hyperelastic energy (Neo-Hookean, thesis eq. 4.4, by default; St
 Venant–Kirchhoff possible) and ``φ_L`` the linear energy (thesis eqs 2.11–2.12), both with the
-SIMP modulus ``E(ρ̄)``.  ``γ = 0`` gives ``φ_L(G)`` exactly (``φ_H(0) = φ_L(0) = 0``), ``γ = 1``
-gives ``φ_H(G)`` exactly.  The interpolation factor is (thesis eq. 5.2)
+SIMP modulus ``E(ρ̄)``, in the dimension of the mesh (3D, or 2D with its ``plane`` setting,
+:mod:`~pacto_ng.physics.materials`).  ``γ = 0`` gives ``φ_L(G)`` exactly
+(``φ_H(0) = φ_L(0) = 0``), ``γ = 1`` gives ``φ_H(G)`` exactly.  The interpolation factor is (thesis eq. 5.2)
 
     γ = H(ρ̄^p; η1, β1) = (tanh(β1 η1) + tanh(β1 (ρ̄^p - η1))) / (tanh(β1 η1) + tanh(β1 (1 - η1))),
 
@@ -36,7 +37,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from .materials import (first_piola_kirchhoff, linear_energy, neohookean_energy, svk_energy)
+from .materials import (PLANES, dimension, first_piola_kirchhoff, linear_energy,
+                        neohookean_energy, svk_energy)
 
 HYPERELASTIC = {"neohookean": (neohookean_energy, True), "gnl": (svk_energy, False)}
 
@@ -84,8 +86,8 @@ class WangModel:
     """The Wang interpolation of one hyperelastic model, as the energy/guard pair
     :class:`~pacto_ng.physics.mechanics.Mechanics` takes, plus output measures.
 
-    ``energy, guard = model`` unpacks it.  Every method takes ``G`` (a 2x2 CF, ``∇u``) and
-    ``coeffs`` (field name -> GridFunction, as Mechanics passes them).
+    ``energy, guard = model`` unpacks it.  Every method takes ``G`` (a d x d CF, ``∇u``; 2D or
+    3D) and ``coeffs`` (field name -> GridFunction, as Mechanics passes them).
 
     Parameters
     ----------
@@ -94,6 +96,8 @@ class WangModel:
     nu : float
         Poisson's ratio.
     plane : {"strain", "stress"}
+        2D meshes only; on a 3D mesh ``"stress"`` raises ``ValueError`` when the energy is
+        built and ``"strain"`` changes nothing.
     field : str
         Name of the physical density ``ρ̄`` in ``coeffs``.
     penal : float or Parameter
@@ -122,7 +126,7 @@ class WangModel:
 
     def __post_init__(self):
         _hyper(self.hyper)
-        if self.plane not in ("strain", "stress"):
+        if self.plane not in PLANES:
             raise ValueError(f"plane must be 'strain' or 'stress' (got '{self.plane}')")
         if isinstance(self.beta, (int, float)) and self.beta < 0:
             raise ValueError("wang beta must be >= 0")
@@ -145,7 +149,7 @@ class WangModel:
         """``det(I + γ G)``: the deformation whose logarithm enters ``φ_H(γG)``."""
         from ngsolve import Det, Id
 
-        return Det(Id(2) + self.gamma(coeffs) * G)
+        return Det(Id(dimension(G)) + self.gamma(coeffs) * G)
 
     @property
     def guard(self):
@@ -176,9 +180,10 @@ class WangModel:
         """``E_W1 = E_GL(γG) - ε(γG) + ε(G)`` (eq. 5.4): nonlinear part scaled by ``γ²``."""
         from ngsolve import Id
 
+        d = dimension(G)
         gG = self.gamma(coeffs) * G
-        Fg = Id(2) + gG
-        egl = 0.5 * (Fg.trans * Fg - Id(2))
+        Fg = Id(d) + gG
+        egl = 0.5 * (Fg.trans * Fg - Id(d))
         return egl - _sym(gG) + _sym(G)
 
     def strain_w2(self, G, coeffs):
@@ -186,7 +191,7 @@ class WangModel:
         return _sym(G) + self.gamma(coeffs) * (0.5 * (G.trans * G))
 
     def stress(self, G, coeffs):
-        """``S = S_H(γG) - S_L(γG) + S_L(G)`` (eq. 5.3, App. E.2), 2x2 in-plane.
+        """``S = S_H(γG) - S_L(γG) + S_L(G)`` (eq. 5.3, App. E.2), d x d (in-plane in 2D).
 
         ``S_H(A) = (I + A)⁻¹ ∂φ_H/∂A`` and ``S_L(A) = ∂φ_L/∂A = λ tr ε I + 2μ ε``, both from
         ``.Diff`` of the energies.
@@ -196,7 +201,8 @@ class WangModel:
         E, nu, plane = self.modulus(coeffs), self.nu, self.plane
         phi_h = _hyper(self.hyper)[0]
         gG = self.gamma(coeffs) * G
-        s_h = Inv(Id(2) + gG) * first_piola_kirchhoff(lambda A: phi_h(A, E, nu, plane), gG)
+        s_h = Inv(Id(dimension(G)) + gG) * first_piola_kirchhoff(
+            lambda A: phi_h(A, E, nu, plane), gG)
         s_l = lambda A: first_piola_kirchhoff(lambda B: linear_energy(B, E, nu, plane), A)
         return s_h - s_l(gG) + s_l(G)
 
