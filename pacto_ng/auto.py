@@ -38,10 +38,10 @@ def material_strain(mech, q: float = 0.99) -> tuple[float, float]:
     """``(s, largest)``: the strain ``s`` that a fraction ``q`` of the material stays below (the
     measure ``ρ̄ dx`` of the first design field, at the mechanics' quadrature points), and the
     largest strain at a point with ρ̄ >= 0.5 (0 if there is none)."""
-    from ngsolve import QUAD, TRIG, VOL, IfPos, Integrate, Parameter
+    from ngsolve import VOL, IfPos, Integrate, Parameter
 
     eps, rho = strain_field(mech), mech.fields[0].gf
-    pts = mech.mesh.MapToAllElements({TRIG: mech.rules[TRIG], QUAD: mech.rules[QUAD]}, VOL)
+    pts = mech.mesh.MapToAllElements(mech.rules, VOL)
     e_pts = np.asarray(eps(pts)).ravel()
     r_pts = np.asarray(rho(pts)).ravel()
     solid = e_pts[r_pts >= 0.5]

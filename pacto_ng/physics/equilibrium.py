@@ -147,14 +147,17 @@ class Equilibrium:
         return bool(np.all(np.isfinite(vals)) and np.min(vals) > 0.0)
 
     def lowest_jacobian(self, points: str = "quadrature") -> dict:
-        """Where ``det F`` (of the in-plane deformation, ``F = I + ∇u`` of the current
-        displacement) is lowest: ``{"J", "element", "point"}`` with the element's index (NGSolve's
-        order) and the kind of point (``"quadrature point"``, ``"vertex"``, ``"edge midpoint"``
-        or ``"centroid"``).  ``points``: ``"quadrature"`` (the points of the forms' rule) or
-        ``"corners"`` (vertices, edge midpoints and centroid only)."""
-        from ngsolve import QUAD, VOL, Grad
+        """Where ``det F`` (``F = I + ∇u`` of the current displacement; in 2D of the in-plane
+        deformation) is lowest: ``{"J", "element", "point"}`` with the element's index
+        (NGSolve's order) and the kind of point (``"quadrature point"``, ``"vertex"``, ``"edge
+        midpoint"`` or ``"centroid"``).  ``points``: ``"quadrature"`` (the points of the forms'
+        rule) or ``"corners"`` (vertices, edge midpoints and centroid only).  Any element type
+        of :mod:`~pacto_ng.physics.quadrature`: triangles, quadrilaterals, tetrahedra,
+        hexahedra."""
+        from ngsolve import VOL, Grad
 
         from .materials import jacobian
+        from .quadrature import element_points
 
         if points not in ("quadrature", "corners"):
             raise ValueError(f"points must be 'quadrature' or 'corners' (got '{points}')")
@@ -164,9 +167,7 @@ class Equilibrium:
         start = 0
         for el in self.mesh.Elements(VOL):
             n_quad = len(self.rules[el.type].points)
-            n_vert = 4 if el.type == QUAD else 3
-            kinds = (["quadrature point"] * n_quad + ["vertex"] * n_vert
-                     + ["edge midpoint"] * n_vert + ["centroid"])
+            kinds = ["quadrature point"] * n_quad + element_points(el.type.name)[1]
             own = vals[start:start + len(kinds)]
             start += len(kinds)
             sel = slice(0, n_quad) if points == "quadrature" else slice(n_quad, None)

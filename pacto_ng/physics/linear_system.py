@@ -64,8 +64,9 @@ class LinearSystem:
     """
 
     def __init__(self, mech, coupling=None):
-        from ngsolve import (CF, L2, BilinearForm, GridFunction, Grad, LinearForm, QUAD, TRIG,
-                             VOL, IntegrationRule)
+        from ngsolve import CF, L2, BilinearForm, GridFunction, Grad, LinearForm, VOL
+
+        from .quadrature import centroid_rules
 
         self.mech = mech
         self._Ku, self._Ku_at = None, None  # K u of the last residual and (version, u) of it
@@ -81,9 +82,7 @@ class LinearSystem:
         phis = [mech.thickness * mech.energy(G, mech.coeffs) for G in Gs]
         Cs = [phi.Diff(G).Diff(G).Reshape((dd, dd)).Compile() for phi, G in zip(phis, Gs)]
         self.C = Cs[0]
-        self._centroids = mesh.MapToAllElements(
-            {TRIG: IntegrationRule([(1 / 3, 1 / 3)], [0.5]),
-             QUAD: IntegrationRule([(0.5, 0.5)], [1.0])}, VOL)
+        self._centroids = mesh.MapToAllElements(centroid_rules(), VOL)
         self._verify_quadratic(Cs, phis, Gs)
         self.l2C = L2(mesh, order=0, dim=dd * dd)
         self.gfC = GridFunction(self.l2C)

@@ -1,14 +1,54 @@
 """The quadrature of the mechanics (and Darcy) forms: one rule for every form of a block, and
 the points where the ``det F`` guard is checked (the rule's own points, or those and the
-element's vertices, edge midpoints and centroid: :data:`GUARD_POINTS`)."""
+element's vertices, edge midpoints and centroid: :data:`GUARD_POINTS`).
+
+Rules exist for every element type a mesh of this toolkit has: triangles and quadrilaterals
+(2D), tetrahedra and hexahedra (3D); a dictionary of rules holds all four, so that one serves
+a mesh of either dimension.
+"""
 from __future__ import annotations
+
+import itertools
+
+#: the reference elements by NGSolve's type name: their vertices and edges (vertex pairs)
+_SQUARE = [(0, 0), (1, 0), (1, 1), (0, 1)]
+_CUBE = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+REFERENCE = {
+    "TRIG": ([(0, 0), (1, 0), (0, 1)], [(0, 1), (1, 2), (2, 0)]),
+    "QUAD": (_SQUARE, [(0, 1), (1, 2), (2, 3), (3, 0)]),
+    "TET": ([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)],
+            list(itertools.combinations(range(4), 2))),
+    "HEX": (_CUBE, [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
+                    (0, 4), (1, 5), (2, 6), (3, 7)]),
+}
+
+
+def _types():
+    """``[(ngsolve element type, name)]`` of the element types of :data:`REFERENCE`."""
+    import ngsolve
+
+    return [(getattr(ngsolve, name), name) for name in REFERENCE]
 
 
 def integration_rules(order: int):
-    """The one quadrature rule used by every form of an order-``order`` displacement."""
-    from ngsolve import QUAD, TRIG, IntegrationRule
+    """The one quadrature rule used by every form of an order-``order`` displacement, per
+    element type (triangle, quadrilateral, tetrahedron, hexahedron)."""
+    from ngsolve import IntegrationRule
 
-    return {TRIG: IntegrationRule(TRIG, order), QUAD: IntegrationRule(QUAD, order)}
+    return {et: IntegrationRule(et, order) for et, _ in _types()}
+
+
+def centroid_rules():
+    """One point per element, its centroid (weight: the reference element's measure), per
+    element type: for element-wise constants evaluated with ``MapToAllElements``."""
+    from ngsolve import IntegrationRule
+
+    out = {}
+    for et, name in _types():
+        verts = REFERENCE[name][0]
+        c = tuple(sum(v[k] for v in verts) / len(verts) for k in range(len(verts[0])))
+        out[et] = IntegrationRule([c], [IntegrationRule(et, 0).weights[0]])
+    return out
 
 
 #: where a guard can be checked: ``"quadrature"``, the points of the forms' rule (where the
@@ -17,24 +57,32 @@ def integration_rules(order: int):
 #: point still sees J > 0)
 GUARD_POINTS = ("quadrature", "element")
 
-#: reference-element points of the ``"element"`` guard besides the quadrature points
-_EXTRA_GUARD_POINTS = {
-    "TRIG": [(0, 0), (1, 0), (0, 1), (0.5, 0), (0.5, 0.5), (0, 0.5), (1 / 3, 1 / 3)],
-    "QUAD": [(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0), (1, 0.5), (0.5, 1), (0, 0.5), (0.5, 0.5)],
-}
+
+def element_points(name: str):
+    """``(points, kinds)``: the reference-element vertices, edge midpoints and centroid of the
+    element type ``name`` (``"TRIG"``, ``"QUAD"``, ``"TET"``, ``"HEX"``), in this order, and
+    what each is (``"vertex"``, ``"edge midpoint"``, ``"centroid"``)."""
+    verts, edges = REFERENCE[name]
+    dim = len(verts[0])
+    mids = [tuple(0.5 * (verts[a][k] + verts[b][k]) for k in range(dim)) for a, b in edges]
+    centroid = tuple(sum(v[k] for v in verts) / len(verts) for k in range(dim))
+    points = [tuple(float(c) for c in v) for v in verts] + mids + [centroid]
+    kinds = ["vertex"] * len(verts) + ["edge midpoint"] * len(edges) + ["centroid"]
+    return points, kinds
 
 
 def guard_rules(rules, points: str = "element"):
     """The quadrature points of ``rules``, with ``points="element"`` (default) followed by the
-    vertices, edge midpoints and centroid (:data:`GUARD_POINTS`)."""
-    from ngsolve import QUAD, TRIG, IntegrationRule
+    vertices, edge midpoints and centroid (:func:`element_points`), per element type."""
+    from ngsolve import IntegrationRule
 
     if points not in GUARD_POINTS:
         raise ValueError(f"guard points must be one of {', '.join(GUARD_POINTS)} (got '{points}')")
     out = {}
-    for et, key in ((TRIG, "TRIG"), (QUAD, "QUAD")):
-        pts = [tuple(p[:2]) for p in rules[et].points]
+    for et, name in _types():
+        dim = len(REFERENCE[name][0][0])
+        pts = [tuple(p[:dim]) for p in rules[et].points]
         if points == "element":
-            pts += _EXTRA_GUARD_POINTS[key]
+            pts += element_points(name)[0]
         out[et] = IntegrationRule(pts, [0.0] * len(pts))
     return out

@@ -16,6 +16,8 @@ are ``S_kᵀ w`` with ``w`` the products ``x_i y_j`` of the stored entries.
 ``S_k`` is found by assembling the form itself with ``c_k`` the indicator of a set of elements
 that share no vertex (a colouring): every stored entry then belongs to one element of the set.
 The result is checked against a direct assembly with random coefficients before it is used.
+Nothing here depends on the dimension: it serves triangles and quadrilaterals, tetrahedra and
+hexahedra alike.
 """
 from __future__ import annotations
 
@@ -78,7 +80,9 @@ class ElementMatrices:
     max_entries : int
         Above this many entries of the ``S_k`` together (about 12 bytes each), :meth:`build`
         returns None (the memory of high orders on fine meshes), and the form is assembled as
-        before.  The build costs one assembly per colour and term (about 4-12 colours).
+        before.  The build costs one assembly per colour and term (4-12 colours in 2D, 8 on
+        structured hexahedra; on Netgen tetrahedra measured 22 colours for 157 elements, 46 for
+        851).
 
     A form that is not of this kind (an entry no single element explains, or the check against
     NGSolve's assembly with random coefficients) raises ``ValueError``: the caller declared it.
