@@ -3,7 +3,10 @@ ratio −sΔ/SE, and volume.
 
 Each returns a float from ``forward`` and, from ``backward(g)``, ``g`` times its partial
 derivatives: a vector on the displacement space for ``u`` and numpy arrays for element fields.
-The displacement part is what the mechanics block's adjoint solve consumes.
+The displacement part is what the mechanics block's adjoint solve consumes.  Every response
+holds on 2D and 3D meshes alike: the mechanics block's thickness ``t`` is 1 on a 3D mesh (its
+integrals are over the volume), and ``Volume``'s element measures are areas in 2D and volumes
+in 3D.
 """
 from __future__ import annotations
 

@@ -4,6 +4,8 @@ The pressure ``p`` is the output of :class:`~pacto_ng.physics.darcy.DarcyPressur
 :class:`~pacto_ng.physics.mechanics.Mechanics` as a field on its own space
 (:meth:`~pacto_ng.physics.darcy.DarcyPressure.field`) through one of two loads:
 
+Both hold in 2D (``t`` the thickness) and 3D (``t = 1``, the integral over the volume).
+
 * fixed load (thesis eq. 3.8): body force ``b = -∇p``, external work ``t ∫ -∇p·u dΩ``
   (``f = -H p``), deformation independent (docs/theory.md §4).  :func:`darcy_body` gives it to
   :class:`~pacto_ng.physics.mechanics.Mechanics`, whose load factor multiplies it; the pressure
@@ -60,17 +62,22 @@ def darcy_follower(p_name: str = "p", gamma=None):
     multiplies it by the thickness; ``s`` is its load-factor Parameter.
 
     The cofactor ``cof(F) = J F⁻ᵀ`` is used rather than ``det F · F⁻ᵀ``: it is polynomial in
-    ``∇u`` (affine in 2D: ``cof(I + G) = I + cof(G)``), defined for every ``F`` (also where the
+    ``∇u`` (affine in 2D: ``cof(I + G) = I + cof(G)``; quadratic in 3D:
+    ``cof(I + G) = I + (tr G I - Gᵀ) + cof(G)``), defined for every ``F`` (also where the
     fictitious void is inverted) and differentiated by NGSolve without a division.  Because it
     is affine in 2D, a *linear* material with this load still has a residual that is affine in
-    ``u``: one Newton step is exact.  In plane stress the change of the out-of-plane thickness
-    is not included in the load (the pressure acts on the reference thickness).
+    ``u`` in 2D: one Newton step is exact.  In 3D it is not: the density declares
+    ``affine_dims = (2,)``, and :class:`~pacto_ng.physics.mechanics.Mechanics` solves a linear
+    material with it on a 3D mesh by Newton (with the tangent at the solution for the
+    adjoint).  In plane stress (2D) the change of the out-of-plane thickness is not included
+    in the load (the pressure acts on the reference thickness).
 
     ``gamma`` (a callable ``coeffs -> CF`` in [0, 1], e.g. the Wang interpolation factor
     :meth:`~pacto_ng.physics.wang.WangModel.gamma`): the load follows ``F_γ = I + γ∇u``, the
     deformation the Wang energy's large-strain part sees, instead of ``F``:
     ``cof(F_γ) = I + γ cof(∇u)`` in 2D.  In solid (γ = 1) this is the follower load; in void
-    (γ = 0) it is the fixed load, as small-strain theory models the void.  Without it the
+    (γ = 0) it is the fixed load, as small-strain theory models the void (in 3D
+    ``cof(F_γ)`` is quadratic in ``γ∇u``, with the same two limits).  Without it the
     load's own stiffness (of the order of the pressure) acts on void material whose stiffness
     is E0: once the pressure exceeds E0 by far, the fictitious void can buckle under its own
     load and Newton finds no equilibrium.
@@ -92,6 +99,7 @@ def darcy_follower(p_name: str = "p", gamma=None):
         F = Id(G.dims[0]) + G
         return load * InnerProduct(Cof(F) * grad(coeffs[p_name]), v)
 
+    density.affine_dims = (2,)  # declared: affine in u on 2D meshes only (see above)
     return density
 
 

@@ -6,6 +6,11 @@ spread uniformly over a named boundary (so that a "point" load does not invert t
 under it), a :class:`Spring` resists the displacement component along ``direction`` at a named
 point (``k/2 (d·u)²``) or, on a named boundary, its mean over that boundary.  The
 Darcy pressure loads live in :mod:`pacto_ng.physics.darcy_load`.
+
+Regions by dimension: in 2D a named point (a vertex region) or a named boundary edge; in 3D a
+named point (a vertex region), a named edge (its mean over the edge's length) or a named face
+(its mean over the face's area).  Forces and directions have as many components as the mesh
+has dimensions (``ValueError`` otherwise).
 """
 from __future__ import annotations
 
@@ -27,23 +32,41 @@ class LoadSettings(Settings):
 
 
 def _region(mesh, name):
-    if name in mesh.GetBBoundaries():
-        return mesh.BBoundaries(name), "point"
+    """``(region, kind)`` of a named point (``"point"``) or boundary: in 2D a named edge
+    (``"boundary"``); in 3D a named face (``"boundary"``) or a named edge (``"edge"``)."""
+    points = mesh.BBBoundaries if mesh.dim == 3 else mesh.BBoundaries
+    named_points = mesh.GetBBBoundaries() if mesh.dim == 3 else mesh.GetBBoundaries()
+    if name in named_points:
+        return points(name), "point"
+    if mesh.dim == 3 and name in mesh.GetBBoundaries():
+        return mesh.BBoundaries(name), "edge"
     if name in mesh.GetBoundaries():
-        return mesh.Boundaries(name), "edge"
+        return mesh.Boundaries(name), "boundary"
     raise ValueError(f"port '{name}' is neither a named point nor a boundary of the mesh")
 
 
 def _measure(mesh, name):
+    """``(measure, weight)``: a point's measure and weight 1 (the value at its vertices), or a
+    boundary's (an edge's in 3D) measure and one over its length or area (the mean over it)."""
     from ngsolve import Integrate, dx, ds
 
     reg, kind = _region(mesh, name)
     if kind == "point":
         return dx(definedon=reg), 1.0
-    length = Integrate(1.0, mesh, definedon=reg)
-    if length <= 0:
+    size = Integrate(1.0, mesh, definedon=reg)
+    if size <= 0:
         raise ValueError(f"boundary '{name}' is empty")
-    return ds(definedon=reg), 1.0 / length
+    return (ds(definedon=reg) if kind == "boundary" else dx(definedon=reg)), 1.0 / size
+
+
+def _vector(mesh, values, what: str, region: str):
+    """``values`` as a CF of the mesh's dimension (``ValueError`` if the length differs)."""
+    from ngsolve import CF
+
+    if len(values) != mesh.dim:
+        raise ValueError(f"{what} at '{region}': {len(values)} components on a {mesh.dim}D mesh "
+                         f"(give {mesh.dim})")
+    return CF(tuple(float(v) for v in values))
 
 
 @dataclass(frozen=True)
@@ -55,10 +78,9 @@ class PointLoad:
 
     def work(self, mesh, u, scale=1.0):
         """``scale · F·u`` as an integral (``scale`` may be a Parameter)."""
-        from ngsolve import CF
-
+        force = _vector(mesh, self.force, "force", self.region)
         meas, w = _measure(mesh, self.region)
-        return (scale * w * (CF(tuple(self.force)) * u)) * meas
+        return (scale * w * (force * u)) * meas
 
 
 EdgeLoad = PointLoad
@@ -66,7 +88,8 @@ EdgeLoad = PointLoad
 
 @dataclass(frozen=True)
 class Spring:
-    """Linear spring ``k/2 (d·u)²`` at a named point (or on the mean of a boundary), N/m."""
+    """Linear spring ``k/2 (d·u)²`` at a named point (or on the mean of a boundary), N/m;
+    ``direction`` has as many components as the mesh has dimensions (the default is 2D's x)."""
 
     region: str
     stiffness: float
@@ -75,6 +98,7 @@ class Spring:
     def energy(self, mesh, u):
         from ngsolve import CF
 
+        _vector(mesh, self.direction, "spring direction", self.region)
         meas, w = _measure(mesh, self.region)
         d = np.asarray(self.direction, dtype=float)
         d = d / np.linalg.norm(d)
@@ -104,10 +128,9 @@ class Port:
                              f"(got {self.weight})")
 
     def functional(self, mesh, u):
-        from ngsolve import CF
-
+        direction = _vector(mesh, self.direction, "port direction", self.region)
         meas, w = _measure(mesh, self.region)
-        return (self.weight * w) * (CF(tuple(self.direction)) * u) * meas
+        return (self.weight * w) * (direction * u) * meas
 
     def springs(self) -> tuple[Spring, ...]:
         """The port's output spring (none for ``spring`` = 0)."""

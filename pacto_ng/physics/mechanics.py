@@ -4,7 +4,9 @@ The total potential is
 
     Π(u) = t ∫ φ(∇u; fields) dΩ + Σ springs - s [ Σ point/edge loads · u + t ∫ b(p) · u dΩ ]
 
-with thickness ``t`` and load factor ``s``.  The residual ``R = ∂Π/∂u`` and the tangent come from
+with thickness ``t`` and load factor ``s``.  The dimension is the mesh's: on a 2D mesh ``Ω`` is
+the cross-section of a slice of thickness ``t``; on a 3D mesh ``Ω`` is the body and ``t = 1``
+(required: the integrals are over the volume).  The residual ``R = ∂Π/∂u`` and the tangent come from
 NGSolve's ``Variation`` (automatic differentiation).  Equilibrium is found by
 :func:`~pacto_ng.physics.newton.solve_with_continuation`.
 
@@ -61,7 +63,8 @@ _UNDECLARED = object()  # a body without the attribute linear_in
 
 @dataclass(frozen=True)
 class Supports:
-    """Dirichlet conditions by region name (boundaries or named points): ``clamp`` fixes
+    """Dirichlet conditions by region name (boundaries, named points, and in 3D named edges
+    too): ``clamp`` fixes
     every displacement component (as many as the mesh has dimensions), ``fix_x``, ``fix_y``,
     ``fix_z`` one component each (``fix_z``: 3D meshes only)."""
 
@@ -96,8 +99,11 @@ class Mechanics(Equilibrium, Adjoint):
     Parameters
     ----------
     mesh : ngsolve.Mesh
+        2D (triangles, quadrilaterals) or 3D (tetrahedra, hexahedra).
     order : int
         Polynomial order of the VectorH1 displacement (1, 2, 3).
+    thickness : float
+        Out-of-plane thickness ``t`` of a 2D mesh; must be 1 on a 3D mesh.
     energy : callable ``(G, coeffs) -> CF``
         Strain-energy density per unit volume; ``G = ∇u`` and ``coeffs`` maps every field name
         to its GridFunction.  Its ``traits`` attribute
@@ -124,7 +130,10 @@ class Mechanics(Equilibrium, Adjoint):
         or also every element's vertices, edge midpoints and centroid; :attr:`guard_points`).
     linear : bool
         The whole residual (residual density and terms included) is linear in u (one Newton
-        step; the tangent does not depend on u).
+        step; the tangent does not depend on u).  A residual density may declare the mesh
+        dimensions in which it is affine in u (its attribute ``affine_dims``, e.g. the Darcy
+        follower load: 2D only); on a mesh of another dimension the block is nonlinear
+        (:attr:`linear` False) whatever ``linear`` says.
     residual_terms : callable ``(u, v, load) -> integral`` or None
         Extra residual terms that are not the derivative of a potential (e.g. a follower
         pressure): the returned sum of integrals, linear in the test function ``v``, is *added
@@ -175,27 +184,37 @@ class Mechanics(Equilibrium, Adjoint):
             raise ValueError(f"element order must be 1, 2 or 3 (got {order})")
         if thickness <= 0:
             raise ValueError("thickness must be positive")
+        if mesh.dim == 3 and thickness != 1.0:
+            raise ValueError(f"thickness must be 1 on a 3D mesh (got {thickness:g}): the "
+                             f"integrals are over the volume")
         self.mesh, self.order, self.thickness = mesh, order, float(thickness)
         conservative = residual_terms is None and residual_density is None
         self.symmetric = conservative if symmetric is None else bool(symmetric)
         if inverse is None:
             inverse = "sparsecholesky" if self.symmetric else "umfpack"
-        self.linear, self.settings, self.inverse_type = linear, newton, inverse
+        if residual_density is not None and mesh.dim not in getattr(
+                residual_density, "affine_dims", (mesh.dim,)):
+            linear = False  # e.g. the follower load's cofactor: quadratic in ∇u in 3D
+        self.linear, self.settings, self.inverse_type = bool(linear), newton, inverse
         self.realcompile = bool(realcompile)
         self.fields = [f if isinstance(f, Field) else Field(f) for f in fields]
         self.inputs = tuple(f.name for f in self.fields)
         self.output = output
+        # the named regions by codimension: boundaries, then (2D) points or (3D) edges, then
+        # (3D) points
+        regions = {"": mesh.GetBoundaries(), "_bbnd": mesh.GetBBoundaries()}
+        if mesh.dim == 3:
+            regions["_bbbnd"] = mesh.GetBBBoundaries()
         for name in supports.names():
-            if name not in mesh.GetBoundaries() and name not in mesh.GetBBoundaries():
-                raise ValueError(f"support region '{name}' is not a boundary or point of the mesh")
+            if not any(name in known for known in regions.values()):
+                raise ValueError(f"support region '{name}' is not a boundary, edge or point of "
+                                 f"the mesh")
         kw = {}
         for axis, names in zip("xyz", supports.per_component(mesh.dim)):
-            on_bnd = [n for n in names if n in mesh.GetBoundaries()]
-            on_bbnd = [n for n in names if n in mesh.GetBBoundaries()]
-            if on_bnd:
-                kw[f"dirichlet{axis}"] = "|".join(on_bnd)
-            if on_bbnd:
-                kw[f"dirichlet{axis}_bbnd"] = "|".join(on_bbnd)
+            for suffix, known in regions.items():
+                on = [n for n in names if n in known]
+                if on:
+                    kw[f"dirichlet{axis}{suffix}"] = "|".join(on)
         self.fes = VectorH1(mesh, order=order, **kw)
         self.free = np.array(list(self.fes.FreeDofs()), dtype=bool)
         if self.free.all():
