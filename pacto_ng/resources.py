@@ -129,6 +129,11 @@ def run_memory(dofs: float, order: int, elements: float, *, quads: bool = False,
     return run_overheads(system, elements, local, dim=2)
 
 
+def mesh_bytes(elements: float) -> float:
+    """The memory of a mesh of ``elements`` elements (Netgen + NGSolve), as the fits count it."""
+    return _MESH_BYTES * elements
+
+
 def run_overheads(system: float, elements: float, local: float, *, dim: int) -> float:
     """A run's memory around its displacement ``system`` (bytes, assembled and factorised):
     the system times ``_RUN_FACTOR``, the mesh, and the linear fast paths' element matrices
@@ -138,7 +143,7 @@ def run_overheads(system: float, elements: float, local: float, *, dim: int) -> 
     for entries in (elements * (dim * local) ** 2, 2 * elements * local ** 2):  # u; Darcy K, D
         if entries <= _SCATTER_MAX:  # above it the fast path is not built
             scatter += _SCATTER_BYTES * entries
-    return _RUN_FACTOR * system + _MESH_BYTES * elements + scatter
+    return _RUN_FACTOR * system + mesh_bytes(elements) + scatter
 
 
 def vector_h1_dofs(order: int, *, vertices: float, edges: float, trigs: float = 0.0,

@@ -12,11 +12,11 @@ Estimates (measured on this 2-core, 23 GB machine, ngsolve 6.2.2608)
 **Tetrahedra.**  Netgen tetrahedra of size ``h`` in a solid of volume ``V``: ``5·V/h³``
 (a regular tetrahedron of edge ``h`` fills ``h³/(6√2)``, i.e. 8.5 per h³; Netgen's interior
 elements grow larger).  Fitted on the probe shapes ``cube``, ``slab``, ``bar`` and ``holed``
-(a 2 x 1 x 1 box with a cylindrical hole of radius 0.25; :func:`test_shape`) at 2–4 sizes each,
+(a 2 x 1 x 1 box with a cylindrical hole of radius 0.25; :func:`probe_shape`) at 2–4 sizes each,
 648 to 73 813 tetrahedra: ``n·h³/V`` = 4.27–8.03, geometric mean 5.12; 5 gives 0.62–1.17 of
 Netgen's count on them.  The spread is Netgen's: its count is not monotone in ``h`` (the slab:
 4.36 at h = 0.05, 6.33 at 0.035), and a curved face within a few elements of its radius is
-refined (the holed box at h = 0.2: 8.03).  On shapes not fitted (:func:`test_shape`
+refined (the holed box at h = 0.2: 8.03).  On shapes not fitted (:func:`probe_shape`
 ``chamber``, ``sphere``, ``lbracket``, and the 2 x 1 x 1 box of the memory probes), the
 estimate is 0.59–1.53 of Netgen's count (tests/unit/test_resources_3d.py).  A solid's own
 ``maxh`` replaces ``h`` in it; a face's or edge's smaller ``maxh`` is not counted.  Structured
@@ -28,7 +28,8 @@ measured), edges ``vertices + n``, faces ``2n``.
 grid (``3·(k·nelx+1)(k·nely+1)(k·nelz+1)``) and a mesh that exists.
 
 **Meshing time**: Netgen took 0.18–0.31 ms of CPU per tetrahedron (up to 0.9 ms on coarse
-meshes of curved shapes), the hexahedral grid builder about 2 µs per hexahedron.
+meshes of curved shapes), the hexahedral grid builder 7–34 µs per hexahedron (128 000 and
+16 000 of them, a passive block an eighth of the box).
 
 MEMORY_DOCSTRING
 """
@@ -143,7 +144,7 @@ def probe_tets(shape_name: str, maxh: float) -> dict:
     """Mesh a test shape with Netgen tetrahedra at ``maxh``; the count and the CPU time."""
     from netgen import occ
 
-    shape = test_shape(shape_name)
+    shape = probe_shape(shape_name)
     cpu = resource.getrusage(resource.RUSAGE_SELF)
     ngm = occ.OCCGeometry(shape).GenerateMesh(maxh=maxh)
     cpu2 = resource.getrusage(resource.RUSAGE_SELF)
@@ -152,7 +153,7 @@ def probe_tets(shape_name: str, maxh: float) -> dict:
             "mesh_cpu_s": (cpu2.ru_utime + cpu2.ru_stime) - (cpu.ru_utime + cpu.ru_stime)}
 
 
-def test_shape(name: str):
+def probe_shape(name: str):
     """The shapes of the tetrahedra fit and its check."""
     from netgen import occ
 
@@ -211,6 +212,71 @@ def probe_solve(size: float, order: int, solver: str, hexes: bool = False) -> di
     return {"hexes": hexes, "size": size, "order": order, "solver": solver,
             "elements": mesh.ne, "dofs": fes.ndof, "mesh_bytes": after_mesh - start,
             "factor_s": t_fac, "peak_bytes": peak - start}
+
+
+_TET_PROBES = (("cube", (0.2, 0.1, 0.07, 0.05)), ("slab", (0.1, 0.05, 0.035)),
+               ("bar", (0.1, 0.05)), ("holed", (0.2, 0.1, 0.05)))
+_SOLVE_PROBES = (("netgen", 1, (0.1, 0.07, 0.05, 0.035)), ("netgen", 2, (0.2, 0.14, 0.1, 0.07)),
+                 ("netgen", 3, (0.3, 0.2, 0.14)), ("hex", 1, (16, 24)), ("hex", 2, (8, 12)))
+
+
+def _probe(*args) -> dict | None:
+    """One probe in a fresh process (its peak RSS is the process's): ``python -m
+    pacto_ng.resources3d ARGS``."""
+    import json
+    import subprocess
+
+    out = subprocess.run([sys.executable, "-m", "pacto_ng.resources3d", *map(str, args)],
+                         capture_output=True, text=True, timeout=1800)
+    if out.returncode != 0:
+        print(f"{' '.join(map(str, args))}: failed ({out.stderr.strip()[-200:]})")
+        return None
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def fit_tets(rows) -> float:
+    """The geometric mean of ``n·h³/V`` over the tetrahedra probes ``rows``."""
+    q = [r["tets"] * r["maxh"] ** 3 / r["volume"] for r in rows]
+    return math.exp(sum(map(math.log, q)) / len(q))
+
+
+def fit_memory(rows, solver: str) -> tuple[float, float, float, float]:
+    """``(a, b, q, o)`` of ``bytes − _MESH_BYTES·elements = a · ndof^b · q^[hexes] · o^k``
+    over the solve probes of ``solver`` above 2·10⁴ dofs (least squares in the logs)."""
+    import numpy as np
+
+    from .resources import mesh_bytes
+
+    sel = [r for r in rows if r["solver"] == solver and r["dofs"] > 20000]
+    y = np.log([r["peak_bytes"] - mesh_bytes(r["elements"]) for r in sel])
+    hexes = [float(r["hexes"]) for r in sel]
+    X = np.array([[1.0, math.log(r["dofs"]), h, r["order"]] for r, h in zip(sel, hexes)])
+    if not any(hexes):  # no hexahedra measured: q = 1
+        X[:, 2] = 0.0
+    c = np.linalg.lstsq(X, y, rcond=None)[0]
+    return float(np.exp(c[0])), float(c[1]), float(np.exp(c[2])), float(np.exp(c[3]))
+
+
+def measure() -> list[dict]:
+    """Run the probes behind the module docstring's fits (each in a fresh process), print
+    them and the fits with measured/fit ranges.  Hours of CPU at the largest sizes:
+    ``python -c 'from pacto_ng.resources3d import measure; measure()'``."""
+    tets = [r for name, sizes in _TET_PROBES for h in sizes
+            if (r := _probe("tets", name, h)) is not None]
+    c = fit_tets(tets)
+    print(f"tetrahedra per V/h³: {c:.2f}; estimate/Netgen "
+          + ", ".join(f"{r['shape']} {r['maxh']:g}: {c * r['volume'] / r['maxh'] ** 3 / r['tets']:.2f}"
+                      for r in tets))
+    rows = [r for solver in _FIT for kind, k, sizes in _SOLVE_PROBES for size in sizes
+            if (r := _probe(kind, size, k, solver)) is not None]
+    for r in rows:
+        print(f"{r['solver']:14s} {'hex' if r['hexes'] else 'tet'} {r['size']:6g} k={r['order']} "
+              f"{r['elements']:7d} el {r['dofs']:8d} dofs  factor {r['factor_s']:6.1f} s  "
+              f"peak {r['peak_bytes'] / 1e6:7.0f} MB")
+    for solver in _FIT:
+        a, b, q, o = fit_memory(rows, solver)
+        print(f"{solver}: a = {a:.4g}, b = {b:.4f}, q = {q:.3f}, o = {o:.4f}")
+    return tets + rows
 
 
 if __name__ == "__main__":

@@ -45,7 +45,9 @@ def mesh_to_pyvista_3d(mesh):
     sizes = np.count_nonzero(nodes >= 0, axis=1)
     if not np.all((sizes == 4) | (sizes == 8)):
         raise ValueError("only tetrahedra and hexahedra are supported")
-    flat = np.concatenate([np.r_[n, row[:n]] for n, row in zip(sizes, nodes)])
+    # each row: its size, then its nodes; the unused slots of the tetrahedra dropped
+    table = np.c_[sizes, nodes]
+    flat = table[np.arange(table.shape[1])[None, :] <= sizes[:, None]]
     types = np.where(sizes == 4, pv.CellType.TETRA, pv.CellType.HEXAHEDRON).astype(np.uint8)
     return pv.UnstructuredGrid(flat.astype(np.int64), types, pts)
 
