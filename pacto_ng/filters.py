@@ -18,10 +18,17 @@ from .interpolation import heaviside_deriv_np, heaviside_np
 
 
 class HelmholtzFilter:
-    """Helmholtz PDE filter with cone-equivalent radius ``R`` (``r_h = R / (2√3)``)."""
+    """Helmholtz PDE filter with cone-equivalent radius ``R`` (``r_h = R / (2√3)``).
 
-    def __init__(self, mesh, radius: float, inputs=("rho",), output="rho_tilde"):
+    ``solver``: ``auto``, ``direct`` or ``iterative``, the route of the filter's system
+    (:class:`~pacto_ng.physics.solvers.LinearSolver`: sparse Cholesky, or CG with ``h1amg``;
+    :attr:`solver_info`)."""
+
+    def __init__(self, mesh, radius: float, inputs=("rho",), output="rho_tilde",
+                 solver: str = "auto"):
         from ngsolve import H1, L2, BilinearForm, GridFunction, Integrate, grad, dx
+
+        from .physics.solvers import LinearSolver
 
         if radius <= 0:
             raise ValueError("filter radius must be positive")
@@ -34,12 +41,13 @@ class HelmholtzFilter:
         q = self.l2.TrialFunction()
         a = BilinearForm(self.fes, symmetric=True)
         a += (rh ** 2 * grad(u) * grad(v) + u * v) * dx
+        self._solver = LinearSolver(a, setting=solver)
         a.Assemble()
         b = BilinearForm(trialspace=self.l2, testspace=self.fes)
         b += q * v * dx
         b.Assemble()
         self.a, self.b = a, b
-        self.inv = a.mat.Inverse(inverse="sparsecholesky")
+        self._solver.prepare()
         self.areas = np.array(Integrate(1.0, mesh, element_wise=True))
         self._gx = GridFunction(self.l2)
         self._rhs = a.mat.CreateColVector()
@@ -49,10 +57,16 @@ class HelmholtzFilter:
         """``M⁻¹ Bᵀ A⁻¹ B xe`` (the operator is symmetric up to the area weights)."""
         self._gx.vec.FV().NumPy()[:] = xe
         self._rhs.data = self.b.mat * self._gx.vec
-        self._sol.data = self.inv * self._rhs
+        self._solver.solve(self._rhs, self._sol)
         out = self._gx.vec.CreateVector()
         out.data = self.b.mat.T * self._sol
         return out.FV().NumPy().copy()
+
+    @property
+    def solver_info(self) -> dict:
+        """The filter's linear solver, for the run summary
+        (:attr:`~pacto_ng.physics.solvers.LinearSolver.info`)."""
+        return self._solver.info
 
     def forward(self, x):
         return self._apply(np.asarray(x, dtype=float)) / self.areas

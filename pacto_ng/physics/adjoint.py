@@ -80,7 +80,7 @@ class Adjoint:
                 self.adjoint_solves_skipped += 1
                 return lam
         self._ensure_tangent()
-        lam.data = (self._inv if self.symmetric else self._inv.T) * dJdu
+        self._solver.solve(dJdu, lam, transpose=True)
         self.adjoint_solves += 1
         return lam
 

@@ -43,6 +43,7 @@ from ..params import InputError
 from ..settings import Settings, setting
 from .mechanics import Field
 from .quadrature import integration_rules
+from .solvers import LinearSolver
 
 __all__ = ["DarcySettings", "DarcyPressure"]
 
@@ -126,6 +127,11 @@ class DarcyPressure:
         ``A`` on element-wise constant densities, triangles and quads).
     inverse : str
         Sparse direct solver (always passed explicitly to NGSolve).
+    solver : str
+        ``auto``, ``direct`` or ``iterative``: the route of the pressure system
+        (:class:`~pacto_ng.physics.solvers.LinearSolver`; :attr:`solver_info`).  On the
+        iterative route the matrix is assembled by its form at every design (its
+        preconditioner is built during the assembly), not from element matrices.
 
     Notes
     -----
@@ -139,7 +145,8 @@ class DarcyPressure:
                  beta_k: float = 10.0, eta_h: float = 0.2, beta_h: float = 10.0,
                  r: float = 0.1, delta_s: float = 0.002, p_out: float = 0.0,
                  sensitivity: bool = True, inputs=("rho_bar",), output: str = "p",
-                 intorder: int | None = None, inverse: str = "sparsecholesky"):
+                 intorder: int | None = None, inverse: str = "sparsecholesky",
+                 solver: str = "auto"):
         from ngsolve import (BND, H1, L2, BilinearForm, GridFunction, LinearForm, dx, grad)
 
         inlet = _names(inlet, "inlet")
@@ -178,7 +185,8 @@ class DarcyPressure:
         self.a += (self.K * grad(p) * grad(q) + self.D * p * q) * DX
         self.f = LinearForm(self.fes)
         self.f += self.D * self.p_out * q * DX
-        self._inv = None
+        self._solver = LinearSolver(self.a, self.fes.FreeDofs(), setting=solver,
+                                    order=self.order, inverse=inverse)
 
         # unit lifting: 1 on the inlet dofs, 0 elsewhere (zero-pressure dofs win at shared points)
         lift = GridFunction(self.fes)
@@ -199,6 +207,7 @@ class DarcyPressure:
         self._sens += (self._dK * grad(self.gfp) * grad(self.lam)
                        + self._dD * (self.gfp - self.p_out) * self.lam) * q0 * DX
         self._rhs = self.gfp.vec.CreateVector()
+        self._dp = self.gfp.vec.CreateVector()
         self._ready = False
         # A(ρ̄) = Σ_e K_e L_e + D_e M_e from precomputed element matrices (ElementMatrices),
         # built at the second design (a single analysis does not pay for them), or at the
@@ -247,7 +256,8 @@ class DarcyPressure:
         self.rho.vec.FV().NumPy()[:] = rho
         Kvals = self.Kv - (self.Kv - self.Ks) * heaviside_np(rho, self.eta_k, self.beta_k)
         Dvals = self._drain * heaviside_np(rho, self.eta_h, self.beta_h)
-        if self._scatter_pending and (self._designs >= 1 or self._many_designs):
+        if (self._scatter_pending and self._solver.direct
+                and (self._designs >= 1 or self._many_designs)):
             self._build_scatter()
         self._designs += 1
         self.K.vec.FV().NumPy()[:] = Kvals
@@ -260,14 +270,12 @@ class DarcyPressure:
             self.f.vec[:] = 0.0  # ∫ D p_out q = 0
         else:
             self.f.Assemble()
-        if self._inv is None:
-            self._inv = self.a.mat.Inverse(self.fes.FreeDofs(), inverse=self.inverse_type)
-        else:
-            self._inv.Update()
+        self._solver.prepare()
         p = self.gfp.vec
         p.data = self.p_in * self._lift
         self._rhs.data = self.f.vec - self.a.mat * p
-        p.data += self._inv * self._rhs
+        self._solver.solve(self._rhs, self._dp)
+        p.data += self._dp
         self._ready = True
         out = p.CreateVector()
         out.data = p
@@ -282,7 +290,7 @@ class DarcyPressure:
         else:
             self._rhs.data = dJdp
         lam = self._rhs.CreateVector()
-        lam.data = self._inv * self._rhs  # A symmetric: the forward factorisation serves
+        self._solver.solve(self._rhs, lam)  # A symmetric: the forward factorisation serves
         return lam
 
     def backward(self, grad_output):
@@ -304,6 +312,12 @@ class DarcyPressure:
         self._dD.vec.FV().NumPy()[:] = dD
         self._sens.Assemble()
         return (-self._sens.vec.FV().NumPy().copy(),)
+
+    @property
+    def solver_info(self) -> dict:
+        """The pressure system's linear solver, for the run summary
+        (:attr:`~pacto_ng.physics.solvers.LinearSolver.info`)."""
+        return self._solver.info
 
     @property
     def route(self) -> str:

@@ -177,19 +177,21 @@ class Compliance:
 
 
 def for_case(mesh, settings: DarcySettings, p_in: float, pressure, rho_name: str = "rho_bar", *,
-             order: int = 1, output: str = "p", gamma=None):
+             order: int = 1, output: str = "p", gamma=None, solver: str = "auto"):
     """Build the Darcy part of a case: ``(DarcyPressure block, Field for Mechanics, load)``.
 
     ``pressure`` has ``inlet`` and ``zero`` (boundary names); ``p_in`` is the inlet pressure.
     ``settings.load_type`` chooses the third item: ``"fixed"`` gives :func:`darcy_body`
     (``Mechanics(body=...)``), ``"follower"`` gives :func:`darcy_follower`
-    (``Mechanics(residual_density=...)``), with ``gamma`` passed on to it.
+    (``Mechanics(residual_density=...)``), with ``gamma`` passed on to it.  ``solver``: the
+    pressure system's route (``auto``, ``direct`` or ``iterative``,
+    :class:`~pacto_ng.physics.solvers.LinearSolver`).
     """
     d = settings
     block = DarcyPressure(mesh, inlet=pressure.inlet, zero=pressure.zero, p_in=p_in,
                           order=order, Kv=d.Kv, Ks=d.Ks, eta_k=d.eta_k, beta_k=d.beta_k,
                           eta_h=d.eta_h, beta_h=d.beta_h, r=d.r, delta_s=d.delta_s,
                           p_out=d.p_out, sensitivity=d.load_sensitivity, inputs=(rho_name,),
-                          output=output)
+                          output=output, solver=solver)
     load = darcy_body(output) if d.load_type == "fixed" else darcy_follower(output, gamma)
     return block, block.field(), load

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .newton import NewtonResult, solve_with_continuation
+from .solvers import LinearSolver
 from .quadrature import guard_rules
 
 
@@ -57,7 +58,15 @@ class Equilibrium:
         from ngsolve import VOL, GridFunction, Grad, LinearForm
 
         self._guard = guard
-        self._inv = None
+        # the tangent's solver (solvers.py): its preconditioner, if any, is registered on the
+        # form before the first assembly; a linear system's K is then assembled by its form
+        # at every design (the element-matrix scatter would bypass the preconditioner)
+        form = self._lin.a if self._lin is not None else self.a
+        self._solver = LinearSolver(form, self.fes.FreeDofs(), setting=self.settings.solver,
+                                    symmetric=self.symmetric, order=self.order,
+                                    inverse=self.inverse_type)
+        if self._lin is not None and not self._solver.direct:
+            self._lin.element_matrices = False
         self._tangent_at = None  # id of the state the factorisation belongs to
         self.result: NewtonResult | None = None
         self._ramp_first = None  # first increment of the last successful ramp from zero
@@ -130,14 +139,31 @@ class Equilibrium:
             self._lin.assemble()
         else:
             self.a.AssembleLinearization(vec)
-        if self._inv is None:
-            self._inv = self.matrix.Inverse(self.fes.FreeDofs(), inverse=self.inverse_type)
-        else:
-            self._inv.Update()
+        self._solver.prepare()
         self._tangent_at = (load, vec.FV().NumPy().copy()) if not self.linear else ("linear",)
 
     def solve_tangent(self, rhs, out):
-        out.data = self._inv * rhs
+        """``out = K⁻¹ rhs``.  A Krylov solve stops at the relative tolerance
+        ``max(0.1 rtol |f| / |rhs|, min(0.01, |rhs| / |f|))`` (``rtol`` Newton's, ``|f|`` the
+        load norm, ``|rhs|`` the residual's): never tighter than a tenth of what Newton's
+        convergence test asks, and, for a nonlinear problem, loose far from equilibrium (an
+        inexact Newton step whose forcing term shrinks with the residual); a linear problem
+        solves to the first bound in its one step."""
+        rtol = None
+        if not self._solver.direct:
+            res = float(np.linalg.norm(rhs.FV().NumPy()[self.free]))
+            ref = self.load_norm(self.target)
+            if res > 0 and ref > 0:
+                floor = 0.1 * self.settings.rtol * ref / res
+                rtol = floor if self.linear else max(floor, min(1e-2, res / ref))
+        self._solver.solve(rhs, out, rtol=rtol, strict=False)
+
+    @property
+    def solver_info(self) -> dict:
+        """The tangent's linear solver, for the run summary
+        (:attr:`~pacto_ng.physics.solvers.LinearSolver.info`: kind, method, preconditioner,
+        tolerance, Krylov iterations)."""
+        return self._solver.info
 
     def admissible(self, vec) -> bool:
         if self._guard is None:

@@ -125,6 +125,9 @@ class LinearSystem:
         # design on (not for the first, so that a single analysis does not pay for them), or
         # from the first after expect_many_designs
         self.scatter = None
+        # False: K is assembled by its form at every design, never from element matrices (an
+        # iterative solver's preconditioner is built during the form's assembly)
+        self.element_matrices = True
         self._scatter_built = False
         self._many_designs = False
         self._modulus = None
@@ -253,7 +256,7 @@ class LinearSystem:
         """Assemble ``K`` and ``f`` for the current fields (once per design)."""
         if not self.stale:
             return
-        if (self._modulus is not None and not self._scatter_built
+        if (self.element_matrices and self._modulus is not None and not self._scatter_built
                 and (self.version >= 1 or self._many_designs)):
             self._build_scatter()  # a second design: from now on worth the element matrices
         if self.scatter is not None:

@@ -45,8 +45,13 @@ class NewtonSettings:
     max_steps: int = 200
     max_total_iter: int = 1000  # Newton iterations per solve, over all load steps and retries
     line_search: str = "guard"  # "guard" (admissibility only) or "residual" (Armijo on |R|)
+    solver: str = "auto"  # the tangent's linear solver: auto | direct | iterative (solvers.py)
 
     def __post_init__(self):
+        from .solvers import SOLVERS
+
+        if self.solver not in SOLVERS:
+            raise ValueError(f"solver must be one of {', '.join(SOLVERS)}")
         if self.line_search not in ("guard", "residual"):
             raise ValueError("line_search must be 'guard' or 'residual'")
         if not 0 < self.initial_increment <= 1:
@@ -71,6 +76,10 @@ class NewtonParameters(Settings):
                                           "Newton gives up (fraction)", range="(0, 1]")
     realcompile: bool = setting(False, "", "compile the Newton forms to machine code (C++ "
                                 "compiler; ~10-30 s once, 2.5-3.5x faster assembly)")
+    solver: str = setting("auto", "", "linear solver of the tangent: auto (sparse direct in "
+                          "2D, and in 3D at order 1 or up to 60 000 dofs; else iterative) | "
+                          "direct | iterative (CG / GMRES with BDDC, pacto_ng/physics/solvers.py)",
+                          choices=("auto", "direct", "iterative"))
 
     def check(self):
         if self.newton_min_increment > self.newton_increment:
@@ -80,7 +89,7 @@ class NewtonParameters(Settings):
         """The Newton settings of these parameters."""
         return NewtonSettings(rtol=self.newton_rtol, max_iter=self.newton_max_iter,
                               initial_increment=self.newton_increment,
-                              min_increment=self.newton_min_increment)
+                              min_increment=self.newton_min_increment, solver=self.solver)
 
 
 @dataclass

@@ -1,0 +1,189 @@
+"""The linear solver of a block's system: a sparse direct factorisation while it fits, a
+preconditioned Krylov solver beyond.
+
+:class:`LinearSolver` solves ``A x = b`` (and ``Aᵀ x = b``, the adjoint) on the free dofs of a
+:class:`ngsolve.BilinearForm`'s matrix, by one of two routes:
+
+* ``direct``: ``sparsecholesky`` for a symmetric matrix, ``umfpack`` otherwise (or the
+  ``inverse`` given); factorised once per matrix (:meth:`LinearSolver.prepare`: ``Inverse``,
+  then a numeric ``Update`` for every new matrix of the same structure); the transpose solve
+  uses the same factorisation;
+* ``iterative``: NGSolve's CG (symmetric) or GMRES (unsymmetric) with a preconditioner
+  registered on the form *before* it is assembled (it is built from the element matrices
+  during ``Assemble``/``AssembleLinearization``, so a matrix written by other means, e.g. the
+  element-matrix scatter, must not be used with it): BDDC for vector spaces and higher
+  orders, ``h1amg`` for a scalar order-1 space (the Darcy pressure at order 1, the Helmholtz
+  filter).  In 3D at order >= 2 the edge dofs are made interface dofs, so that BDDC's coarse
+  (wirebasket) problem is the vertex problem, an eighth of the dofs, solved by a direct
+  factorisation; with NGSolve's default (edges in the wirebasket) every order-2 dof is coarse
+  and BDDC is a direct solve.  The transpose solve (an unsymmetric adjoint) is GMRES on
+  ``Aᵀ`` with the same preconditioner (it approximates ``A⁻¹``; the follower tangent is a
+  perturbation of a symmetric one).
+
+``auto`` (:func:`choose`) takes the direct route in 2D and, in 3D, below
+:data:`DIRECT_MAX_DOFS_3D` dofs and for a vector space of order 1 (where every dof is a BDDC
+vertex dof, so the iterative route is a direct solve plus iterations; the scalar order-1
+systems, Darcy and the filter, take ``h1amg`` above the same number of dofs).  That threshold is measured by ``python3 -m benchmarks
+solvers_3d`` (docs/benchmarks.md, "3D solvers: direct against iterative"): linear elasticity
+on a 3D cantilever box, order 2, sparse Cholesky against CG + BDDC.
+
+The Krylov tolerance is relative to the right-hand side's (preconditioned) norm; the caller
+ties it to what it needs (Newton: a tenth of its residual tolerance times the load norm, the
+adjoint: :data:`ADJOINT_RTOL`, tight enough for the finite-difference checks of the
+gradients; tests/physics/test_solvers.py).  :attr:`LinearSolver.info` describes the route for
+the run summary.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+SOLVERS = ("auto", "direct", "iterative")
+
+# Above this many dofs of a 3D system of order >= 2, ``auto`` takes the iterative route
+# (measured: docs/benchmarks.md, "3D solvers: direct against iterative").
+DIRECT_MAX_DOFS_3D = 60_000
+
+ADJOINT_RTOL = 1e-12  # Krylov tolerance of the adjoint, Darcy and filter solves (relative)
+MAX_ITERATIONS = 1000
+
+
+class SolverFailure(RuntimeError):
+    """A Krylov solve that did not reach its tolerance within its iterations."""
+
+
+def preconditioner_for(fes, order: int) -> str:
+    """``"h1amg"`` for a scalar H1 space of order 1, ``"bddc"`` otherwise."""
+    from ngsolve import H1
+
+    return "h1amg" if type(fes) is H1 and order == 1 else "bddc"
+
+
+def choose(setting: str, ndof: int, dim: int, order: int, preconditioner: str = "bddc") -> str:
+    """``"direct"`` or ``"iterative"`` for a system of ``ndof`` dofs on a ``dim``-D mesh of
+    element order ``order`` whose iterative route would use ``preconditioner`` (see the
+    module); ``setting`` is ``auto``, ``direct`` or ``iterative``."""
+    if setting not in SOLVERS:
+        raise ValueError(f"solver must be one of {', '.join(SOLVERS)} (got '{setting}')")
+    if setting != "auto":
+        return setting
+    coarse_is_all = preconditioner == "bddc" and order == 1  # every dof a vertex dof
+    if dim == 3 and not coarse_is_all and ndof > DIRECT_MAX_DOFS_3D:
+        return "iterative"
+    return "direct"
+
+
+def _vertex_coarse_space(fes):
+    """Make every wirebasket dof that is not on a vertex an interface dof (BDDC's coarse
+    problem is then the vertex problem)."""
+    from ngsolve import VERTEX, NodeId
+    from ngsolve.comp import COUPLING_TYPE
+
+    on_vertex = np.zeros(fes.ndof, dtype=bool)
+    for v in range(fes.mesh.nv):
+        on_vertex[[d for d in fes.GetDofNrs(NodeId(VERTEX, v)) if d >= 0]] = True
+    wirebasket = COUPLING_TYPE.WIREBASKET_DOF
+    types = fes.couplingtype
+    for d in range(fes.ndof):
+        if not on_vertex[d] and types[d] == wirebasket:
+            fes.SetCouplingType(d, COUPLING_TYPE.INTERFACE_DOF)
+
+
+class LinearSolver:
+    """Solves with the matrix of ``form`` on ``freedofs`` (see the module).
+
+    Parameters
+    ----------
+    form : ngsolve.BilinearForm
+        Not yet assembled when the route is iterative (its preconditioner is registered here).
+    freedofs : BitArray or None
+        The free dofs (None: every dof).
+    setting : str
+        ``auto``, ``direct`` or ``iterative`` (:func:`choose`).
+    symmetric : bool
+        CG and ``sparsecholesky`` for a symmetric matrix, GMRES and ``umfpack`` otherwise.
+    order : int
+        The element order of the form's space (the choice and the preconditioner).
+    inverse : str or None
+        The direct solver (default by symmetry).
+    rtol : float
+        Default Krylov tolerance (relative to the right-hand side).
+    """
+
+    def __init__(self, form, freedofs=None, *, setting: str = "auto", symmetric: bool = True,
+                 order: int = 1, inverse: str | None = None, rtol: float = ADJOINT_RTOL):
+        from ngsolve import Preconditioner
+
+        fes = form.space
+        self.form, self.freedofs, self.symmetric = form, freedofs, bool(symmetric)
+        pre = preconditioner_for(fes, order)
+        self.kind = choose(setting, fes.ndof, fes.mesh.dim, order, pre)
+        self.setting = setting
+        self.inverse = inverse or ("sparsecholesky" if self.symmetric else "umfpack")
+        self.rtol = float(rtol)
+        self.preconditioner = None
+        self._pre = None
+        self._inv = None
+        self.iterations = 0  # Krylov iterations of the last solve
+        self.total_iterations = 0
+        self.solves = 0
+        if self.kind == "iterative":
+            self.preconditioner = pre
+            if self.preconditioner == "bddc" and fes.mesh.dim == 3 and order >= 2:
+                _vertex_coarse_space(fes)
+            self._pre = Preconditioner(form, self.preconditioner)
+
+    @property
+    def direct(self) -> bool:
+        """Whether the route is the direct factorisation."""
+        return self.kind == "direct"
+
+    def prepare(self):
+        """Make the solver ready for the form's current matrix (after each assembly): the
+        direct route factorises it (the first time) or refactorises it numerically; the
+        iterative route's preconditioner was updated by the assembly itself."""
+        if self.direct:
+            if self._inv is None:
+                self._inv = self.form.mat.Inverse(self.freedofs, inverse=self.inverse)
+            else:
+                self._inv.Update()
+
+    def solve(self, rhs, out, *, rtol: float | None = None, transpose: bool = False,
+              strict: bool = True):
+        """``out = A⁻¹ rhs`` (``A⁻ᵀ rhs`` with ``transpose``) on the free dofs, 0 on the
+        others.  ``rtol``: the Krylov tolerance relative to the (preconditioned) norm of
+        ``rhs`` (default :attr:`rtol`); ``strict``: raise :class:`SolverFailure` when it is
+        not reached (Newton, which checks its residual itself, passes False)."""
+        self.solves += 1
+        if self.direct:
+            inv = self._inv.T if transpose and not self.symmetric else self._inv
+            out.data = inv * rhs
+            return
+        from ngsolve.krylovspace import CGSolver, GMResSolver
+
+        tol = self.rtol if rtol is None else float(rtol)
+        mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
+        method = CGSolver if self.symmetric else GMResSolver
+        krylov = method(mat, self._pre.mat, tol=tol, maxiter=MAX_ITERATIONS)
+        krylov.Solve(rhs=rhs, sol=out)
+        self.iterations = krylov.iterations
+        self.total_iterations += krylov.iterations
+        res = krylov.residuals
+        if strict and res and res[0] > 0 and not res[-1] <= tol * res[0]:
+            raise SolverFailure(f"{method.__name__} with {self.preconditioner} did not reach "
+                                f"the relative tolerance {tol:.1e} in {krylov.iterations} "
+                                f"iterations (reached {res[-1] / res[0]:.1e})")
+
+    @property
+    def info(self) -> dict:
+        """The route, for the run summary: ``kind`` (direct | iterative), ``setting`` (what
+        was asked: auto | direct | iterative), ``method`` (the direct solver, or CG / GMRES),
+        ``preconditioner`` (None for direct), ``tolerance`` (the default Krylov tolerance,
+        None for direct), ``iterations`` (Krylov iterations of the last solve),
+        ``total_iterations`` and ``solves``."""
+        iterative = not self.direct
+        return {"kind": self.kind, "setting": self.setting,
+                "method": ("CG" if self.symmetric else "GMRES") if iterative else self.inverse,
+                "preconditioner": self.preconditioner,
+                "tolerance": self.rtol if iterative else None,
+                "iterations": self.iterations, "total_iterations": self.total_iterations,
+                "solves": self.solves, "ndof": self.form.space.ndof}

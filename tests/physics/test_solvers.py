@@ -1,0 +1,135 @@
+"""The linear solvers' routes (pacto_ng/physics/solvers.py): the choice, the iterative route's
+gradients against central finite differences, and direct against iterative.
+
+The chain ``x -> Embed -> HelmholtzFilter -> HeavisideProjection -> FixPassive ->
+DarcyPressure -> Mechanics -> output displacement, strain energy, -Δ/SE`` on the small
+pa-inverter (tests/small_cases.py) at order 2 (at order 1 in 2D every dof is a BDDC vertex
+dof and CG converges in one step), every block on the iterative route: the filter by CG with
+h1amg, the Darcy pressure and the symmetric tangents by CG with BDDC, the follower tangent by
+GMRES with BDDC (its adjoint by GMRES on Kᵀ).  Linear and Neo-Hookean, the Darcy pressure as
+a fixed and as a follower load, Newton to 1e-12 of the load; central differences along random
+directions (:func:`pacto_ng.core.check_gradient`).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from small_cases import small_pa_mesh
+from pacto_ng.core import Chain, check_gradient
+from pacto_ng.design import DesignField, Embed, FixPassive
+from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
+from pacto_ng.interpolation import simp_cf
+from pacto_ng.physics.darcy import DarcyPressure
+from pacto_ng.physics.darcy_load import darcy_body, darcy_follower
+from pacto_ng.physics.loads import Port, Spring
+from pacto_ng.physics.materials import jacobian, linear_energy, neohookean_energy
+from pacto_ng.physics.mechanics import Mechanics, Supports
+from pacto_ng.physics.newton import NewtonSettings
+from pacto_ng.physics.solvers import DIRECT_MAX_DOFS_3D, choose
+from pacto_ng.responses import MechanismRatio, StrainEnergy, output_displacement
+
+ORDER = 2
+FD_TOL = 1e-6  # as tests/gradients/test_follower_gradients.py
+SAME_TOL = 1e-8  # direct against iterative: objective and displacement (relative)
+
+
+def _chain(model, load, solver):
+    mesh = small_pa_mesh("trig")
+    dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=2e6 if model != "linear" else 1e5,
+                        order=ORDER, solver=solver)
+    modulus = lambda c: simp_cf(c["rho_bar"], 3e3, 3e8, 3.0)
+    if model == "linear":
+        energy, guard = (lambda G, c: linear_energy(G, modulus(c), 0.4)), None
+    else:
+        energy, guard = (lambda G, c: neohookean_energy(G, modulus(c), 0.4)), \
+            (lambda G, c: jacobian(G))
+    mech = Mechanics(mesh, order=ORDER, energy=energy, fields=("rho_bar", dar.field()),
+                     supports=Supports(clamp=("fixed",), fix_y=("symmetry",)),
+                     springs=(Spring("output", 1e4, (1.0, 0.0)),),
+                     body=darcy_body("p") if load == "fixed" else None,
+                     residual_density=darcy_follower("p") if load == "follower" else None,
+                     thickness=1e-3, guard=guard, linear=model == "linear",
+                     newton=NewtonSettings(rtol=1e-12, solver=solver))
+    field = DesignField(mesh, solid=("block",))
+    flt = HelmholtzFilter(mesh, 0.002, solver=solver)
+    chain = Chain([Embed(field), flt, HeavisideProjection(2.0), FixPassive(field), dar, mech,
+                   output_displacement(mech, Port("output", (-1.0, 0.0))), StrainEnergy(mech),
+                   MechanismRatio(scale=1.0)])
+    x0 = np.random.default_rng(1).uniform(0.2, 0.8, field.n)
+    return chain, (flt, dar, mech), x0
+
+
+def _fd(chain, name, x0):
+    def fun(x):
+        return chain.forward(x=x)[name]
+
+    def grad(x):
+        chain.forward(x=x)
+        return chain.gradient(name)
+
+    return check_gradient(fun, grad, x0, h=1e-5, directions=3)
+
+
+def test_choice():
+    """``auto``: direct in 2D, for a 3D vector space of order 1 and below the threshold;
+    iterative above it at order 2 and for the scalar order-1 systems (h1amg)."""
+    big = DIRECT_MAX_DOFS_3D + 1
+    assert choose("auto", 10 ** 7, 2, 2) == "direct"
+    assert choose("auto", big, 3, 1, "bddc") == "direct"
+    assert choose("auto", big, 3, 2, "bddc") == "iterative"
+    assert choose("auto", big, 3, 1, "h1amg") == "iterative"
+    assert choose("auto", DIRECT_MAX_DOFS_3D, 3, 2, "bddc") == "direct"
+    assert choose("iterative", 10, 2, 1) == "iterative"
+    assert choose("direct", big, 3, 2) == "direct"
+    with pytest.raises(ValueError):
+        choose("cg", 10, 2, 1)
+    with pytest.raises(ValueError):
+        NewtonSettings(solver="cg")
+
+
+def test_auto_is_direct_in_2d():
+    chain, (flt, dar, mech), x0 = _chain("linear", "fixed", "auto")
+    chain.forward(x=x0)
+    for block in (flt, dar, mech):
+        assert block.solver_info["kind"] == "direct"
+        assert block.solver_info["preconditioner"] is None
+    assert mech.solver_info["method"] == "sparsecholesky"
+
+
+@pytest.mark.parametrize("model,load", [("linear", "fixed"), ("linear", "follower"),
+                                        ("neohookean", "fixed"), ("neohookean", "follower")])
+def test_iterative_gradients(model, load):
+    """The whole chain's gradients through the iterative route pass the FD check; the
+    tangent's method follows its symmetry, and a linear system keeps assembling K by its form
+    (the preconditioner is built during the assembly)."""
+    chain, (flt, dar, mech), x0 = _chain(model, load, "iterative")
+    chain.forward(x=x0)
+    assert mech.result.converged
+    info = mech.solver_info
+    assert info["kind"] == "iterative" and info["preconditioner"] == "bddc"
+    assert info["method"] == ("GMRES" if load == "follower" else "CG")
+    assert info["iterations"] > 1
+    assert flt.solver_info["preconditioner"] == "h1amg"
+    assert dar.solver_info["preconditioner"] == "bddc"
+    errs = {name: _fd(chain, name, x0).rel_error for name in ("objective", "delta", "se")}
+    print(model, load, errs, mech.solver_info)
+    assert max(errs.values()) < FD_TOL, errs
+    if mech.linear_system is not None:
+        assert mech.assembly["linear_system"] == "hessian"
+
+
+@pytest.mark.parametrize("model,load", [("linear", "fixed"), ("neohookean", "follower")])
+def test_direct_equals_iterative(model, load):
+    """The same design on both routes: the objective, the displacement and the gradient agree
+    to SAME_TOL (relative)."""
+    out = {}
+    for solver in ("direct", "iterative"):
+        chain, (_, _, mech), x0 = _chain(model, load, solver)
+        vals = chain.forward(x=x0)
+        out[solver] = (vals["objective"], mech.gfu.vec.FV().NumPy().copy(),
+                       chain.gradient("objective"))
+    (jd, ud, gd), (ji, ui, gi) = out["direct"], out["iterative"]
+    assert abs(ji - jd) <= SAME_TOL * abs(jd)
+    assert np.max(np.abs(ui - ud)) <= SAME_TOL * np.max(np.abs(ud))
+    assert np.max(np.abs(gi - gd)) <= 1e-6 * np.max(np.abs(gd))
