@@ -78,21 +78,23 @@ def energy(model):
     return make_energy(Parameters(model=model, E1=E1, E0=E0, nu=NU), Parameter(3.0))
 
 
-def chain_of(kind, model, load):
-    """The chain and the names of its checked responses."""
+def chain_of(kind, model, load, order=1):
+    """The chain and the names of its checked responses (displacement and pressure of order
+    ``order``, as a run builds them)."""
     mesh, n = mesh_of(kind)
     field = DesignField(mesh)
     blocks = [Embed(field), HelmholtzFilter(mesh, 0.3), HeavisideProjection(2.0),
               FixPassive(field)]
     e, guard, linear = energy(model)
     port = Port(n["end"], (0.0, 1.0, 0.0), spring=1e6)
-    kw = dict(order=1, energy=e, supports=Supports(clamp=(n["clamp"],)), guard=guard,
+    kw = dict(order=order, energy=e, supports=Supports(clamp=(n["clamp"],)), guard=guard,
               linear=linear, springs=port.springs(), newton=NewtonSettings(rtol=1e-12))
     if load == "force":
         mech = Mechanics(mesh, loads=(PointLoad(n["end"], (0.0, FORCE, 0.0)),), **kw)
         responses = [compliance(mech)]
     else:
-        dar = DarcyPressure(mesh, inlet=n["inlet"], zero=n["zero"], p_in=P_IN, delta_s=0.1)
+        dar = DarcyPressure(mesh, inlet=n["inlet"], zero=n["zero"], p_in=P_IN, delta_s=0.1,
+                            order=order)
         blocks.append(dar)
         extra = ({"body": darcy_body("p")} if load == "fixed"
                  else {"residual_density": darcy_follower("p", e.gamma if model == "wang"
@@ -104,15 +106,15 @@ def chain_of(kind, model, load):
     return field, mech, chain, [r.output for r in responses]
 
 
-def check_chain(kind, model, load):
+def check_chain(kind, model, load, order=1):
     """The worst relative error of the chain's responses (asserted below TOL), after checking
     that the structure deforms visibly and that a linear material under the follower load is
     solved by Newton in 3D (its residual is quadratic in u there)."""
-    field, mech, chain, names = chain_of(kind, model, load)
+    field, mech, chain, names = chain_of(kind, model, load, order)
     assert mech.linear == (model == "linear" and load != "follower")
     x0 = np.random.default_rng(2).uniform(0.3, 0.7, field.n)
     tip = float(chain.forward(x=x0)["delta"])
-    print(kind, mech.mesh.ne, model, load, "end deflection / L", tip / L)
+    print(kind, order, mech.mesh.ne, model, load, "end deflection / L", tip / L)
     assert abs(tip) / L > 0.02
     errors = {}
     for name in names:
