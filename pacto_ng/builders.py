@@ -235,10 +235,12 @@ class Builder:
         fields = list(design.names) + ([pressure.field] if pressure.field is not None else [])
         loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force)))
                       for ld in setup.loads)
+        # a 2D mesh is a slice of thickness t; a 3D mesh is the body itself
+        thickness = params.thickness if self.mesh.dim == 2 else 1.0
         try:
             return Mechanics(self.mesh, order=params.order, energy=model.energy, fields=fields,
                              supports=setup.supports, loads=loads, springs=setup.all_springs,
-                             body=pressure.body, thickness=params.thickness, guard=model.guard,
+                             body=pressure.body, thickness=thickness, guard=model.guard,
                              linear=model.linear, newton=params.newton.settings(),
                              residual_density=pressure.follower, realcompile=params.realcompile,
                              output="u" + suffix)
