@@ -44,6 +44,10 @@ CASE_MODULES = {
     "jaw-gripper": "pacto_ng.cases.jaw_gripper",
     "sorotop": "pacto_ng.cases.sorotop",
     "topress": "pacto_ng.cases.topress",
+    "cantilever-3d": "pacto_ng.cases.cantilever_3d",
+    "pneunet-3d": "pacto_ng.cases.pneunet_3d",
+    "pa-inverter-3d": "pacto_ng.cases.pa_inverter_3d",
+    "pa-gripper-3d": "pacto_ng.cases.pa_gripper_3d",
 }
 
 

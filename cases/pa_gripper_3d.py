@@ -1,0 +1,38 @@
+"""The pressure-actuated gripper in 3D: pa-inverter-3d's body with the 2D gripper's jaw.
+
+The body, supports, pressure boundaries and quarter model of pa-inverter-3d (see its
+docstring), with a passive void x ∈ [0.8L, L], y ∈ [0, 0.2H] through the whole depth (the
+gripped object's place) and a passive solid jaw pad x ∈ [0.8L, L], y ∈ [0.2H, 0.25H].
+Output: the jaw pad's inner face y = 0.2H, Δ = the mean of -u_y over it (the jaw closes), with
+the output spring k_out = 2e5 N/m on the same mean.  Defaults as pa-inverter-3d.
+"""
+from __future__ import annotations
+
+import sys
+
+from pacto_ng import Case, Parameters, Setup
+from pacto_ng.cases.pa_inverter_3d import DEFAULTS_3D, DEPTH, HEIGHT, LENGTH, setup_3d
+from pacto_ng.geometries import solids
+
+def _geometry(p: Parameters):
+    return solids.pa_mechanism(LENGTH, HEIGHT, DEPTH, gripper=True)
+
+
+def _setup(p: Parameters) -> Setup:
+    return setup_3d(p, gripper=True)
+
+
+CASE = Case(
+    name="pa-gripper-3d",
+    summary="3D pressure-actuated gripper (Darcy), minimise -Δ/SE, the jaw closes",
+    source="the 2D pa-gripper (thesis §6.2; Kumar, Frouws & Langelaar 2020) in 3D",
+    defaults=DEFAULTS_3D,
+    geometry=_geometry,
+    setup=_setup,
+    load_unit="Pa",
+)
+
+if __name__ == "__main__":
+    from pacto_ng import main
+
+    sys.exit(main(["run", CASE.name] + sys.argv[1:]))

@@ -1,0 +1,68 @@
+"""The pressure-actuated inverter in 3D: the 2D pa-inverter given a depth, with open sides.
+
+What it shows: a design-dependent pressure load in 3D.  Body 0.2 x 0.2 x 0.04 m (L x 2H x D),
+solved on a quarter: y ∈ [0, H] (``symmetry`` at y = 0) and z ∈ [0, D/2] (``symmetry_z`` at
+z = D/2), each held in its normal direction, no flux through either.  Pressure inlet P_in on
+the face x = 0; zero pressure on the top, the right and the front face z = 0, so that the
+optimiser must also seal the cavity at the front (the 2D case's faces are sealed by its plane
+strain).  Clamp on the strip x ∈ [0, L/20] of the top face, a passive solid block L/20 x H/20
+under it.  Output: the strip y ∈ [0, 0.05 H] of the right face, Δ = the mean of -u_x over it
+(towards the inlet), with an output spring of k_out = 2e5 N/m on the same mean (the 2D case's
+1e4 N/m per mm of depth).  E1 = 3e9 Pa, E0 = 1e-6 E1, ν = 0.4, volume fraction 0.2,
+tetrahedra of 0.005 m, Helmholtz filter of radius 0.012 m and the 2D case's continuation; load
+1e6 Pa.  Objective ``mechanism``: minimise -sΔ/SE.
+"""
+from __future__ import annotations
+
+import sys
+
+from pacto_ng import Case, Parameters, Port, Pressure, Setup, Spring, Supports
+from pacto_ng.cases.pa_inverter import PA_DEFAULTS, SE_FACTOR
+from pacto_ng.geometries import solids
+
+LENGTH, HEIGHT, DEPTH = 0.2, 0.1, 0.04
+#: the 2D cases' settings that carry over (the mesh, the plane and the thickness do not)
+DEFAULTS_3D = PA_DEFAULTS.replace(maxh=0.005, plane="strain", thickness=1e-3, k_out=2e5,
+                                  penal_start=2.0)
+
+
+def setup_3d(p: Parameters, *, gripper: bool) -> Setup:
+    """The set-up of pa-inverter-3d and (``gripper``) pa-gripper-3d."""
+    volume = LENGTH * HEIGHT * 0.5 * DEPTH
+    direction = (0.0, 1.0, 0.0) if gripper else (1.0, 0.0, 0.0)
+    zero = ("zero_pressure", "fixed") + (() if gripper else ("output",))
+    return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",),
+                                   fix_z=("symmetry_z",)),
+                 springs=(Spring("output", p.k_out, direction),),
+                 port=Port("output", tuple(-c for c in direction)),
+                 solid=("block", "jaw_pad") if gripper else ("block",),
+                 void=("jaw_void",) if gripper else (), objective="mechanism",
+                 pressure=Pressure(inlet=("inlet",), zero=zero),
+                 se_max=SE_FACTOR * p.load ** 2 * volume / p.E1,
+                 # -Δ/SE is of order 3 / (P_in L D/2), as the 2D cases' 3 / (P_in L t)
+                 objective_ref=3.0 / (p.load * LENGTH * 0.5 * DEPTH))
+
+
+def _geometry(p: Parameters):
+    return solids.pa_mechanism(LENGTH, HEIGHT, DEPTH)
+
+
+def _setup(p: Parameters) -> Setup:
+    return setup_3d(p, gripper=False)
+
+
+CASE = Case(
+    name="pa-inverter-3d",
+    summary="3D pressure-actuated inverter (Darcy), minimise -Δ/SE, output moves against "
+            "the pressure",
+    source="the 2D pa-inverter (thesis §6.1; Kumar, Frouws & Langelaar 2020) in 3D",
+    defaults=DEFAULTS_3D,
+    geometry=_geometry,
+    setup=_setup,
+    load_unit="Pa",
+)
+
+if __name__ == "__main__":
+    from pacto_ng import main
+
+    sys.exit(main(["run", CASE.name] + sys.argv[1:]))
