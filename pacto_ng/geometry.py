@@ -165,7 +165,7 @@ def extent(geometry) -> float | None:
 
 def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: int = 0,
                   order: int = 1, mesh_time_limit: float = resources.MESH_TIME_LIMIT,
-                  solver: str | None = None) -> Meshed:
+                  solver: str | None = None, linear_solver: str = "auto") -> Meshed:
     """Mesh a case's geometry (see the module docstring for what it may be).
 
     Netgen triangles (tetrahedra for a 3D shape or a Box) of size ``maxh``; with ``nelx, nely
@@ -174,8 +174,10 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
 
     Before a mesh is made, its elements, its displacement dofs at ``order`` and a run's memory
     are estimated (:mod:`pacto_ng.resources`, :mod:`pacto_ng.resources3d`; ``solver`` of the
-    displacement system, ``sparsecholesky`` or ``umfpack``, None for the larger estimate): a
-    mesh that would not fit this machine's memory, or would take Netgen (or the grid builder)
+    displacement system, ``sparsecholesky`` or ``umfpack``, None for the larger estimate; in
+    3D ``linear_solver``, the ``solver`` setting, decides whether the system is factorised or
+    solved iteratively, :func:`pacto_ng.resources3d.route`): a mesh that would not fit this
+    machine's memory, or would take Netgen (or the grid builder)
     longer than ``mesh_time_limit`` seconds to make, is refused with one line.  A mesh file or
     an ``ngsolve.Mesh`` is checked on its own counts."""
     import ngsolve
@@ -193,7 +195,8 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
                              f"({', '.join(CAD_SUFFIXES)}) nor a mesh file "
                              f"({', '.join(MESH_SUFFIXES)})")
     if isinstance(geometry, Box):
-        return _mesh_box(geometry, maxh, (nelx, nely, nelz), order, mesh_time_limit, solver)
+        return _mesh_box(geometry, maxh, (nelx, nely, nelz), order, mesh_time_limit,
+                         dict(solver=solver, linear_solver=linear_solver))
     if nelz > 0:
         raise InputError("nelz: structured hexahedra need a box domain (a Box); this case's "
                          "geometry is not one (give --maxh instead)")
@@ -207,7 +210,8 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
     finer = "give a larger maxh or a lower order"
     if isinstance(geometry, ngsolve.Mesh):
         mesh = _checked_mesh(geometry)
-        fits(resources.estimate_mesh(mesh, order, solver=solver), source,
+        fits(resources.estimate_mesh(mesh, order, solver=solver, linear_solver=linear_solver),
+             source,
              "give a coarser mesh or a lower order")
         return Meshed(mesh, _mean_size(mesh), None)
     if isinstance(geometry, Layout):
@@ -228,7 +232,7 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
         _check_maxh(maxh, _extent(geometry))
         if solid:
             estimate = resources3d.estimate_tets(resources3d.shape_tets(geometry, maxh), order,
-                                                 solver=solver)
+                                                 solver=solver, linear_solver=linear_solver)
         else:
             estimate = resources.estimate_triangles(resources.shape_triangles(geometry, maxh),
                                                     order, solver=solver)
@@ -246,9 +250,10 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
                      "ngsolve.Mesh")
 
 
-def _mesh_box(box: Box, maxh, nel, order, mesh_time_limit, solver) -> Meshed:
+def _mesh_box(box: Box, maxh, nel, order, mesh_time_limit, solvers: dict) -> Meshed:
     """A Box as Netgen tetrahedra of ``maxh`` or, with ``nel`` = (nelx, nely, nelz) > 0,
-    structured hexahedra; checked against this machine's resources first."""
+    structured hexahedra; checked against this machine's resources first (``solvers``: the
+    estimates' ``solver`` and ``linear_solver``)."""
     def fits(estimate, what, advice):
         resources.check(estimate, what, mesh_time_limit=mesh_time_limit, advice=advice)
 
@@ -257,14 +262,14 @@ def _mesh_box(box: Box, maxh, nel, order, mesh_time_limit, solver) -> Meshed:
         if nelz == 0:
             raise InputError("nelz: a box domain (3D) meshed as hexahedra needs nelx, nely and "
                              "nelz")
-        fits(resources3d.estimate_hex_grid(nelx, nely, nelz, order, solver=solver),
+        fits(resources3d.estimate_hex_grid(nelx, nely, nelz, order, **solvers),
              f"nelx x nely x nelz = {nelx} x {nely} x {nelz}",
              "give a smaller nelx, nely, nelz or order")
         mesh = structured_box(box, nelx, nely, nelz)
         return Meshed(mesh, float(min(box.size / np.array(nel))), None)
     _check_maxh(maxh, float(box.size.min()))
     tets = resources3d.netgen_tets(float(np.prod(box.size)), maxh)
-    fits(resources3d.estimate_tets(tets, order, solver=solver), f"maxh = {maxh:g}",
+    fits(resources3d.estimate_tets(tets, order, **solvers), f"maxh = {maxh:g}",
          "give a larger maxh or a lower order")
     return Meshed(netgen_box_mesh(box, maxh), maxh, box_shape(box))
 

@@ -207,15 +207,16 @@ def estimate_grid(nelx: int, nely: int, order: int, *, solver: str | None = None
                     _GRID_SECONDS * n, k, "quads", "the grid builder", exact=True)
 
 
-def estimate_mesh(mesh, order: int, *, solver: str | None = None) -> Estimate:
+def estimate_mesh(mesh, order: int, *, solver: str | None = None,
+                  linear_solver: str = "auto") -> Estimate:
     """A mesh that exists (an ``ngsolve.Mesh``; a 3D one: :func:`pacto_ng.resources3d.
-    estimate_mesh`): elements and dofs counted."""
+    estimate_mesh`, whose route ``linear_solver`` decides): elements and dofs counted."""
     import numpy as np
 
     if mesh.dim == 3:
         from .resources3d import estimate_mesh as estimate_mesh_3d
 
-        return estimate_mesh_3d(mesh, order, solver=solver)
+        return estimate_mesh_3d(mesh, order, solver=solver, linear_solver=linear_solver)
 
     types = np.asarray(mesh.ngmesh.Elements2D().NumPy()["type"])
     quads = int(np.count_nonzero(types == 11))  # Netgen's QUAD; TRIG is 10

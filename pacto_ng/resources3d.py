@@ -31,7 +31,32 @@ grid (``3·(k·nelx+1)(k·nely+1)(k·nelz+1)``) and a mesh that exists.
 meshes of curved shapes), the hexahedral grid builder 7–34 µs per hexahedron (128 000 and
 16 000 of them, a passive block an eighth of the box).
 
-MEMORY_DOCSTRING
+**Memory.**  As in 2D the largest allocation is the displacement system, and fill-in is far
+larger in 3D: a nested-dissection factorisation of a 3D mesh grows like ``ndof^(4/3)`` and
+more (2D: ``ndof^1.07``).  Peak RSS above the start, measured by :func:`probe_solve` (one
+process each, one thread) on linear elasticity on a 2 x 1 x 1 box, Netgen tetrahedra (h =
+0.3 ... 0.035) at orders 1–3 and 2n x n x n hexahedra (n = 8 ... 24) at orders 1–3, 5·10³ to
+2.1·10⁵ dofs, factorised (``sparsecholesky``, ``umfpack``) or assembled with the BDDC
+preconditioner of the iterative route as :class:`pacto_ng.physics.solvers.LinearSolver`
+builds it (``iterative``, orders 2–3: its coarse vertex problem factorised), and fitted
+(points above 2·10⁴ dofs) as ``bytes − mesh = a · ndof^b · q^[hexahedra] · o^k``
+(:func:`fit_memory`)::
+
+    sparsecholesky  a = 57.6   b = 1.463  q = 1.58  o = 1.093   measured/fit 0.89–1.13 (12 points)
+    umfpack         a = 152.7  b = 1.452  q = 1.38  o = 1.134   measured/fit 0.91–1.13 (11 points)
+    iterative       a = 2188   b = 0.999  q = 2.13  o = 1.211   measured/fit 0.93–1.08 (8 points)
+
+e.g. 1.51·10⁵ dofs (order 1, 271 359 tetrahedra): 2.68 GB with Cholesky (factorised in
+84 s), 6.65 GB with UMFPACK (225 s); 9.2·10⁴ dofs on 48 x 24 x 24 hexahedra: 1.84 and 3.83
+GB; 2.1·10⁵ dofs (order 2, 32 x 16 x 16 hexahedra) with BDDC: 1.44 GB.  At 4.4·10⁴ dofs the
+3D Cholesky takes 0.43 GB where the 2D fit gives 0.05 GB; at 1.5·10⁵, 2.7 GB against 0.19
+GB.  Below 2·10⁴ dofs the measured is 0.94–1.29 of the fit (fixed costs).  The rest of a
+run is counted as in 2D (:func:`pacto_ng.resources.run_overheads`: ``_RUN_FACTOR`` on the
+system, the mesh, the fast paths' element matrices); whole 3D runs have not been measured
+against it yet.  Which route the run takes is the
+physics' (:func:`route`: :func:`pacto_ng.physics.solvers.choose`, direct below 5·10⁴ dofs
+and at order 1, iterative above at order ≥ 2 with ``solver = auto``).  This machine (23 GB,
+about 18 GB usable) plans runs up to about 5·10⁵ dofs with Cholesky at order 1.
 """
 from __future__ import annotations
 
@@ -42,21 +67,33 @@ import sys
 from .resources import Estimate, run_overheads
 
 # the displacement system's memory fit in 3D (module docstring): (a, b, hexahedra, per order)
-_FIT = {"sparsecholesky": (400.0, 1.3, 1.0, 1.2), "umfpack": (800.0, 1.3, 1.0, 1.3)}
+_FIT = {"sparsecholesky": (57.55, 1.4627, 1.582, 1.0925),
+        "umfpack": (152.7, 1.4516, 1.384, 1.1340),
+        "iterative": (2188.0, 0.9989, 2.134, 1.2113)}
 _TETS_PER_VOLUME = 5.0      # Netgen tetrahedra per h³ of volume (module docstring)
 _NETGEN_SECONDS = 2.5e-4  # CPU seconds per Netgen tetrahedron
 _GRID_SECONDS = 2.0e-5    # CPU seconds per structured hexahedron
 _HUGE = 1e300                  # counts are capped here (a maxh of 1e-300 still gives one line)
 
 
+def route(dofs: float, order: int, linear_solver: str = "auto") -> str:
+    """``"direct"`` or ``"iterative"``: the displacement system's route as the physics takes
+    it (:func:`pacto_ng.physics.solvers.choose`; ``linear_solver`` its ``solver`` setting)."""
+    from .physics.solvers import choose
+
+    return choose(linear_solver, int(min(dofs, 1e18)), 3, max(int(order), 1))
+
+
 def run_memory(dofs: float, order: int, elements: float, *, hexes: bool = False,
-               solver: str | None = None) -> float:
+               solver: str | None = None, linear_solver: str = "auto") -> float:
     """A 3D run's peak memory in bytes (above the process's start) for ``dofs`` displacement
     dofs of ``order`` on ``elements`` tetrahedra (or hexahedra): the displacement system's fit
-    (``solver``: ``sparsecholesky``, ``umfpack`` or None for the larger, umfpack's) and the
-    same overheads as in 2D (:func:`pacto_ng.resources.run_overheads`)."""
+    for its :func:`route` (direct: ``solver``, ``sparsecholesky``, ``umfpack`` or None for the
+    larger, umfpack's; iterative: CG or GMRES with BDDC) and the same overheads as in 2D
+    (:func:`pacto_ng.resources.run_overheads`)."""
     k = max(int(order), 1)
-    a, b, q, o = _FIT[solver or "umfpack"]
+    direct = route(dofs, k, linear_solver) == "direct"
+    a, b, q, o = _FIT[(solver or "umfpack") if direct else "iterative"]
     system = a * min(max(dofs, 1.0), 1e30) ** b * (q if hexes else 1.0) * o ** k
     local = (k + 1) ** 3 if hexes else (k + 1) * (k + 2) * (k + 3) / 6  # scalar dofs per element
     return run_overheads(system, elements, local, dim=3)
@@ -84,27 +121,31 @@ def shape_tets(shape, maxh: float) -> float:
     return sum(netgen_tets(solid.mass, min(maxh, solid.maxh)) for solid in shape.solids)
 
 
-def estimate_tets(tets: float, order: int, *, solver: str | None = None) -> Estimate:
+def estimate_tets(tets: float, order: int, *, solver: str | None = None,
+                  linear_solver: str = "auto") -> Estimate:
     """A Netgen tetrahedral mesh still to be made, of about ``tets`` tetrahedra: vertices
     ``tets/5``, edges ``vertices + tets``, faces ``2·tets`` (module docstring)."""
     n = min(float(tets), _HUGE)
     dofs = vector_h1_dofs(order, vertices=n / 5, edges=1.2 * n, trig_faces=2 * n, tets=n)
-    return Estimate(n, dofs, run_memory(dofs, order, n, solver=solver), _NETGEN_SECONDS * n,
-                    max(int(order), 1), "tetrahedra", "Netgen")
+    return Estimate(n, dofs, run_memory(dofs, order, n, solver=solver,
+                                        linear_solver=linear_solver),
+                    _NETGEN_SECONDS * n, max(int(order), 1), "tetrahedra", "Netgen")
 
 
 def estimate_hex_grid(nelx: int, nely: int, nelz: int, order: int, *,
-                      solver: str | None = None) -> Estimate:
+                      solver: str | None = None, linear_solver: str = "auto") -> Estimate:
     """A structured ``nelx x nely x nelz`` hexahedral mesh (:func:`pacto_ng.box.
     structured_box`): counted exactly."""
     k = max(int(order), 1)
     n = float(nelx) * float(nely) * float(nelz)
     dofs = 3.0 * (k * nelx + 1) * (k * nely + 1) * (k * nelz + 1)
-    return Estimate(n, dofs, run_memory(dofs, k, n, hexes=True, solver=solver),
+    return Estimate(n, dofs, run_memory(dofs, k, n, hexes=True, solver=solver,
+                                        linear_solver=linear_solver),
                     _GRID_SECONDS * n, k, "hexahedra", "the grid builder", exact=True)
 
 
-def estimate_mesh(mesh, order: int, *, solver: str | None = None) -> Estimate:
+def estimate_mesh(mesh, order: int, *, solver: str | None = None,
+                  linear_solver: str = "auto") -> Estimate:
     """A 3D mesh that exists: elements and dofs counted (tetrahedra and hexahedra; a mixed
     mesh's faces are counted one by one)."""
     import numpy as np
@@ -124,7 +165,7 @@ def estimate_mesh(mesh, order: int, *, solver: str | None = None) -> Estimate:
     kind = ("hexahedra" if hexes == types.size else "tetrahedra" if tets == types.size
             else "elements")
     return Estimate(mesh.ne, dofs, run_memory(dofs, order, mesh.ne, hexes=hexes > tets,
-                                              solver=solver),
+                                              solver=solver, linear_solver=linear_solver),
                     0.0, max(int(order), 1), kind, None, exact=True)
 
 
@@ -177,7 +218,10 @@ def probe_shape(name: str):
 
 def probe_solve(size: float, order: int, solver: str, hexes: bool = False) -> dict:
     """3D linear elasticity on a 2 x 1 x 1 box (Netgen tets of ``size``, or 2n x n x n
-    hexes for ``hexes``), assembled and factorised with ``solver``: counts, peak RSS."""
+    hexes for ``hexes``), assembled and factorised with ``solver`` (``sparsecholesky``,
+    ``umfpack``; ``iterative``: assembled with its BDDC preconditioner, as
+    :class:`pacto_ng.physics.solvers.LinearSolver` builds it): counts, the seconds of the
+    factorisation (with the assembly for ``iterative``), peak RSS."""
     import time
 
     from ngsolve import (BilinearForm, InnerProduct, Mesh, SetNumThreads, Sym, TaskManager,
@@ -202,11 +246,18 @@ def probe_solve(size: float, order: int, solver: str, hexes: bool = False) -> di
         after_mesh = _hwm()
         fes = VectorH1(mesh, order=order, dirichlet=dirichlet)
         u, v = fes.TnT()
-        a = BilinearForm(fes, symmetric=solver == "sparsecholesky")
+        a = BilinearForm(fes, symmetric=solver != "umfpack")
         a += (InnerProduct(Sym(Grad(u)), Sym(Grad(v))) + div(u) * div(v)) * dx
-        a.Assemble()
+        if solver == "iterative":  # CG + BDDC as the physics builds it
+            from .physics.solvers import LinearSolver
+
+            route = LinearSolver(a, fes.FreeDofs(), setting="iterative", order=order)
         t = time.perf_counter()
-        a.mat.Inverse(fes.FreeDofs(), inverse=solver)
+        a.Assemble()  # the iterative route's preconditioner is built here
+        if solver != "iterative":
+            a.mat.Inverse(fes.FreeDofs(), inverse=solver)
+        else:
+            route.prepare()
         t_fac = time.perf_counter() - t
         peak = _hwm()
     return {"hexes": hexes, "size": size, "order": order, "solver": solver,
@@ -217,7 +268,8 @@ def probe_solve(size: float, order: int, solver: str, hexes: bool = False) -> di
 _TET_PROBES = (("cube", (0.2, 0.1, 0.07, 0.05)), ("slab", (0.1, 0.05, 0.035)),
                ("bar", (0.1, 0.05)), ("holed", (0.2, 0.1, 0.05)))
 _SOLVE_PROBES = (("netgen", 1, (0.1, 0.07, 0.05, 0.035)), ("netgen", 2, (0.2, 0.14, 0.1, 0.07)),
-                 ("netgen", 3, (0.3, 0.2, 0.14)), ("hex", 1, (16, 24)), ("hex", 2, (8, 12)))
+                 ("netgen", 3, (0.3, 0.2, 0.14, 0.1)), ("hex", 1, (16, 24)),
+                 ("hex", 2, (8, 12, 16)), ("hex", 3, (8, 12)))
 
 
 def _probe(*args) -> dict | None:
@@ -268,7 +320,8 @@ def measure() -> list[dict]:
           + ", ".join(f"{r['shape']} {r['maxh']:g}: {c * r['volume'] / r['maxh'] ** 3 / r['tets']:.2f}"
                       for r in tets))
     rows = [r for solver in _FIT for kind, k, sizes in _SOLVE_PROBES for size in sizes
-            if (r := _probe(kind, size, k, solver)) is not None]
+            if not (solver == "iterative" and k == 1)  # BDDC at order 1 is a direct solve
+            and (r := _probe(kind, size, k, solver)) is not None]
     for r in rows:
         print(f"{r['solver']:14s} {'hex' if r['hexes'] else 'tet'} {r['size']:6g} k={r['order']} "
               f"{r['elements']:7d} el {r['dofs']:8d} dofs  factor {r['factor_s']:6.1f} s  "

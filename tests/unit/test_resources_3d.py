@@ -108,3 +108,14 @@ def test_the_limit_comes_from_the_memory_fit():
     with pytest.raises(InputError, match="maxh = 0.05: about .* tetrahedra"):
         resources.check(est, "maxh = 0.05", limit=(0.99 * est.memory, "test"))
     assert np.isfinite(est.memory) and est.memory > 1e8
+
+
+def test_the_route_is_the_physics_choice():
+    """Order 2 above 5·10⁴ dofs: ``solver = auto`` solves iteratively (BDDC), whose memory is
+    far below a factorisation's; ``direct`` is estimated as a factorisation."""
+    auto = resources3d.estimate_hex_grid(40, 20, 20, 2, solver="sparsecholesky")
+    direct = resources3d.estimate_hex_grid(40, 20, 20, 2, solver="sparsecholesky",
+                                           linear_solver="direct")
+    assert resources3d.route(auto.dofs, 2) == "iterative"
+    assert resources3d.route(auto.dofs, 1) == "direct"  # order 1: BDDC would be direct
+    assert direct.memory > 5 * auto.memory
