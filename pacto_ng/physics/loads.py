@@ -96,16 +96,13 @@ class Spring:
     direction: tuple[float, ...] = (1.0, 0.0)
 
     def energy(self, mesh, u):
-        from ngsolve import CF
-
-        _vector(mesh, self.direction, "spring direction", self.region)
-        meas, w = _measure(mesh, self.region)
         d = np.asarray(self.direction, dtype=float)
-        d = d / np.linalg.norm(d)
+        d = _vector(mesh, d / np.linalg.norm(d), "spring direction", self.region)
+        meas, w = _measure(mesh, self.region)
         # the mean displacement of a boundary needs the squared mean, not the mean square:
         # for a point region w = 1 and both agree; for an edge we use the mean square (a
         # distributed spring of the same total stiffness), which is stated in the docs.
-        return 0.5 * self.stiffness * w * (CF(tuple(d)) * u) ** 2 * meas
+        return 0.5 * self.stiffness * w * (d * u) ** 2 * meas
 
 
 @dataclass(frozen=True)
