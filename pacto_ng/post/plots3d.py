@@ -65,11 +65,12 @@ def design_picture(path, mesh, rho, title: str = "") -> None:
     p.subplot(0, 0)
     p.add_mesh(grid.outline(), color="grey")
     surface = grid.contour([0.5], scalars="rho_bar")
+    words = "rho_bar = 0.5 iso-surface"  # VTK's text font has no ρ̄
     if surface.n_points:
         p.add_mesh(surface, color="lightsteelblue", smooth_shading=True)
-    # VTK's text font has no ρ̄: the pictures' words say rho_bar
-    p.add_text(f"{title}\nrho_bar = 0.5 iso-surface" if title else "rho_bar = 0.5 iso-surface",
-               font_size=9)
+    else:
+        words += " (none: rho_bar does not cross 0.5)"
+    p.add_text(f"{title}\n{words}" if title else words, font_size=9)
     p.view_isometric()
     p.subplot(0, 1)
     p.add_mesh(grid.outline(), color="grey")
