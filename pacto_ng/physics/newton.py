@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 
 from ..params import InputError
 from ..settings import Settings, setting
+from .solvers import DIRECT_MAX_DOFS_3D, SOLVERS
 
 import numpy as np
 
@@ -48,8 +49,6 @@ class NewtonSettings:
     solver: str = "auto"  # the tangent's linear solver: auto | direct | iterative (solvers.py)
 
     def __post_init__(self):
-        from .solvers import SOLVERS
-
         if self.solver not in SOLVERS:
             raise ValueError(f"solver must be one of {', '.join(SOLVERS)}")
         if self.line_search not in ("guard", "residual"):
@@ -77,9 +76,9 @@ class NewtonParameters(Settings):
     realcompile: bool = setting(False, "", "compile the Newton forms to machine code (C++ "
                                 "compiler; ~10-30 s once, 2.5-3.5x faster assembly)")
     solver: str = setting("auto", "", "linear solver of the tangent: auto (sparse direct in "
-                          "2D, and in 3D at order 1 or up to 60 000 dofs; else iterative) | "
-                          "direct | iterative (CG / GMRES with BDDC, pacto_ng/physics/solvers.py)",
-                          choices=("auto", "direct", "iterative"))
+                          f"2D, and in 3D at order 1 or up to {DIRECT_MAX_DOFS_3D:,} dofs; else "
+                          "iterative) | direct | iterative (CG / GMRES with BDDC, "
+                          "pacto_ng/physics/solvers.py)", choices=SOLVERS)
 
     def check(self):
         if self.newton_min_increment > self.newton_increment:

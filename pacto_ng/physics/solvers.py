@@ -13,19 +13,19 @@ preconditioned Krylov solver beyond.
   during ``Assemble``/``AssembleLinearization``, so a matrix written by other means, e.g. the
   element-matrix scatter, must not be used with it): BDDC for vector spaces and higher
   orders, ``h1amg`` for a scalar order-1 space (the Darcy pressure at order 1, the Helmholtz
-  filter).  In 3D at order >= 2 the edge dofs are made interface dofs, so that BDDC's coarse
-  (wirebasket) problem is the vertex problem, an eighth of the dofs, solved by a direct
-  factorisation; with NGSolve's default (edges in the wirebasket) every order-2 dof is coarse
-  and BDDC is a direct solve.  The transpose solve (an unsymmetric adjoint) is GMRES on
-  ``Aᵀ`` with the same preconditioner (it approximates ``A⁻¹``; the follower tangent is a
-  perturbation of a symmetric one).
+  filter).  In 3D at order >= 2 the dofs of the interior edges are made interface dofs, so
+  that BDDC's coarse (wirebasket) problem is the vertex problem (an eighth of the dofs) with
+  the boundary's edges, solved by a direct factorisation; with NGSolve's default (edges in
+  the wirebasket) every order-2 dof is coarse and BDDC is a direct solve.  The transpose
+  solve (an unsymmetric adjoint) is GMRES on ``Aᵀ`` with the same preconditioner (it
+  approximates ``A⁻¹``; the follower tangent is a perturbation of a symmetric one).
 
-``auto`` (:func:`choose`) takes the direct route in 2D and, in 3D, below
+``auto`` (:func:`choose`) takes the direct route in 2D and, in 3D, up to
 :data:`DIRECT_MAX_DOFS_3D` dofs and for a vector space of order 1 (where every dof is a BDDC
-vertex dof, so the iterative route is a direct solve plus iterations; the scalar order-1
-systems, Darcy and the filter, take ``h1amg`` above the same number of dofs).  That threshold is measured by ``python3 -m benchmarks
-solvers_3d`` (docs/benchmarks.md, "3D solvers: direct against iterative"): linear elasticity
-on a 3D cantilever box, order 2, sparse Cholesky against CG + BDDC.
+vertex dof, so that the iterative route is a direct solve plus iterations); the scalar
+order-1 systems (Darcy, the filter) take ``h1amg`` above the same number of dofs.  The
+threshold is measured by ``PACTO_THREADS=1 python3 -m benchmarks.solvers_3d``
+(docs/benchmarks.md, "3D solvers: direct against iterative"; see the constant's comment).
 
 The Krylov tolerance is relative to the right-hand side's (preconditioned) norm; the caller
 ties it to what it needs (Newton: a tenth of its residual tolerance times the load norm, the
@@ -39,9 +39,18 @@ import numpy as np
 
 SOLVERS = ("auto", "direct", "iterative")
 
-# Above this many dofs of a 3D system of order >= 2, ``auto`` takes the iterative route
-# (measured: docs/benchmarks.md, "3D solvers: direct against iterative").
-DIRECT_MAX_DOFS_3D = 60_000
+# Above this many dofs of a 3D system, ``auto`` takes the iterative route.  Measured
+# (docs/benchmarks.md, "3D solvers: direct against iterative": linear elasticity on a
+# cantilever box at order 2, one linear solve with its assembly, one thread, CG + BDDC to
+# 1e-8): the direct route is faster at 8 000 dofs (1.1 against 1.5 s), the iterative one at
+# 25 000 (5.0 against 8.0 s) and 56 000 (3.4 against 25 s), with slopes of 2 against 1.
+# An optimisation asks more of the iterative route than that solve: the adjoint is a second
+# Krylov solve where the direct route reuses its factorisation, the tolerances of Newton's
+# linear step and of the adjoint are tighter than 1e-8 (12 digits against 8 at CG's linear
+# rate: about 1.5x the iterations, estimated), and SIMP's contrast adds some (measured: 57 ->
+# 65 iterations at 25 000 dofs, E0 = 1e-6 E1, a 0/1 design).  Hence a threshold between the
+# 25 000 and 56 000 dofs measured.
+DIRECT_MAX_DOFS_3D = 40_000
 
 ADJOINT_RTOL = 1e-12  # Krylov tolerance of the adjoint, Darcy and filter solves (relative)
 MAX_ITERATIONS = 1000
@@ -73,19 +82,23 @@ def choose(setting: str, ndof: int, dim: int, order: int, preconditioner: str = 
 
 
 def _vertex_coarse_space(fes):
-    """Make every wirebasket dof that is not on a vertex an interface dof (BDDC's coarse
-    problem is then the vertex problem)."""
-    from ngsolve import VERTEX, NodeId
+    """Make the wirebasket dofs inside the domain that are not on a vertex (the interior edges'
+    dofs) interface dofs: BDDC's coarse problem is then the vertex problem and the dofs on
+    the boundary's edges.  Those stay in it because a boundary term (a spring on a face) has
+    element matrices that are singular on its edge dofs, which BDDC would invert."""
+    from ngsolve import BND, VERTEX, NodeId
     from ngsolve.comp import COUPLING_TYPE
 
-    on_vertex = np.zeros(fes.ndof, dtype=bool)
+    keep = np.zeros(fes.ndof, dtype=bool)
     for v in range(fes.mesh.nv):
-        on_vertex[[d for d in fes.GetDofNrs(NodeId(VERTEX, v)) if d >= 0]] = True
+        keep[[d for d in fes.GetDofNrs(NodeId(VERTEX, v)) if d >= 0]] = True
+    for el in fes.mesh.Elements(BND):
+        keep[[d for d in fes.GetDofNrs(el) if d >= 0]] = True
     wirebasket = COUPLING_TYPE.WIREBASKET_DOF
     types = fes.couplingtype
-    for d in range(fes.ndof):
-        if not on_vertex[d] and types[d] == wirebasket:
-            fes.SetCouplingType(d, COUPLING_TYPE.INTERFACE_DOF)
+    for d in np.flatnonzero(~keep):
+        if types[d] == wirebasket:
+            fes.SetCouplingType(int(d), COUPLING_TYPE.INTERFACE_DOF)
 
 
 class LinearSolver:

@@ -133,3 +133,108 @@ def test_direct_equals_iterative(model, load):
     assert abs(ji - jd) <= SAME_TOL * abs(jd)
     assert np.max(np.abs(ui - ud)) <= SAME_TOL * np.max(np.abs(ud))
     assert np.max(np.abs(gi - gd)) <= 1e-6 * np.max(np.abs(gd))
+
+
+# -- 3D: a small tetrahedral box at order 2 (BDDC with the vertex coarse space) ---------------
+L3, W3, D3 = 1.0, 0.4, 0.3
+
+
+def _chain_3d(model, load, solver):
+    """The box of tests/physics/test_3d_gradients.py (Netgen tetrahedra, maxh 0.15) at order
+    2: clamped at x = 0, a force on the end face (compliance) or the Darcy pressure as a
+    follower load (strain energy), and the output displacement of the end face against a
+    spring."""
+    from netgen.occ import X, Y, Box, OCCGeometry
+    from ngsolve import Mesh
+
+    from pacto_ng.physics.loads import PointLoad
+    from pacto_ng.physics.mechanics import Field
+    from pacto_ng.responses import compliance
+
+    box = Box((0, 0, 0), (L3, W3, D3))
+    box.faces.Min(X).name = "clamp"
+    box.faces.Max(X).name = "end"
+    box.faces.Min(Y).name = "inlet"
+    box.faces.Max(Y).name = "zero"
+    mesh = Mesh(OCCGeometry(box, dim=3).GenerateMesh(maxh=0.15))
+    field = DesignField(mesh)
+    flt = HelmholtzFilter(mesh, 0.3, solver=solver)
+    blocks = [Embed(field), flt, HeavisideProjection(2.0), FixPassive(field)]
+    modulus = lambda c: simp_cf(c["rho_bar"], 3e3, 3e9, 3.0)
+    if model == "linear":
+        energy, guard = (lambda G, c: linear_energy(G, modulus(c), 0.4)), None
+    else:
+        energy, guard = (lambda G, c: neohookean_energy(G, modulus(c), 0.4)), \
+            (lambda G, c: jacobian(G))
+    port = Port("end", (0.0, 1.0, 0.0), spring=1e6)
+    kw = dict(order=ORDER, energy=energy, supports=Supports(clamp=("clamp",)), guard=guard,
+              linear=model == "linear" and load == "force", springs=port.springs(),
+              newton=NewtonSettings(rtol=1e-12, solver=solver))
+    if load == "force":
+        mech = Mechanics(mesh, loads=(PointLoad("end", (0.0, 2e5, 0.0)),), **kw)
+        responses = [compliance(mech)]
+    else:
+        dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=2e6, delta_s=0.1,
+                            order=ORDER, solver=solver)
+        blocks.append(dar)
+        mech = Mechanics(mesh, fields=("rho_bar", Field("p", dar.fes)),
+                         residual_density=darcy_follower("p"), **kw)
+        responses = [StrainEnergy(mech)]
+    responses.append(output_displacement(mech, port))
+    chain = Chain(blocks + [mech] + responses)
+    x0 = np.random.default_rng(2).uniform(0.3, 0.7, field.n)
+    return chain, mech, [r.output for r in responses], x0
+
+
+@pytest.mark.parametrize("model,load", [("linear", "force"), ("neohookean", "force"),
+                                        ("neohookean", "follower")])
+def test_iterative_gradients_3d(model, load):
+    """The 3D chain's gradients through the iterative route (CG or GMRES with BDDC on the
+    vertex coarse space, h1amg for the filter) pass the FD check (five-point stencil at
+    h = 1e-4, as tests/physics/test_3d_gradients.py), and BDDC really iterates."""
+    chain, mech, names, x0 = _chain_3d(model, load, "iterative")
+    chain.forward(x=x0)
+    info = mech.solver_info
+    assert info["kind"] == "iterative" and info["preconditioner"] == "bddc"
+    assert info["iterations"] > 3
+    errors = {}
+    for name in names:
+        fun = lambda x, nm=name: float(chain.forward(x=x)[nm])
+
+        def grad(x, nm=name):
+            chain.forward(x=x)
+            return chain.gradient(nm)
+
+        errors[name] = check_gradient(fun, grad, x0, h=1e-4, directions=2, stencil=4).rel_error
+    print(model, load, errors, mech.solver_info)
+    assert max(errors.values()) < FD_TOL, errors
+
+
+def test_direct_equals_iterative_3d():
+    """The 3D linear box on both routes: the compliance and the displacement agree to
+    SAME_TOL (relative)."""
+    out = {}
+    for solver in ("direct", "iterative"):
+        chain, mech, names, x0 = _chain_3d("linear", "force", solver)
+        vals = chain.forward(x=x0)
+        out[solver] = (vals[names[0]], mech.gfu.vec.FV().NumPy().copy())
+    (jd, ud), (ji, ui) = out["direct"], out["iterative"]
+    assert abs(ji - jd) <= SAME_TOL * abs(jd)
+    assert np.max(np.abs(ui - ud)) <= SAME_TOL * np.max(np.abs(ud))
+
+
+def test_darcy_order1_h1amg():
+    """The Darcy pressure at order 1 on the iterative route (CG with h1amg, Dirichlet inlet and
+    zero boundaries): its pressure and its backward pass equal the direct route's."""
+    mesh = small_pa_mesh("trig")
+    rho = np.random.default_rng(3).uniform(0.0, 1.0, mesh.ne)
+    out = {}
+    for solver in ("direct", "iterative"):
+        dar = DarcyPressure(mesh, inlet="inlet", zero="zero", p_in=1e5, order=1, solver=solver)
+        p = dar.forward(rho).FV().NumPy().copy()
+        g = dar.backward(np.linspace(0.0, 1.0, len(p)))[0]
+        out[solver] = (p, g, dar.solver_info)
+    (pd, gd, _), (pi, gi, info) = out["direct"], out["iterative"]
+    assert info["preconditioner"] == "h1amg" and info["iterations"] > 1
+    assert np.max(np.abs(pi - pd)) <= SAME_TOL * np.max(np.abs(pd))
+    assert np.max(np.abs(gi - gd)) <= 1e-6 * np.max(np.abs(gd))
