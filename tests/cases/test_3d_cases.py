@@ -79,11 +79,11 @@ def test_smoke_run(case, tmp_path):
 
 def _check(case, model, load_type):
     extra = ["--set", f"load_type={load_type}"] if case != "cantilever-3d" else []
-    # a random grey design's void (E0 = 1e-6 E1) under the follower load of the full inlet
-    # pressure has no equilibrium (as for the 2D PneuNet, tests/cases/test_pa_cases.py): the
-    # follower chains are checked at a thousandth of the load
-    if load_type == "follower":
-        extra += ["--load", "1e3"]
+    # at the case's own load: at a thousandth of it the strains of E1 = 3e9 Pa material are
+    # ~1e-7, and a hyperelastic energy (I1 - 3, ln J: terms of 1e-7 that cancel to 1e-14)
+    # keeps ~3 digits; the strain energy's finite differences are then noise (the 2D
+    # pa-gripper's Neo-Hookean check at 1e3 Pa fails by 3e-2 at every Newton tolerance,
+    # linear passes at 6e-10; measured 2026-12-03)
     return main(["check-gradients", case, *COARSE[case], "--model", model, *extra])
 
 
