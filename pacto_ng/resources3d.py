@@ -36,7 +36,7 @@ larger in 3D: a nested-dissection factorisation of a 3D mesh grows like ``ndof^(
 more (2D: ``ndof^1.07``).  Peak RSS above the start, measured by :func:`probe_solve` (one
 process each, one thread) on linear elasticity on a 2 x 1 x 1 box, Netgen tetrahedra (h =
 0.3 ... 0.035) at orders 1–3 and 2n x n x n hexahedra (n = 8 ... 24) at orders 1–3, 5·10³ to
-2.1·10⁵ dofs, factorised (``sparsecholesky``, ``umfpack``) or assembled with the BDDC
+3.2·10⁵ dofs, factorised (``sparsecholesky``, ``umfpack``) or assembled with the BDDC
 preconditioner of the iterative route as :class:`pacto_ng.physics.solvers.LinearSolver`
 builds it (``iterative``, orders 2–3: its coarse vertex problem factorised), and fitted
 (points above 2·10⁴ dofs) as ``bytes − mesh = a · ndof^b · q^[hexahedra] · o^k``
@@ -44,11 +44,12 @@ builds it (``iterative``, orders 2–3: its coarse vertex problem factorised), a
 
     sparsecholesky  a = 57.6   b = 1.463  q = 1.58  o = 1.093   measured/fit 0.89–1.13 (12 points)
     umfpack         a = 152.7  b = 1.452  q = 1.38  o = 1.134   measured/fit 0.91–1.13 (11 points)
-    iterative       a = 2188   b = 0.999  q = 2.13  o = 1.211   measured/fit 0.93–1.08 (8 points)
+    iterative       a = 1261   b = 1.047  q = 2.09  o = 1.226   measured/fit 0.92–1.07 (10 points)
 
 e.g. 1.51·10⁵ dofs (order 1, 271 359 tetrahedra): 2.68 GB with Cholesky (factorised in
 84 s), 6.65 GB with UMFPACK (225 s); 9.2·10⁴ dofs on 48 x 24 x 24 hexahedra: 1.84 and 3.83
-GB; 2.1·10⁵ dofs (order 2, 32 x 16 x 16 hexahedra) with BDDC: 1.44 GB.  At 4.4·10⁴ dofs the
+GB; with BDDC, 2.1·10⁵ dofs (order 2, 32 x 16 x 16 hexahedra): 1.44 GB, 3.2·10⁵ (order 2,
+73 721 tetrahedra): 1.26 GB.  At 4.4·10⁴ dofs the
 3D Cholesky takes 0.43 GB where the 2D fit gives 0.05 GB; at 1.5·10⁵, 2.7 GB against 0.19
 GB.  Below 2·10⁴ dofs the measured is 0.94–1.29 of the fit (fixed costs).  The rest of a
 run is counted as in 2D (:func:`pacto_ng.resources.run_overheads`: ``_RUN_FACTOR`` on the
@@ -69,7 +70,7 @@ from .resources import Estimate, run_overheads
 # the displacement system's memory fit in 3D (module docstring): (a, b, hexahedra, per order)
 _FIT = {"sparsecholesky": (57.55, 1.4627, 1.582, 1.0925),
         "umfpack": (152.7, 1.4516, 1.384, 1.1340),
-        "iterative": (2188.0, 0.9989, 2.134, 1.2113)}
+        "iterative": (1261.0, 1.0466, 2.089, 1.2257)}
 _TETS_PER_VOLUME = 5.0      # Netgen tetrahedra per h³ of volume (module docstring)
 _NETGEN_SECONDS = 2.5e-4  # CPU seconds per Netgen tetrahedron
 _GRID_SECONDS = 2.0e-5    # CPU seconds per structured hexahedron
