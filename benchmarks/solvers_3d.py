@@ -2,16 +2,17 @@
 
     PACTO_THREADS=1 python3 -m benchmarks.solvers_3d [--sizes 4,6,8,11,14,18,22] [--out docs/benchmarks.md]
 
-A cantilever box 1 x 0.25 x 0.25 m (NGSolve's ``MakeStructured3DMesh``, 4n x n x n cubes of
+A cantilever box 1 x 0.25 x 0.25 m (NGSolve's `MakeStructured3DMesh`, 4n x n x n cubes of
 six tetrahedra each), clamped at x = 0, a downward traction on the end face x = 1; linear
 elasticity (E = 1, ν = 0.3), VectorH1 of order 2.  Per size and route, in a fresh process:
-the time of one linear solve (assembly with the preconditioner's set-up, factorisation or
-Krylov iterations, the solve) and the process's peak resident memory, through
-:class:`~pacto_ng.physics.solvers.LinearSolver` (direct: sparse Cholesky; iterative: CG with
-BDDC, vertex coarse space, relative tolerance 1e-8); and one Neo-Hookean Newton step from the
-undeformed state (``AssembleLinearization`` and the solve, the unsymmetric-free tangent of
-the same box) up to the sizes where the direct route still fits.  The log-log slope of time
-against dofs is a least-squares fit over the sizes of each route.
+the time of one linear solve (set-up: the assembly with the preconditioner's set-up or the
+factorisation; solve: the Krylov iterations or the triangular solves) and the process's peak
+resident memory, through `LinearSolver` (pacto_ng/physics/solvers.py; direct: sparse
+Cholesky; iterative: CG with BDDC, whose coarse space is the vertices and the boundary's
+edges, relative tolerance 1e-8); and one Neo-Hookean Newton step from the undeformed state
+(`AssembleLinearization` of the same box's symmetric tangent and the solve) up to 150 000
+dofs.  The log-log slope of time against dofs is a least-squares fit over the sizes of each
+route; the direct route stops after the first size that takes more than 60 s.
 """
 from __future__ import annotations
 
@@ -148,9 +149,10 @@ def markdown(rows, took, mach):
         lines.append(f"| {r['ndof']:,} | {r['route']} | {r['setup']:.2f} | {r['solve']:.2f} | "
                      f"{r['time']:.2f} | {its} | {r['rss']:.2f} | {nt} | "
                      f"{r['residual']:.1e} |")
-    lines += ["", "Fitted log-log slopes of the total time against dofs: "
+    lines += ["", "Fitted log-log slopes against dofs, of the total time: "
               + ", ".join(f"{k} {slope(v):.2f} ({len(v)} sizes)" for k, v in rows.items()
-                          if v) + "."]
+                          if v) + "; of the peak memory: "
+              + ", ".join(f"{k} {slope(v, 'rss'):.2f}" for k, v in rows.items() if v) + "."]
     it = rows["iterative"]
     if it:
         top = max(it, key=lambda r: r["ndof"])
