@@ -54,6 +54,7 @@ DIRECT_MAX_DOFS_3D = 40_000
 
 ADJOINT_RTOL = 1e-12  # Krylov tolerance of the adjoint, Darcy and filter solves (relative)
 MAX_ITERATIONS = 1000
+GMRES_RESTART = 100  # GMRES keeps this many Krylov vectors at most (8 MB each per 1e6 dofs)
 
 
 class SolverFailure(RuntimeError):
@@ -175,8 +176,11 @@ class LinearSolver:
 
         tol = self.rtol if rtol is None else float(rtol)
         mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
-        method = CGSolver if self.symmetric else GMResSolver
-        krylov = method(mat, self._pre.mat, tol=tol, maxiter=MAX_ITERATIONS)
+        if self.symmetric:
+            method, extra = CGSolver, {}
+        else:
+            method, extra = GMResSolver, {"restart": GMRES_RESTART}
+        krylov = method(mat, self._pre.mat, tol=tol, maxiter=MAX_ITERATIONS, **extra)
         krylov.Solve(rhs=rhs, sol=out)
         self.iterations = krylov.iterations
         self.total_iterations += krylov.iterations
