@@ -91,6 +91,7 @@ class LinearSystem:
             * Grad(v).Reshape((dd,))
         self.a = BilinearForm(fes, symmetric=True)
         self.a += integrand * DX
+        self._volume = list(self.a.integrators)  # the springs below are not element-wise
         self.springs = None
         if mech.springs:
             self.springs = BilinearForm(fes, symmetric=True)
@@ -250,7 +251,8 @@ class LinearSystem:
         gfc = self.gfC.vec.FV().NumPy()
         c1 = self._C1
         setc = lambda cs: gfc.__setitem__(slice(None), (cs[0][:, None] * c1).ravel())
-        self.scatter = ElementMatrices.build(self.a, self.mech.fes, setc, 1)
+        self.scatter = ElementMatrices.build(self.a, self.mech.fes, setc, 1,
+                                             volume=self._volume)
 
     def assemble(self):
         """Assemble ``K`` and ``f`` for the current fields (once per design)."""

@@ -159,3 +159,44 @@ def test_element_matrices_come_with_the_second_design():
     assert fresh.pressure_block.route == "element_matrices"
     assert abs(f1c - f1) <= 1e-12 * abs(f1)
     assert np.max(np.abs(g1c - g1)) <= 1e-11 * np.max(np.abs(g1))
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_element_by_element_equals_the_colouring_on_tetrahedra(order, monkeypatch):
+    """Above MAX_COLOURS colours (Netgen tetrahedra) the element matrices come element by
+    element from the volume integrators; the springs' point and boundary terms stay in the
+    constant part.  Both routes must give the same S_k, and NGSolve's assembly."""
+    from netgen.occ import X, Box, OCCGeometry
+    from ngsolve import CF, L2, BilinearForm, GridFunction, Grad, InnerProduct, Mesh, Sym, \
+        VectorH1, dx, ds
+
+    from pacto_ng.physics import scatter
+
+    box = Box((0, 0, 0), (1, 0.5, 0.3))
+    box.faces.Max(X).name = "end"
+    mesh = Mesh(OCCGeometry(box).GenerateMesh(maxh=0.2))
+    assert element_colours(mesh).max() + 1 > scatter.MAX_COLOURS
+    fes = VectorH1(mesh, order=order)
+    u, v = fes.TnT()
+    c = GridFunction(L2(mesh, order=0))
+    a = BilinearForm(fes, symmetric=True)
+    a += c * InnerProduct(Sym(Grad(u)), Sym(Grad(v))) * dx
+    volume = list(a.integrators)
+    a += 3.0 * (CF((1, 0, 0)) * u) * (CF((1, 0, 0)) * v) * ds("end")
+
+    def setc(cs):
+        c.vec.FV().NumPy()[:] = cs[0]
+
+    by_element = ElementMatrices.build(a, fes, setc, 1, volume=volume)
+    monkeypatch.setattr(scatter, "MAX_COLOURS", 10_000)
+    by_colour = ElementMatrices.build(a, fes, setc, 1)
+    diff = abs(by_element.S[0] - by_colour.S[0]).max()
+    assert diff <= 1e-13 * abs(by_colour.S[0]).max()
+    # and against NGSolve's assembly of a design of its own
+    rng = np.random.default_rng(2)
+    coef = rng.uniform(1e-3, 1.0, mesh.ne)
+    by_element.assemble([coef])
+    A = _csr(a.mat).copy()
+    setc([coef])
+    a.Assemble()
+    assert abs(A - _csr(a.mat)).max() <= 1e-13 * abs(_csr(a.mat)).max()
