@@ -134,13 +134,18 @@ def mesh_bytes(elements: float) -> float:
     return _MESH_BYTES * elements
 
 
-def run_overheads(system: float, elements: float, local: float, *, dim: int) -> float:
+def run_overheads(system: float, elements: float, local: float, *, dim: int,
+                  displacement_matrices: bool = True) -> float:
     """A run's memory around its displacement ``system`` (bytes, assembled and factorised):
     the system times ``_RUN_FACTOR``, the mesh, and the linear fast paths' element matrices
-    for ``local`` scalar dofs per element (a ``dim``-vector displacement and the Darcy
-    pressure's two matrices; not built above ``_SCATTER_MAX`` entries)."""
+    for ``local`` scalar dofs per element (a ``dim``-vector displacement's, unless
+    ``displacement_matrices`` is False: an iterative route assembles by its form, and the
+    Darcy pressure's two matrices; none above ``_SCATTER_MAX`` entries)."""
     scatter = 0.0
-    for entries in (elements * (dim * local) ** 2, 2 * elements * local ** 2):  # u; Darcy K, D
+    parts = [2 * elements * local ** 2]  # Darcy K, D
+    if displacement_matrices:
+        parts.append(elements * (dim * local) ** 2)
+    for entries in parts:
         if entries <= _SCATTER_MAX:  # above it the fast path is not built
             scatter += _SCATTER_BYTES * entries
     return _RUN_FACTOR * system + mesh_bytes(elements) + scatter
