@@ -154,3 +154,24 @@ def test_nelz_needs_a_box_and_a_box_needs_nelz():
         mesh_geometry(chamber_box(), maxh=0.004, nelx=8, nely=4)
     with pytest.raises(InputError, match="structured quads need a rectangular domain"):
         mesh_geometry(chambered_block(), maxh=0.005, nelx=8, nely=4)
+
+
+def test_a_gmsh_file_with_volume_groups(tmp_path):
+    """A 3D .msh: volume physical groups name the regions, surface groups the boundaries."""
+    import meshio
+
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], float)
+    tets = np.array([[0, 1, 2, 3], [1, 2, 3, 4]])
+    tris = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 4, 3], [1, 2, 4], [2, 3, 4]])
+    phys = [np.array([1, 2]), np.array([3, 4, 4, 4, 4, 4])]
+    meshio.write(tmp_path / "two.msh",
+                 meshio.Mesh(pts, [("tetra", tets), ("triangle", tris)],
+                             cell_data={"gmsh:physical": phys, "gmsh:geometrical": phys},
+                             field_data={"design": np.array([1, 3]), "chamber": np.array([2, 3]),
+                                         "fixed": np.array([3, 2]), "free": np.array([4, 2])}),
+                 file_format="gmsh22", binary=False)
+    meshed = mesh_geometry(str(tmp_path / "two.msh"), maxh=1.0)
+    m = meshed.mesh
+    assert m.dim == 3 and m.ne == 2 and set(m.GetMaterials()) == {"design", "chamber"}
+    assert set(m.GetBoundaries()) == {"fixed", "free"}
+    assert meshed.shape is None and meshed.h > 0
