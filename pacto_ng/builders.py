@@ -160,7 +160,7 @@ class Builder:
             blocks.append(Embed(field_, inputs=(xin,), output=f"rho{suf}"))
             if params.filter == "helmholtz":
                 flt = HelmholtzFilter(mesh, radius, inputs=(f"rho{suf}",),
-                                      output=f"rho_tilde{suf}")
+                                      output=f"rho_tilde{suf}", solver=params.solver)
             elif params.filter == "cone":
                 flt = ConeFilter(field_.centroids(), field_.areas, radius, inputs=(f"rho{suf}",),
                                  output=f"rho_tilde{suf}")
@@ -215,7 +215,7 @@ class Builder:
             block, pfield, body = darcy_load.for_case(self.mesh, params.darcy, params.load,
                                                       pressure, design.names[0],
                                                       order=params.order, output="p" + suffix,
-                                                      gamma=gamma)
+                                                      gamma=gamma, solver=params.solver)
         except ValueError as err:
             raise InputError(str(err)) from None
         if params.load_type == "follower":

@@ -86,7 +86,7 @@ class ConeFilter:
         if radius <= 0:
             raise ValueError("filter radius must be positive")
         self.inputs, self.output = tuple(inputs), output
-        c = np.asarray(centroids)[:, :2]
+        c = np.asarray(centroids, dtype=float)  # (elements, dimension)
         tree = cKDTree(c)
         d = tree.sparse_distance_matrix(tree, radius, output_type="coo_matrix")
         w = radius - d.data

@@ -54,6 +54,26 @@ def test_cone_filter_weights_and_gradient():
     assert res.rel_error < 1e-7
 
 
+def test_cone_filter_weights_in_3d():
+    """Unit cubes: within R = 1.5 of an interior cube lie its 6 face neighbours (weight 0.5),
+    12 edge neighbours (1.5 - √2) and none of its corner neighbours (√3 > 1.5) — the weights of
+    the 3D 88-line codes; the z distance counts."""
+    from ngsolve.meshes import MakeStructured3DMesh
+
+    m = MakeStructured3DMesh(hexes=True, nx=3, ny=3, nz=3,
+                             mapping=lambda x, y, z: (3 * x, 3 * y, 3 * z))
+    field = DesignField(m)
+    c = field.centroids()
+    assert c.shape == (27, 3)
+    centre = int(np.argmin(np.linalg.norm(c - 1.5, axis=1)))
+    f = ConeFilter(c, field.areas, 1.5)
+    x = np.zeros(m.ne)
+    x[centre] = 1.0
+    total = 1.5 + 6 * 0.5 + 12 * (1.5 - np.sqrt(2))
+    assert abs(f.forward(x)[centre] - 1.5 / total) < 1e-14
+    assert np.allclose(f.forward(np.ones(m.ne)), 1.0)
+
+
 @pytest.mark.parametrize("beta", [1.0, 8.0, 64.0])
 def test_projection_gradient(beta):
     pr = HeavisideProjection(beta, 0.5)
