@@ -48,6 +48,7 @@ CASE_MODULES = {
     "pneunet-3d": "pacto_ng.cases.pneunet_3d",
     "pa-inverter-3d": "pacto_ng.cases.pa_inverter_3d",
     "pa-gripper-3d": "pacto_ng.cases.pa_gripper_3d",
+    "topress-3d": "pacto_ng.cases.topress_3d",
 }
 
 
