@@ -26,7 +26,9 @@ MATLAB, Optimization and Engineering, doi:10.1007/s11081-024-09931-2:
   normalised by the filtered ones); ρ̄ is the filtered density, no projection.
 
 The code's call line (volfrac, penal, rmin, ηf, βf, maxit) is not in the source file; the
-defaults here: volfrac 0.2, p 3, rmin 2.4, ηf 0.2, βf 10 (those of topress), 100 iterations.
+defaults here: a 16 x 16 x 8 grid, volfrac 0.2, p 3, rmin 2.4, ηf 0.2, βf 10 (those of
+topress), 100 iterations.  The design is a membrane that hangs from the clamped rim and
+sags to mid-depth at the centre: P_in above it, p = 0 below.
 The optimiser is ours (MMA then GCMMA, move 0.1), not the code's MMA set-up, so designs agree
 in kind, not iterate for iterate; the analysis of a given ρ̄ agrees to round-off
 (tests/cases/test_topress_3d.py against tests/topress3d_reference.py).
