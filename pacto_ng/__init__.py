@@ -36,6 +36,7 @@ from .settings import Settings, setting  # noqa: E402
 from .physics.loads import Outputs, PointLoad, Port, Spring  # noqa: E402
 from .physics.mechanics import Supports  # noqa: E402
 from .mesh import Layout, Region, Segment  # noqa: E402
+from .box import Block, Box, Patch  # noqa: E402
 from .case import Case, Pressure, Problem, Setup, domain_size, get_case, load_case_file  # noqa: E402
 from .builders import Builder, Responses, standard_chain  # noqa: E402
 from .responses import StrainEnergy, output_displacement  # noqa: E402
@@ -58,7 +59,7 @@ __all__ = [
     # its chain of blocks
     "Builder", "standard_chain", "Problem", "Responses", "output_displacement", "StrainEnergy",
     # geometry
-    "Layout", "Segment", "Region", "load_cad", "load_mesh", "mesh_geometry",
+    "Layout", "Segment", "Region", "Box", "Patch", "Block", "load_cad", "load_mesh", "mesh_geometry",
     # running
     "run", "Result", "load_result", "check_gradients", "get_case", "load_case_file", "InputError", "main",
     "__version__",

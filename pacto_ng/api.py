@@ -96,7 +96,7 @@ def case_parameters(case: Case, settings: dict) -> Parameters:
             raise InputError(f"{name}: unknown parameter (see 'pacto run CASE --show-parameters')")
     changes = {k: str(v) for k, v in settings.items()}
     if "maxh" in settings and "nelx" not in settings:
-        changes.update(nelx="0", nely="0")
+        changes.update(nelx="0", nely="0", nelz="0")
     return case.defaults.with_overrides(changes)
 
 
@@ -165,7 +165,7 @@ def check_gradients(case: Case | str | os.PathLike, *, seed: int = 0, quiet: boo
     if not isinstance(case, Case):
         case = get_case(os.fspath(case))
     params = case_parameters(case, settings)
-    explicit = any(k in settings for k in ("maxh", "nelx", "nely"))
+    explicit = any(k in settings for k in ("maxh", "nelx", "nely", "nelz"))
     return check_case(case, params, seed=seed, quiet=quiet, explicit_mesh=explicit)
 
 

@@ -482,16 +482,18 @@ def domain_size(params: Parameters, width: float, height: float) -> tuple[float,
 
 
 def mesh_for(case: Case, params: Parameters):
-    """The case's meshed domain (:class:`~pacto_ng.geometry.Meshed`): Netgen triangles of size
-    maxh, or structured quads if nelx > 0 (rectangular layouts only)."""
+    """The case's meshed domain (:class:`~pacto_ng.geometry.Meshed`): Netgen triangles or
+    tetrahedra of size maxh, or structured quads (hexahedra) if nelx > 0 (a Layout; a Box with
+    nelz)."""
     from .geometry import mesh_geometry
 
     # the resources check (pacto_ng.resources) before meshing: a follower load makes the
     # tangent unsymmetric (umfpack), otherwise it is symmetric (sparsecholesky)
     return mesh_geometry(case.make_geometry(params), maxh=params.maxh, nelx=params.nelx,
-                         nely=params.nely, order=params.order,
+                         nely=params.nely, nelz=params.nelz, order=params.order,
                          mesh_time_limit=params.mesh_time_limit,
-                         solver="umfpack" if params.load_type == "follower" else "sparsecholesky")
+                         solver="umfpack" if params.load_type == "follower" else "sparsecholesky",
+                         linear_solver=params.solver)
 
 
 def build_problem(case: Case, params: Parameters) -> Problem:

@@ -2,7 +2,8 @@
 
     pacto cases
     pacto new NAME
-    pacto run CASE [--model M] [--load V] [--iterations N] [--maxh H | --nelx NX --nely NY]
+    pacto run CASE [--model M] [--load V] [--iterations N]
+                   [--maxh H | --nelx NX --nely NY [--nelz NZ]]
                    [--order K] [--optimizer mma|gcmma] [--set NAME=VALUE ...] [--out DIR]
                    [--overwrite] [--quiet] [--show-parameters]
     pacto evaluate CASE --density FILE [--filtered] [same options] [--overwrite]
@@ -67,6 +68,7 @@ def _case_options(p: argparse.ArgumentParser):
     p.add_argument("--maxh", type=float, help="Netgen triangle size")
     p.add_argument("--nelx", type=int, help="structured quads in x")
     p.add_argument("--nely", type=int, help="structured quads in y")
+    p.add_argument("--nelz", type=int, help="structured hexahedra in z (a 3D box case)")
     p.add_argument("--order", type=int, help="displacement element order (1, 2, 3)")
     p.add_argument("--optimizer", help="mma | gcmma")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
@@ -116,7 +118,7 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--scheduler", help="address of a running Dask scheduler (default: a local cluster)")
     w.add_argument("--workers", type=int, help="local worker processes (default: the cores)")
     for opt, kind in (("--iterations", int), ("--maxh", float), ("--nelx", int), ("--nely", int),
-                      ("--order", int), ("--optimizer", str)):
+                      ("--nelz", int), ("--order", int), ("--optimizer", str)):
         w.add_argument(opt, type=kind, help="as for run")
     w.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="as for run")
     w.add_argument("--out", help="sweep folder (default: output/sweep-CASE)")
@@ -193,12 +195,13 @@ def _post_command(args) -> int:
 def params_from_args(case, args) -> Parameters:
     p = case.defaults
     direct = {}
-    for name in ("model", "load", "iterations", "maxh", "nelx", "nely", "order", "optimizer"):
+    for name in ("model", "load", "iterations", "maxh", "nelx", "nely", "nelz", "order",
+                 "optimizer"):
         val = getattr(args, name, None)
         if val is not None:
             direct[name] = str(val)
     if (args.maxh is not None) and args.nelx is None:
-        direct["nelx"], direct["nely"] = "0", "0"
+        direct["nelx"], direct["nely"], direct["nelz"] = "0", "0", "0"
     sets = {}
     for item in args.set:
         if "=" not in item:
@@ -346,7 +349,7 @@ def _main(argv) -> int:
     if args.command == "check-gradients":
         from .gradcheck import check_case
 
-        explicit = args.maxh is not None or args.nelx is not None
+        explicit = args.maxh is not None or args.nelx is not None or args.nelz is not None
         from .physics.equilibrium import NewtonFailure
 
         try:

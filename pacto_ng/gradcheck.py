@@ -25,6 +25,8 @@ def coarse_params(case, params, explicit_mesh: bool):
             nx = min(params.nelx, 24)
             ny = max(2, round(nx * params.nely / params.nelx))
             changes.update(nelx=nx, nely=ny)
+            if params.nelz > 0:
+                changes["nelz"] = max(2, round(nx * params.nelz / params.nelx))
         elif size is not None:
             changes["maxh"] = max(params.maxh, size / 8)
     return params.replace(**changes)
