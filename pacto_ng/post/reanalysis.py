@@ -301,14 +301,17 @@ class Reanalysis:
         res = self.mech.result
         if not ok:
             return self._failed(pressure, res.iterations, float(res.load_reached))
-        gfu = self.mech.gfu
+        along, max_u = self._read(self.mech.gfu)
+        return SweepPoint(float(pressure), float(self._weights @ along), max_u,
+                          float(np.min(self._J(self._pts))), int(res.iterations), True, 1.0,
+                          tuple(map(float, along)))
+
+    def _read(self, gfu):
+        """``(d_k·u(x_k) of every port, largest |u| over the vertices)``."""
         u_ports = np.asarray(gfu(self._port_points)).reshape(len(self.ports), -1)
         along = np.einsum("ij,ij->i", self._directions, u_ports)
         u_v = np.asarray(gfu(self._vertices)).reshape(-1, 2)
-        return SweepPoint(float(pressure), float(self._weights @ along),
-                          float(np.max(np.linalg.norm(u_v, axis=1))),
-                          float(np.min(self._J(self._pts))), int(res.iterations), True, 1.0,
-                          tuple(map(float, along)))
+        return along, float(np.max(np.linalg.norm(u_v, axis=1)))
 
     def _failed(self, pressure, iterations, load_reached) -> SweepPoint:
         return SweepPoint(float(pressure), np.nan, np.nan, np.nan, int(iterations), False,

@@ -1,0 +1,284 @@
+"""The 3D part remeshed with Netgen tetrahedra and re-analysed (Neo-Hookean, fixed against
+follower boundary pressure).
+
+:func:`remesh_part` writes the closed surface of :mod:`.part3d` as STL, meshes it with Netgen's
+STL geometry (``netgen.stl.STLGeometry(...).GenerateMesh(maxh=...)``: the surface is
+remeshed, then the volume) and names the new mesh's boundary faces by position:
+
+* a face lying on a face of the source mesh that bounds its material region (the outer faces
+  and the walls of the passive void regions) takes that face's name (``fixed``,
+  ``symmetry_z``, ``inlet``, ``tip``, ...): the case's supports and output ports carry over
+  by name;
+* **the wetting rule** (as in 2D, :mod:`.remesh`): a face on a source face named in
+  ``wet_boundaries`` (the inlet: the fluid is beyond it), or a face inside the source domain
+  where the run's final Darcy pressure, sampled one source element size outside the part
+  along its outward normal, is at least ``wet_fraction`` P_in, is named ``pressure``;
+* the other faces are ``free``.
+
+:class:`Reanalysis3D` is :class:`~.reanalysis.Reanalysis` on tetrahedra: the full 3D
+Neo-Hookean energy (thickness 1), the pressure ``P`` on ``pressure``
+
+``fixed``
+    deformation independent: the residual gains ``∫ P N0 · v dA0``;
+``follower``
+    following the deformation, the nominal traction ``-P cof(F) N0 = -P J F⁻ᵀ N0``: the
+    residual gains ``∫ P cof(F̃) N0 · v dA0`` with ``F̃ = I + Grad(u).Trace()`` (the surface
+    gradient: ``F̃ T = F T`` on every tangent T and ``F̃ N0 = N0``, so
+    ``cof(F̃) N0 = (F T1) × (F T2) = cof(F) N0``, for tangents with ``T1 × T2 = N0``); its load
+    stiffness from ``AssembleLinearization`` (unsymmetric tangent),
+
+and its output ports on named faces: ``d·u`` is the mean over the port's face (as the 3D
+cases define their output), each port with its spring on the same face.
+"""
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..physics.newton import NewtonSettings
+from .reanalysis import Reanalysis, output_ports
+
+PRESSURE, FREE = "pressure", "free"
+
+
+@dataclass
+class Remeshed3D:
+    """The result of :func:`remesh_part`."""
+
+    mesh: object  # ngsolve.Mesh, material "solid", boundaries named
+    volume: float
+    areas: dict  # boundary name -> area
+    dropped: int = 0  # tetrahedra of the pieces not joined to the clamp through faces
+
+
+def _bounding_faces(source, exclude):
+    """The source's surface triangles that bound its material region (not the interfaces
+    inside it), as a pyvista PolyData with cell data ``name`` (index into the returned list)."""
+    import pyvista as pv
+
+    ngm = source.ngmesh
+    mats = source.GetMaterials()
+    inside = {0: False}
+    inside.update({k + 1: m not in set(exclude) for k, m in enumerate(mats)})
+    names, keep = [], {}
+    for k in range(ngm.GetNFaceDescriptors()):
+        fd = ngm.FaceDescriptor(k + 1)
+        if inside.get(fd.domin, False) != inside.get(fd.domout, False):
+            name = fd.bcname
+            if name not in names:
+                names.append(name)
+            keep[k + 1] = names.index(name)
+    els = ngm.Elements2D().NumPy()
+    idx = np.asarray(els["index"], dtype=int)
+    mask = np.isin(idx, list(keep))
+    tri = np.asarray(els["nodes"], dtype=np.int64)[mask][:, :3] - 1
+    pts = np.asarray(ngm.Coordinates(), dtype=float)
+    poly = pv.PolyData(pts, np.c_[np.full(len(tri), 3), tri].ravel())
+    poly.cell_data["name"] = np.array([keep[i] for i in idx[mask]], dtype=int)
+    return poly, names
+
+
+def _sample(field, source, pts):
+    """``field`` (a CF on ``source``) at the points ``pts`` (n, 3); zero outside the mesh."""
+    mips = source(pts[:, 0].copy(), pts[:, 1].copy(), pts[:, 2].copy())
+    out = np.zeros(len(pts))
+    inside = mips["nr"] >= 0
+    if inside.any():
+        out[inside] = np.asarray(field(mips[inside])).ravel()
+    return out
+
+
+_TET_FACES = np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]])
+
+
+def _face_keys(cells, n: int) -> np.ndarray:
+    """One integer per triangle (rows of 3 point ids) or per face of every tetrahedron (rows
+    of 4, four keys each, in order), independent of the vertex order."""
+    cells = np.asarray(cells, dtype=np.int64)
+    f = np.sort(cells[:, _TET_FACES] if cells.shape[1] == 4 else cells[:, None, :], axis=2)
+    return ((f[..., 0] * n + f[..., 1]) * n + f[..., 2]).ravel()
+
+
+def _clamped_components(tets, clamp_tris, n: int) -> np.ndarray:
+    """Mask of the tetrahedra in a face-connected component that holds one of the boundary
+    triangles ``clamp_tris`` (``n`` points)."""
+    from scipy import sparse
+    from scipy.sparse.csgraph import connected_components
+
+    keys = _face_keys(tets, n)
+    owner = np.repeat(np.arange(len(tets)), 4)
+    order = np.argsort(keys, kind="stable")
+    k, o = keys[order], owner[order]
+    same = k[1:] == k[:-1]
+    g = sparse.coo_matrix((np.ones(same.sum()), (o[:-1][same], o[1:][same])),
+                          shape=(len(tets), len(tets)))
+    _, comp = connected_components(g, directed=False)
+    at = np.searchsorted(k, _face_keys(clamp_tris, n))
+    return np.isin(comp, comp[o[at[at < len(k)]]])
+
+
+def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), exclude=(),
+                wet_boundaries=(), pressure=None, p_in: float | None = None,
+                wet_fraction: float = 0.5, probe: float | None = None) -> Remeshed3D:
+    """Mesh the closed ``surface`` (pyvista PolyData) with Netgen tetrahedra of ``maxh`` and
+    name its boundary faces (see the module docstring; ``h_source`` is the source mesh's
+    element size: the wetting rule's probe distance by default, and 1e-4 of it the distance
+    within which a face lies on a source face).  Only the pieces joined through faces to a
+    face on ``clamp`` are kept.  ValueError when Netgen fails or no face lies on the clamp."""
+    import ngsolve
+    from netgen.meshing import FaceDescriptor, Mesh as NGMesh
+    from netgen.stl import STLGeometry
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "part.stl"
+        surf = surface.copy()
+        surf.clear_data()
+        surf.save(str(path), binary=True)
+        gen = STLGeometry(str(path)).GenerateMesh(maxh=float(maxh))
+    if gen.ne == 0:
+        raise ValueError(f"Netgen could not mesh the part at maxh {maxh:g}")
+    pts = np.asarray(gen.Coordinates(), dtype=float)
+    tris = np.asarray(gen.Elements2D().NumPy()["nodes"], dtype=np.int64)[:, :3] - 1
+    tets = np.asarray(gen.Elements3D().NumPy()["nodes"], dtype=np.int64)[:, :4] - 1
+    # outward normals (a triangle against the fourth vertex of its tetrahedron)
+    a, b, c = pts[tris[:, 0]], pts[tris[:, 1]], pts[tris[:, 2]]
+    cen = (a + b + c) / 3.0
+    nrm = np.cross(b - a, c - a)
+    area = 0.5 * np.linalg.norm(nrm, axis=1)
+    nrm /= np.maximum(2.0 * area[:, None], 1e-300)
+    faces = {tuple(sorted(f)): t for t, tet in enumerate(tets)
+             for f in (tet[[0, 1, 2]], tet[[0, 1, 3]], tet[[0, 2, 3]], tet[[1, 2, 3]])}
+    opp = np.array([np.setdiff1d(tets[faces[tuple(sorted(t))]], t)[0] for t in tris])
+    nrm *= np.where(np.einsum("ij,ij->i", nrm, cen - pts[opp]) > 0, 1.0, -1.0)[:, None]
+    # names by position
+    bnd, names = _bounding_faces(source, exclude)
+    tol = 1e-4 * h_source
+    cell, closest = bnd.find_closest_cell(cen, return_closest_point=True)
+    dist = np.linalg.norm(closest - cen, axis=1)
+    label = np.array([names[i] for i in np.asarray(bnd.cell_data["name"])[cell]], dtype=object)
+    label[dist > tol] = FREE
+    wet = np.isin(label, list(wet_boundaries))
+    if pressure is not None:
+        p_in = p_in if p_in is not None else float(np.max(pressure.vec.FV().NumPy()))
+        step = h_source if probe is None else float(probe)
+        inner = dist > tol
+        wet |= inner & (_sample(pressure, source, cen + step * nrm) >= wet_fraction * p_in)
+    label[wet] = PRESSURE
+    # pieces joined to the clamp through faces only (a piece hanging on a vertex or an edge
+    # of another is a mechanism): the tetrahedra's face-connected components
+    keep_tet = _clamped_components(tets, tris[np.isin(label, list(clamp))], len(pts))
+    if not keep_tet.any():
+        raise ValueError(f"no face of the remeshed part lies on the clamp "
+                         f"({', '.join(clamp)})")
+    used = np.isin(_face_keys(tris, len(pts)), _face_keys(tets[keep_tet], len(pts)))
+    dropped = int(np.count_nonzero(~keep_tet))
+    tets, tris, label, area = tets[keep_tet], tris[used], label[used], area[used]
+    ids, inverse = np.unique(tets, return_inverse=True)
+    pts, tets = pts[ids], inverse.reshape(tets.shape)
+    tris = np.searchsorted(ids, tris)
+    # the new mesh: the kept points and tetrahedra, one face descriptor per name
+    new = NGMesh(dim=3)
+    new.AddPoints(pts)
+    new.SetMaterial(1, "solid")
+    new.AddElements(dim=3, index=1, data=tets, base=0)
+    areas = {}
+    for k, name in enumerate(sorted(set(label))):
+        new.Add(FaceDescriptor(bc=k + 1, domin=1, domout=0, surfnr=k + 1))
+        new.SetBCName(k, name)
+        sel = label == name
+        new.AddElements(dim=2, index=k + 1, data=tris[sel], base=0)
+        areas[name] = float(area[sel].sum())
+    mesh = ngsolve.Mesh(new)
+    return Remeshed3D(mesh, float(ngsolve.Integrate(1.0, mesh)), areas, dropped)
+
+
+class Reanalysis3D(Reanalysis):
+    """One Neo-Hookean analysis of a remeshed 3D part (see the module docstring): ``kind``
+    ``fixed`` or ``follower``; ``output`` the ports on named faces of ``mesh``."""
+
+    def __init__(self, mesh, kind: str, *, E: float, nu: float, supports, output,
+                 order: int = 2, boundary: str = PRESSURE,
+                 newton: NewtonSettings = NewtonSettings()):
+        from ngsolve import TET, VOL, Grad, IntegrationRule, Parameter
+
+        from ..physics.energy import declare
+        from ..physics.materials import jacobian, neohookean_energy
+        from ..physics.mechanics import Mechanics
+
+        if kind not in ("fixed", "follower"):
+            raise ValueError(f"3D re-analysis: kind must be fixed or follower, not {kind!r}")
+        if boundary not in mesh.GetBoundaries():
+            raise ValueError(f"the mesh has no '{boundary}' boundary to apply the pressure on")
+        self.mesh, self.kind, self.ports = mesh, kind, output_ports(output)
+        self.E, self.nu, self.thickness = float(E), float(nu), 1.0
+        self.P = Parameter(0.0)
+        faces = set(mesh.GetBoundaries())
+        for port in self.ports:
+            if port.region not in faces:
+                raise ValueError(f"the part has no face on the output '{port.region}'")
+        self._directions = np.array([port.direction for port in self.ports], dtype=float)
+        self._weights = np.array([port.weight for port in self.ports], dtype=float)
+        springs = tuple(sp for port in self.ports for sp in port.springs())
+        loads, terms = (), None
+        if kind == "fixed":
+            loads = (FixedPressure3D(boundary, self.P),)
+        else:
+            terms = follower_pressure_terms_3d(boundary, self.P)
+        energy = declare(lambda G, coeffs: neohookean_energy(G, self.E, self.nu),
+                         reads=(), stress_free=True)
+        self.mech = Mechanics(mesh, order=order, energy=energy, fields=(), supports=supports,
+                              loads=loads, springs=springs, thickness=1.0,
+                              guard=lambda G, coeffs: jacobian(G), newton=newton,
+                              residual_terms=terms)
+        self._pts = mesh.MapToAllElements(IntegrationRule(TET, 2 * order), VOL)
+        self._J = jacobian(Grad(self.mech.gfu))
+        c = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
+        self._vertices = mesh(c[:, 0].copy(), c[:, 1].copy(), c[:, 2].copy())
+        self._areas = {p.region: _face_area(mesh, p.region) for p in self.ports}
+
+    def _read(self, gfu):
+        from ngsolve import CF, Integrate
+
+        mesh = self.mesh
+        along = np.array([Integrate(CF(tuple(d)) * gfu, mesh, definedon=mesh.Boundaries(
+            p.region)) / self._areas[p.region] for p, d in zip(self.ports, self._directions)])
+        u_v = np.asarray(gfu(self._vertices)).reshape(-1, 3)
+        return along, float(np.max(np.linalg.norm(u_v, axis=1)))
+
+
+def _face_area(mesh, name):
+    from ngsolve import Integrate
+
+    return float(Integrate(1.0, mesh, definedon=mesh.Boundaries(name)))
+
+
+class FixedPressure3D:
+    """Boundary pressure ``P`` on ``boundary`` of a 3D mesh, deformation independent: work
+    ``-∫ P N0 · u dA0`` (NGSolve's normal points out of a boundary face's domain)."""
+
+    def __init__(self, boundary: str, pressure):
+        self.boundary, self.pressure = boundary, pressure
+
+    def work(self, mesh, u, scale=1.0):
+        from ngsolve import ds, specialcf
+
+        return (-scale * self.pressure * (specialcf.normal(3) * u)) * ds(self.boundary)
+
+
+def follower_pressure_terms_3d(boundary: str, pressure):
+    """Residual terms ``(u, v, load) -> s ∫ P cof(F̃) N0 · v dA0`` (module docstring)."""
+    from ngsolve import Cof, Grad, Id, ds, specialcf
+
+    def terms(u, v, load):
+        Ft = Id(3) + Grad(u).Trace()
+        return (load * pressure * ((Cof(Ft) * specialcf.normal(3)) * v)) * ds(boundary)
+
+    return terms
+
+
+def analyse3d(mesh, pressures, *, kinds=("fixed", "follower"), **kwargs) -> dict:
+    """Sweep ``pressures`` with every kind in ``kinds``; returns ``{kind: Sweep}``."""
+    return {k: Reanalysis3D(mesh, k, **kwargs).sweep(pressures) for k in kinds}
