@@ -53,6 +53,7 @@ from ..files import atomic_path, atomic_write_text
 from ..params import InputError
 from ..threads import compute
 from .materials import material_areas
+from .post3d import analyse_run_3d, export_run_3d, is_3d
 from .report import analysis_dict, fmt_value, report_md, short_table
 from .runs import (check_part_mesh, copy_gridfunction, design_density, domain_of, load_run,
                    materials_of, part_of_run, rebuild, thresholded_elements)
@@ -198,6 +199,9 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     if bad or not kinds:
         raise InputError(f"--kinds: choose from {', '.join(KINDS)} (got {','.join(kinds) or 'none'})")
     run = load_run(folder, "analyse")
+    if is_3d(run):
+        return analyse_run_3d(run, pressures=pressures, threshold_value=threshold_value,
+                              maxh=maxh, order=order, kinds=kinds, quiet=quiet)
     setup = run.case.make_setup(run.params)
     if setup.pressure is None:
         raise InputError(f"analyse: case '{run.case.name}' has no pressure load; the re-analysis "
@@ -432,6 +436,8 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
     if maxh is not None and not maxh > 0:
         raise InputError(f"--maxh: must be positive, got {maxh:g}")
     run = load_run(folder, "export")
+    if is_3d(run):
+        return export_run_3d(run, fmt, out=out, threshold_value=threshold_value, quiet=quiet)
     prev = run.path / "analysis" / "analysis.json"
     if prev.exists() and (threshold_value is None or maxh is None or threshold2 is None):
         try:

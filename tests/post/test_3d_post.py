@@ -1,0 +1,142 @@
+"""pacto export / analyse of a 3D run, and the 3D follower pressure against a closed form.
+
+The run: pneunet-3d on tetrahedra of 0.006 m, one iteration (the run folder: params, summary,
+checkpoint), its design then replaced by a hand-made one: solid below y = 0.03 m (the chamber's
+walls, 0.01 m thick at the bottom and top, 0.005 m in front), void above.  Its part is one
+closed box with the chamber inside, clamped at x = 0, the tip face at x = 0.1 m.
+"""
+import json
+
+import numpy as np
+import pytest
+
+from pacto_ng.cli import main
+
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
+
+def _one_line_error(capsys):
+    lines = [ln for ln in capsys.readouterr().err.strip().splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("pacto: error:"), lines
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def run3d(tmp_path_factory):
+    from pacto_ng.post.runs import load_run, rebuild
+
+    out = tmp_path_factory.mktemp("post3d") / "pn"
+    assert main(["run", "pneunet-3d", "--maxh", "0.006", "--iterations", "1", "--set",
+                 "filter_radius=0.004", "--out", str(out), "--quiet"]) == 0
+    problem = rebuild(load_run(out, "test"))
+    c = problem.field.centroids()[problem.field.design_index]
+    x = (c[:, 1] < 0.03).astype(float)
+    ck = out / "checkpoint.npz"
+    with np.load(ck) as data:
+        saved = {k: data[k] for k in data.files}
+    saved["x"] = x
+    np.savez(ck, **saved)
+    return out
+
+
+@pytest.fixture(scope="module")
+def part(run3d):
+    from pacto_ng.post.post3d import part_of_run_3d
+    from pacto_ng.post.runs import load_run
+
+    return part_of_run_3d(load_run(run3d, "test"), 0.5)
+
+
+def test_export_stl_closed_with_the_thresholded_volume(run3d, part, capsys):
+    import pyvista as pv
+
+    from pacto_ng.post.grid import cell_volumes
+
+    assert main(["export", str(run3d), "--format", "stl"]) == 0
+    stl = pv.read(str(run3d / "export" / "design.stl"))
+    assert stl.n_open_edges == 0 and stl.is_manifold
+    p = part[0]
+    assert p.dropped == 0
+    # the thresholded design's volume: the tetrahedra clipped at the nodal rho_bar = 0.5
+    assert p.volume_kept == pytest.approx(float(cell_volumes(p.solid).sum()), rel=1e-12)
+    assert p.volume_kept == pytest.approx(p.volume_thresholded, rel=1e-12)
+    # measured 2026-12-03: +0.006 %
+    assert abs(abs(stl.volume) / p.volume_thresholded - 1.0) < 0.02
+    # the box below y = 0.03 without the chamber: 3.9e-5 m³ (measured 3.88e-5)
+    assert 0.6 < p.volume_thresholded / (0.1 * 0.03 * 0.015 - 0.06 * 0.01 * 0.01) < 1.4
+    assert "0 open edges" in capsys.readouterr().out
+
+
+def test_export_vtk_and_refusals(run3d, tmp_path, capsys):
+    import pyvista as pv
+
+    assert main(["export", str(run3d), "--format", "vtk", "--out", str(tmp_path / "p.vtk")]) == 0
+    assert pv.read(str(tmp_path / "p.vtk")).n_cells > 0
+    capsys.readouterr()
+    assert main(["export", str(run3d), "--format", "msh"]) == 2
+    assert "not supported for 3D runs yet" in _one_line_error(capsys)
+    assert main(["analyse", str(run3d), "--kinds", "darcy"]) == 2
+    assert "darcy analysis is not supported for 3D" in _one_line_error(capsys)
+    assert main(["analyse", str(run3d), "--threshold", "volume"]) == 2
+    assert "--threshold volume is not supported for 3D" in _one_line_error(capsys)
+
+
+def test_analyse_fixed_and_follower(run3d):
+    assert main(["analyse", str(run3d), "--pressures", "1e3,1e4", "--order", "1",
+                 "--quiet"]) == 0
+    out = run3d / "analysis"
+    data = json.loads((out / "analysis.json").read_text())
+    for name in ("design.stl", "part.vtu", "remeshed.vtu", "analysis.png"):
+        assert (out / name).exists()
+    areas = data["remesh"]["areas"]
+    # the chamber's walls (the inlet) are wetted; clamp, tip and symmetry carried over
+    for name in ("pressure", "fixed", "tip", "symmetry_z"):
+        assert areas[name] > 0
+    assert data["settings"]["supports"]["fix_z"] == ["symmetry_z"]
+    # the chamber's wetted walls: 2 (0.06 x 0.01) + 2 (0.01 x 0.01) + 0.06 x 0.01 (half)
+    assert areas["pressure"] == pytest.approx(0.06 * 0.01 * 3 + 0.01 * 0.01 * 2, rel=0.05)
+    rows = data["pressures"]
+    assert all(r[k]["converged"] for r in rows for k in ("fixed", "follower"))
+    # the chamber bulges: the tip moves; fixed and follower agree to first order in P
+    diff = data["follower_vs_fixed"]
+    assert abs(diff[0]) < 1e-2
+    assert diff[1] / diff[0] == pytest.approx(10.0, rel=0.2)
+    assert abs(rows[0]["fixed"]["delta"]) > 0
+
+
+def _cube(maxh=0.5):
+    import ngsolve
+    from netgen import occ
+
+    box = occ.Box((0, 0, 0), (1, 1, 1))
+    box.faces.name = "pressure"
+    for f in box.faces:
+        for axis, name in ((0, "x0"), (1, "y0"), (2, "z0")):
+            if abs(f.center[axis]) < 1e-9:
+                f.name = name
+    return ngsolve.Mesh(occ.OCCGeometry(box).GenerateMesh(maxh=maxh))
+
+
+@pytest.mark.parametrize("kind", ["fixed", "follower"])
+def test_cube_under_pressure_closed_form(kind):
+    """A unit cube on rollers (x0, y0, z0), pressure P on its other three faces: F = s I.
+    Neo-Hookean P1(s) = μ (s - 1/s) + λ ln(s³)/s; the dead load gives P1 = -P, the follower
+    load (the pressure on the deformed area) P1 = -P s²."""
+    from scipy.optimize import brentq
+
+    from pacto_ng.physics.loads import Port
+    from pacto_ng.physics.mechanics import Supports
+    from pacto_ng.post.reanalysis3d import Reanalysis3D
+
+    E, nu = 1e6, 0.3
+    mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+    ana = Reanalysis3D(_cube(), kind, E=E, nu=nu, order=1,
+                       supports=Supports(fix_x=("x0",), fix_y=("y0",), fix_z=("z0",)),
+                       output=(Port("pressure", (1.0, 0.0, 0.0)),))
+    sweep = ana.sweep([1e3, 1e5])
+    for pt in sweep.points:
+        P = pt.pressure
+        s = brentq(lambda s: mu * (s - 1 / s) + lam * np.log(s ** 3) / s
+                   + (P if kind == "fixed" else P * s * s), 0.3, 1.0)
+        # mean u_x over the three loaded faces: s - 1 on x = 1, (s - 1)/2 on y = 1 and z = 1
+        assert pt.delta == pytest.approx(2.0 * (s - 1.0) / 3.0, rel=1e-9)
