@@ -149,7 +149,8 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
     try:
         rm = remesh_part(part.surface, problem.mesh, maxh, h, clamp=setup.supports.clamp,
                          exclude=exclude,
-                         wet_boundaries=setup.pressure.inlet, pressure=p_final, p_in=run.load)
+                         wet_boundaries=setup.pressure.inlet, pressure=p_final, p_in=run.load,
+                         timeout=run.params.mesh_time_limit)
     except ValueError as err:
         raise InputError(f"analyse: {err}") from None
     missing = [n for n in (PRESSURE,) + tuple(p.region for p in ports) if n not in rm.areas]

@@ -91,6 +91,44 @@ def _sample(field, source, pts):
     return out
 
 
+#: Netgen's STL mesher in a child process: on some surfaces it aborts the process (SIGABRT
+#: after "Intersecting elements" in the volume mesher, seen on a 40-iteration pa-inverter-3d
+#: part), which no exception would catch
+_MESHER = ("import sys\n"
+           "from netgen.stl import STLGeometry\n"
+           "m = STLGeometry(sys.argv[1]).GenerateMesh(maxh=float(sys.argv[2]))\n"
+           "sys.exit(3) if m.ne == 0 else m.Save(sys.argv[3])\n")
+
+
+def _netgen_stl(surface, maxh: float, timeout: float):
+    """The Netgen tetrahedral mesh of the closed ``surface`` (its STL meshed in a child
+    process, read back from a .vol file); ValueError when Netgen fails."""
+    import subprocess
+    import sys
+
+    from netgen.meshing import Mesh as NGMesh
+
+    with tempfile.TemporaryDirectory() as tmp:
+        stl, vol = Path(tmp) / "part.stl", Path(tmp) / "part.vol"
+        surf = surface.copy()
+        surf.clear_data()
+        surf.save(str(stl), binary=True)
+        try:
+            proc = subprocess.run([sys.executable, "-c", _MESHER, str(stl), repr(float(maxh)),
+                                   str(vol)], capture_output=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise ValueError(f"Netgen could not mesh the part at maxh {maxh:g} within "
+                             f"{timeout:g} s") from None
+        if proc.returncode != 0 or not vol.is_file():
+            why = ("no tetrahedra" if proc.returncode == 3 else
+                   f"its mesher stopped with exit code {proc.returncode}")
+            raise ValueError(f"Netgen could not mesh the part at maxh {maxh:g} ({why}; a "
+                             f"thin or self-touching part: try another --maxh or --threshold)")
+        gen = NGMesh()
+        gen.Load(str(vol))
+    return gen
+
+
 _TET_FACES = np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]])
 
 
@@ -122,24 +160,18 @@ def _clamped_components(tets, clamp_tris, n: int) -> np.ndarray:
 
 def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), exclude=(),
                 wet_boundaries=(), pressure=None, p_in: float | None = None,
-                wet_fraction: float = 0.5, probe: float | None = None) -> Remeshed3D:
+                wet_fraction: float = 0.5, probe: float | None = None,
+                timeout: float = 300.0) -> Remeshed3D:
     """Mesh the closed ``surface`` (pyvista PolyData) with Netgen tetrahedra of ``maxh`` and
     name its boundary faces (see the module docstring; ``h_source`` is the source mesh's
     element size: the wetting rule's probe distance by default, and 1e-4 of it the distance
     within which a face lies on a source face).  Only the pieces joined through faces to a
-    face on ``clamp`` are kept.  ValueError when Netgen fails or no face lies on the clamp."""
+    face on ``clamp`` are kept.  ValueError when Netgen fails (or takes longer than
+    ``timeout`` s) or no face lies on the clamp."""
     import ngsolve
     from netgen.meshing import FaceDescriptor, Mesh as NGMesh
-    from netgen.stl import STLGeometry
 
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "part.stl"
-        surf = surface.copy()
-        surf.clear_data()
-        surf.save(str(path), binary=True)
-        gen = STLGeometry(str(path)).GenerateMesh(maxh=float(maxh))
-    if gen.ne == 0:
-        raise ValueError(f"Netgen could not mesh the part at maxh {maxh:g}")
+    gen = _netgen_stl(surface, maxh, timeout)
     pts = np.asarray(gen.Coordinates(), dtype=float)
     tris = np.asarray(gen.Elements2D().NumPy()["nodes"], dtype=np.int64)[:, :3] - 1
     tets = np.asarray(gen.Elements3D().NumPy()["nodes"], dtype=np.int64)[:, :4] - 1
