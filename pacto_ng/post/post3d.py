@@ -77,11 +77,18 @@ def write_part_solid(path, part) -> None:
 
 def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False) -> int:
     """``pacto export`` of a 3D run: stl (the closed, smoothed part) or vtk (the clipped
-    solid)."""
+    solid), at ``threshold_value``, else the analysis's (``DIR/analysis/analysis.json``), else
+    0.5."""
     from .part3d import closed_checks, write_part_stl
 
     if fmt not in EXPORT_FORMATS_3D:
         raise _not_yet(f"--format {fmt}")
+    prev = run.path / "analysis" / "analysis.json"
+    if threshold_value is None and prev.exists():
+        try:
+            threshold_value = float(json.loads(prev.read_text())["settings"]["threshold"])
+        except (ValueError, KeyError, TypeError):
+            threshold_value = None
     part, _, _, _ = part_of_run_3d(run, 0.5 if threshold_value is None else threshold_value)
     dst = Path(out) if out else run.path / "export" / f"design.{fmt}"
     if dst.suffix.lower() != f".{fmt}":
