@@ -160,3 +160,54 @@ def test_export_of_a_short_optimisation(tmp_path):
     part = part_of_run_3d(load_run(out, "test"), 0.5)[0]
     assert part.pieces - part.dropped >= 1
     assert abs(abs(stl.volume) / part.volume_kept - 1.0) < 0.02
+
+
+def _named_beam(shape, parts):
+    for f in parts:
+        c = f.center
+        f.name = ("left" if abs(c[0]) < 1e-9 else "right" if abs(c[0] - 1.0) < 1e-9 else
+                  "pressure" if abs(c[1] - 0.1) < 1e-9 else "bottom" if abs(c[1]) < 1e-9
+                  else "side")
+    return shape
+
+
+def test_follower_in_3d_as_in_plane_strain():
+    """A cantilever 1 x 0.1 (x 0.1, held in z on both sides: plane strain) under pressure on
+    its top face, to a tip deflection of 27 % of its length: the follower effect
+    (Δ_follower - Δ_fixed)/Δ_fixed of the 3D term (rotating normals) against the 2D one's
+    (tested in test_reanalysis.py).  Measured: -1.708e-3 (2D) / -1.705e-3 (3D) at 1e2 Pa,
+    +1.34e-3 / +1.41e-3 at 2e3 Pa (the 2D output at the top corner, the 3D one the mean over
+    the end face: Δ differs by 1.2 % there)."""
+    import ngsolve
+    from netgen import occ
+
+    from pacto_ng.physics.loads import Port
+    from pacto_ng.physics.mechanics import Supports
+    from pacto_ng.post.reanalysis import Reanalysis
+    from pacto_ng.post.reanalysis3d import Reanalysis3D
+
+    rect = occ.Rectangle(1.0, 0.1).Face()
+    _named_beam(rect, rect.edges)
+    rect.vertices.Max(occ.X + 0.01 * occ.Y).name = "tip"
+    box = occ.Box((0, 0, 0), (1.0, 0.1, 0.1))
+    _named_beam(box, box.faces)
+    m2 = ngsolve.Mesh(occ.OCCGeometry(rect, dim=2).GenerateMesh(maxh=0.05))
+    m3 = ngsolve.Mesh(occ.OCCGeometry(box).GenerateMesh(maxh=0.05))
+    kw = dict(E=1e7, nu=0.3, order=2)
+    effect = {}
+    for dim in (2, 3):
+        d = {}
+        for kind in ("fixed", "follower"):
+            if dim == 2:
+                ana = Reanalysis(m2, kind, thickness=1.0, supports=Supports(clamp=("left",)),
+                                 output=Port("tip", (0.0, -1.0)), **kw)
+            else:
+                ana = Reanalysis3D(m3, kind, output=(Port("right", (0.0, -1.0, 0.0)),),
+                                   supports=Supports(clamp=("left",), fix_z=("side",)), **kw)
+            sweep = ana.sweep([1e2, 2e3])
+            assert sweep.converged.all()
+            d[kind] = sweep.delta
+        effect[dim] = (d["follower"] - d["fixed"]) / d["fixed"]
+    assert effect[3][0] == pytest.approx(effect[2][0], rel=0.01)
+    assert effect[3][1] == pytest.approx(effect[2][1], rel=0.1)
+    assert effect[3][0] < 0 < effect[3][1]
