@@ -147,28 +147,31 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
     ports = case_ports(setup)
     pressures = default_pressures(run.load) if pressures is None else list(pressures)
     _say(quiet, f"analyse {run.path}: {run.case.name} (3D), model {run.params.model}, load "
-        f"{run.load:g} Pa" + ("; darcy is not in 3D yet: skipped" if kinds3 != tuple(kinds)
-                              else ""))
-    p_final = copy_gridfunction(problem.pressure_block.gfp)
-    expected = expected_sweep(problem, run.x, pressures, run.load)
+                f"{run.load:g} Pa" + ("; darcy is not in 3D yet: skipped"
+                                      if kinds3 != tuple(kinds) else ""))
     h = float(problem.h)
     maxh = 0.5 * h if maxh is None else float(maxh)
     try:
         rm = remesh_part(part.surface, problem.mesh, maxh, h, clamp=setup.supports.clamp,
-                         exclude=exclude,
-                         wet_boundaries=setup.pressure.inlet, pressure=p_final, p_in=run.load,
-                         timeout=run.params.mesh_time_limit)
+                         exclude=exclude, wet_boundaries=setup.pressure.inlet,
+                         pressure=copy_gridfunction(problem.pressure_block.gfp),
+                         p_in=run.load, timeout=run.params.mesh_time_limit)
     except ValueError as err:
         raise InputError(f"analyse: {err}") from None
-    missing = [n for n in (PRESSURE,) + tuple(p.region for p in ports) if n not in rm.areas]
+    if PRESSURE not in rm.areas:
+        raise InputError(f"analyse: no face of the part is wetted (threshold "
+                         f"{part.threshold:g}): it borders neither the inlet nor the "
+                         f"pressurised region of the run's Darcy field")
+    missing = [p.region for p in ports if p.region not in rm.areas]
     if missing:
-        raise InputError(f"analyse: the remeshed part has no face '{missing[0]}' (threshold "
-                         f"{part.threshold:g}): it does not reach it")
+        raise InputError(f"analyse: the part does not reach the output face '{missing[0]}' "
+                         f"(threshold {part.threshold:g})")
+    expected = expected_sweep(problem, run.x, pressures, run.load)
     supports = _present(setup.supports, rm.mesh)
     _say(quiet, f"  part: volume {part.volume:.4g} m³ ({100 * part.volume_error:+.2f} % of the "
-        f"thresholded), remeshed {rm.mesh.ne} tetrahedra (maxh {maxh:g}; {rm.dropped} off the "
-        f"clamp dropped), wetted area "
-        f"{rm.areas[PRESSURE]:.4g} m²; sweeps {', '.join(kinds3)} at {len(pressures)} pressures")
+                f"thresholded), remeshed {rm.mesh.ne} tetrahedra (maxh {maxh:g}; {rm.dropped} "
+                f"off the clamp dropped), wetted area {rm.areas[PRESSURE]:.4g} m²; sweeps "
+                f"{', '.join(kinds3)} at {len(pressures)} pressures")
     newton = run.params.newton.settings()
     sweeps = {}
     for kind in kinds3:
