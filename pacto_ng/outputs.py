@@ -83,10 +83,24 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         # the primal (compliance of design-independent loads on a linear model)
         "adjoint_solves": {"solved": problem.mech.adjoint_solves,
                            "skipped_self_adjoint": problem.mech.adjoint_solves_skipped},
+        "solvers": solvers_used(problem),
     }
     out.update(lowest_jacobian(problem))
     out.update(pressure_and_material_summary(problem))
     return out
+
+
+def solvers_used(problem: Problem) -> dict:
+    """The linear solver of each system (``--set solver``, :mod:`pacto_ng.physics.solvers`):
+    the displacement's tangent, the Darcy pressure's and the Helmholtz filter's (None: no
+    such system), each as its ``solver_info`` (route, method, preconditioner, iterations)."""
+    from .filters import HelmholtzFilter
+
+    filters = [b for b in problem.chain.blocks if isinstance(b, HelmholtzFilter)]
+    return {"displacement": problem.mech.solver_info,
+            "pressure": (problem.pressure_block.solver_info
+                         if problem.pressure_block is not None else None),
+            "filter": filters[0].solver_info if filters else None}
 
 
 def lowest_jacobian(problem: Problem) -> dict:

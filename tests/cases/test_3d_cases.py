@@ -72,9 +72,28 @@ def test_smoke_run(case, tmp_path):
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
     summ = json.loads((out / "summary.json").read_text())
     assert summ["mesh"]["dim"] == 3
+    # auto: order-1 displacements are factorised (BDDC pays only from order 2)
+    assert summ["solvers"]["displacement"]["kind"] == "direct"
     with open(out / "history.csv") as fh:
         obj = [float(r["objective"]) for r in csv.DictReader(fh)]
     assert len(obj) == 4 and obj[-1] < obj[0], obj
+
+
+def test_iterative_route_recorded(tmp_path):
+    """--set solver=iterative: every system by a Krylov method, as summary.json says, and the
+    same objective as the direct route to the Krylov tolerance."""
+    objectives = {}
+    for route in ("direct", "iterative"):
+        out = tmp_path / route
+        assert main(["run", "pneunet-3d", "--maxh", "0.006", "--order", "2", "--set",
+                     f"solver={route}", "--iterations", "1", "--out", str(out), "--quiet"]) == 0
+        summ = json.loads((out / "summary.json").read_text())
+        objectives[route] = summ["objective_history"][0]
+        for system in ("displacement", "pressure", "filter"):
+            assert summ["solvers"][system]["kind"] == route, system
+    assert summ["solvers"]["displacement"]["method"] == "CG"
+    assert summ["solvers"]["displacement"]["preconditioner"] == "bddc"
+    assert objectives["iterative"] == pytest.approx(objectives["direct"], rel=1e-8)
 
 
 def _check(case, model, load_type):
