@@ -1,4 +1,4 @@
-"""Shared set-up of the nonlinear-mechanics tests: the small cantilever of CASES.md.
+"""Shared set-up of the nonlinear-mechanics tests: the small cantilever of cases/cantilever.py.
 
 Layout 1.0 x 0.25 m, left edge clamped, the tip load spread over y in [0.1, 0.15] of the right
 edge; E1 = 3e9, E0 = 3e3, ν = 0.4, t = 0.1 m, SIMP p = 3.

@@ -21,3 +21,18 @@ def small_pa_mesh(kind: str):
     if kind in ("netgen", "trig"):
         return netgen_mesh(small_pa_layout(), 0.0012)
     return structured_mesh(small_pa_layout(), 20, 10)
+
+
+def chain_fd(chain, name, x0, **options):
+    """:func:`~pacto_ng.core.check_gradient` of the chain's value ``name`` against its adjoint
+    gradient at ``x0`` (``options``: h, directions, stencil)."""
+    from pacto_ng.core import check_gradient
+
+    def fun(x):
+        return float(chain.forward(x=x)[name])
+
+    def grad(x):
+        chain.forward(x=x)
+        return chain.gradient(name)
+
+    return check_gradient(fun, grad, x0, **options)

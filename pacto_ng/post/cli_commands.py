@@ -55,8 +55,9 @@ from ..threads import compute
 from .materials import material_areas
 from .post3d import analyse_run_3d, export_run_3d, is_3d
 from .report import analysis_dict, fmt_value, report_md, short_table
-from .runs import (check_part_mesh, copy_gridfunction, design_density, domain_of, load_run,
-                   materials_of, part_of_run, rebuild, thresholded_elements)
+from .runs import (check_part_mesh, copy_gridfunction, design_density, domain_of,
+                   export_destination, load_run, materials_of, part_of_run, rebuild,
+                   thresholded_elements)
 
 KINDS = ("darcy", "fixed", "follower")
 
@@ -451,13 +452,7 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
     threshold2 = 0.5 if threshold2 is None else threshold2
     th, rm, problem = part_of_run(run, threshold_value, maxh, threshold2)
     two = rm.materials is not None
-    dst = Path(out) if out else run.path / "export" / f"design.{fmt}"
-    if dst.suffix.lower() != f".{fmt}":
-        raise InputError(f"--out: '{dst}' must end in .{fmt}")
-    try:
-        dst.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise InputError(f"--out: cannot create '{dst.parent}' ({err.strerror})") from None
+    dst = export_destination(run, out, fmt)
     if fmt == "stl":
         write_stl(dst, rm.mesh, run.params.thickness)
     elif fmt == "msh":

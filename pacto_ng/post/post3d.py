@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import json
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -80,6 +79,7 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False)
     solid), at ``threshold_value``, else the analysis's (``DIR/analysis/analysis.json``), else
     0.5."""
     from .part3d import closed_checks, write_part_stl
+    from .runs import export_destination
 
     if fmt not in EXPORT_FORMATS_3D:
         raise _not_yet(f"--format {fmt}")
@@ -90,13 +90,7 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False)
         except (ValueError, KeyError, TypeError):
             threshold_value = None
     part, _, _, _ = part_of_run_3d(run, 0.5 if threshold_value is None else threshold_value)
-    dst = Path(out) if out else run.path / "export" / f"design.{fmt}"
-    if dst.suffix.lower() != f".{fmt}":
-        raise InputError(f"--out: '{dst}' must end in .{fmt}")
-    try:
-        dst.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise InputError(f"--out: cannot create '{dst.parent}' ({err.strerror})") from None
+    dst = export_destination(run, out, fmt)
     (write_part_stl if fmt == "stl" else write_part_solid)(dst, part)
     chk = closed_checks(part.surface)
     _say(quiet, f"{dst}: {run.case.name} part (3D), threshold {part.threshold:g}, volume "

@@ -64,6 +64,19 @@ def load_run(folder, command: str, case=None) -> Run:
     return Run(path, case, params, summary, x, design, k)
 
 
+def export_destination(run: Run, out, fmt: str) -> Path:
+    """Where ``pacto export`` writes: ``out``, or ``DIR/export/design.FMT``; its folder made,
+    an ``out`` of another suffix or a folder that cannot be made refused in one line."""
+    dst = Path(out) if out else run.path / "export" / f"design.{fmt}"
+    if dst.suffix.lower() != f".{fmt}":
+        raise InputError(f"--out: '{dst}' must end in .{fmt}")
+    try:
+        dst.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError(f"--out: cannot create '{dst.parent}' ({err.strerror})") from None
+    return dst
+
+
 def rebuild(run: Run):
     """The run's problem with its final design analysed at the run's load (as ``run.py`` does
     for summary.json).  Returns the problem; ``problem.values`` hold ρ̄, p and Δ."""

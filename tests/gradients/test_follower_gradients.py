@@ -1,4 +1,4 @@
-"""Finite-difference checks of the chain with the Darcy pressure as a follower load (SPEC §4).
+"""Finite-difference checks of the chain with the Darcy pressure as a follower load (docs/theory.md §4).
 
 x -> Embed -> HelmholtzFilter -> HeavisideProjection -> FixPassive -> DarcyPressure ->
 Mechanics (residual density ``-cof(F)∇p``: unsymmetric tangent, transposed adjoint, and
@@ -8,17 +8,14 @@ Central differences along random directions (:func:`pacto_ng.core.check_gradient
 """
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
-from small_cases import PA_H, PA_L, small_pa_layout, small_pa_mesh
-from pacto_ng.core import Chain, check_gradient
+from small_cases import PA_H, PA_L, chain_fd, small_pa_layout, small_pa_mesh
+from pacto_ng.core import Chain
 from pacto_ng.design import DesignField, Embed, FixPassive
 from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
 from pacto_ng.interpolation import simp_cf
-from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
 from pacto_ng.physics.darcy import DarcyPressure
 from pacto_ng.physics.darcy_load import darcy_follower
 from pacto_ng.physics.loads import PointLoad, Port, Spring
@@ -57,14 +54,7 @@ def _chain(kind, model):
 
 
 def _fd(chain, name, x0):
-    def fun(x):
-        return chain.forward(x=x)[name]
-
-    def grad(x):
-        chain.forward(x=x)
-        return chain.gradient(name)
-
-    return check_gradient(fun, grad, x0, h=1e-5, directions=3)
+    return chain_fd(chain, name, x0, h=1e-5, directions=3)
 
 
 @pytest.mark.parametrize("kind", ["trig", "quad"])

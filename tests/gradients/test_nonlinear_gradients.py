@@ -1,5 +1,5 @@
 """Adjoint gradients of compliance and strain energy through every mechanics model, checked
-against central finite differences (relative error < 1e-6) on the small cantilever of CASES.md
+against central finite differences (relative error < 1e-6) on the small cantilever of cases/cantilever.py
 (1.0 x 0.25 m, clamped left edge, 2e5 N spread over 0.05 m of the right edge, E1 = 3e9,
 E0 = 3e3, ν = 0.4, t = 0.1 m: tip rotations of ~0.5 rad, far from linear).
 

@@ -1,4 +1,4 @@
-"""The Darcy–drainage pressure (SPEC §2, thesis ch. 3 and Appendix B) against closed forms.
+"""The Darcy–drainage pressure (docs/theory.md §2, thesis ch. 3 and Appendix B) against closed forms.
 
 References are independent of the code under test: exponential / cosh / Bessel closed forms,
 a 1D finite-element solver written here in numpy, and the divergence theorem for the load.

@@ -1,4 +1,4 @@
-"""The Darcy pressure as a follower load (SPEC §4): ``r(u, v) = s cof(F) ∇_X p · v`` added to the
+"""The Darcy pressure as a follower load (docs/theory.md §4): ``r(u, v) = s cof(F) ∇_X p · v`` added to the
 residual (the pulled-back spatial body force ``-J F⁻ᵀ ∇_X p``).
 
 References are independent of the code under test: the cofactor written out component by

@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from small_cases import small_pa_mesh
-from pacto_ng.core import Chain, check_gradient
+from small_cases import chain_fd, small_pa_mesh
+from pacto_ng.core import Chain
 from pacto_ng.design import DesignField, Embed, FixPassive
 from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
 from pacto_ng.interpolation import simp_cf
@@ -61,14 +61,7 @@ def _chain(model, load, solver):
 
 
 def _fd(chain, name, x0):
-    def fun(x):
-        return chain.forward(x=x)[name]
-
-    def grad(x):
-        chain.forward(x=x)
-        return chain.gradient(name)
-
-    return check_gradient(fun, grad, x0, h=1e-5, directions=3)
+    return chain_fd(chain, name, x0, h=1e-5, directions=3)
 
 
 def test_choice():
@@ -199,13 +192,7 @@ def test_iterative_gradients_3d(model, load):
     assert info["iterations"] > 3
     errors = {}
     for name in names:
-        fun = lambda x, nm=name: float(chain.forward(x=x)[nm])
-
-        def grad(x, nm=name):
-            chain.forward(x=x)
-            return chain.gradient(nm)
-
-        errors[name] = check_gradient(fun, grad, x0, h=1e-4, directions=2, stencil=4).rel_error
+        errors[name] = chain_fd(chain, name, x0, h=1e-4, directions=2, stencil=4).rel_error
     print(model, load, errors, mech.solver_info)
     assert max(errors.values()) < FD_TOL, errors
 

@@ -188,7 +188,7 @@ def test_wang_energy_with_svk():
 # --------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("order", [1, 2])
 def test_c_beam_wang_carries_six_times_the_neohookean_load(order):
-    """C-beam (CASES.md, 10 x 10 quads): Wang reaches at least 6x the Neo-Hookean load factor.
+    """C-beam (cases/c_beam.py, 10 x 10 quads): Wang reaches at least 6x the Neo-Hookean load factor.
 
     Neo-Hookean stops when a void element inverts (det F <= 0 at a vertex or edge midpoint);
     the Wang model linearises the void and carries the C to the cap of λ = 12.
