@@ -2,6 +2,7 @@
 
     python -m benchmarks all [--quick] [--out docs/benchmarks.md] [--plots docs]
     python -m benchmarks peer|trade|stability|profile|mbb [--quick] ...
+    python -m benchmarks solvers_3d|iteration_3d [--out docs/benchmarks.md]   (3D, one at a time)
 
 Each study writes one marked block of the report (``<!-- BEGIN name -->`` ... ``<!-- END name
 -->``); the rest of the file (other engineers' sections) is kept as it is.  The default run
@@ -21,6 +22,9 @@ import tempfile
 import time
 
 STUDIES = ("peer", "trade", "stability", "profile", "mbb")
+# Studies with their own command line and report block, run one at a time (not by `all`:
+# they take 20-25 minutes each): `python -m benchmarks NAME` runs `benchmarks.NAME`.
+STANDALONE = ("solvers_3d", "iteration_3d")
 
 
 def machine() -> str:
@@ -256,11 +260,16 @@ ARGS = None
 def main(argv=None):
     global ARGS
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("study", choices=STUDIES + ("all",))
+    ap.add_argument("study", choices=STUDIES + STANDALONE + ("all",))
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--out", default=None)
     ap.add_argument("--plots", default=None)
     ARGS = args = ap.parse_args(argv)
+    if args.study in STANDALONE:
+        import importlib
+
+        return importlib.import_module(f"benchmarks.{args.study}").main(
+            [] if args.out is None else ["--out", args.out])
     if args.out is None:
         args.out = (os.path.join(tempfile.gettempdir(), "pacto_benchmarks_quick.md")
                     if args.quick else os.path.join("docs", "benchmarks.md"))
