@@ -4,8 +4,8 @@ configuration, each defined and validated next to the code that reads it:
 ================  ==========================================  ==================================
 part              settings                                    defined in
 ================  ==========================================  ==================================
-``mesh``          maxh, nelx, nely, order, unit_elements,     :mod:`pacto_ng.geometry`
-                  mesh_time_limit
+``mesh``          maxh, nelx, nely, nelz, order,              :mod:`pacto_ng.geometry`
+                  unit_elements, mesh_time_limit
 ``material``      model, plane, thickness, E0, E1, E2, nu,    :mod:`pacto_ng.physics.energy`
                   wang_beta, wang_eta, wang_gamma
 ``design``        volfrac, volfrac2, filter, filter_radius,   :mod:`pacto_ng.builders`
@@ -20,7 +20,7 @@ part              settings                                    defined in
 ``responses``     objective, se_max                           :mod:`pacto_ng.builders`
 ``newton``        newton_rtol, newton_max_iter,               :mod:`pacto_ng.physics.newton`
                   newton_increment, newton_min_increment,
-                  realcompile
+                  realcompile, solver
 ``optimization``  iterations, optimizer, move, tol,           :mod:`pacto_ng.optimize.driver`
                   obj_tol, load_adapt
 ``robustness``    robust, robust_deta, robust_every           :mod:`pacto_ng.robust`
