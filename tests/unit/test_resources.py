@@ -34,6 +34,8 @@ def no_meshing(monkeypatch):
 
     monkeypatch.setattr(geometry, "structured_mesh", started)
     monkeypatch.setattr(geometry, "netgen_mesh", started)
+    monkeypatch.setattr(geometry, "structured_box", started)  # a Box's hexahedra
+    monkeypatch.setattr(geometry, "netgen_box_mesh", started)
     monkeypatch.setattr(mesh, "structured_mesh", started)  # the C-beam analysis's mesher
     monkeypatch.setattr(mesh, "netgen_mesh", started)
     monkeypatch.setattr(occ, "OCCGeometry", started)
