@@ -48,9 +48,13 @@ SOLVERS = ("auto", "direct", "iterative")
 # Krylov solve where the direct route reuses its factorisation, the tolerances of Newton's
 # linear step and of the adjoint are tighter than 1e-8 (12 digits against 8 at CG's linear
 # rate: about 1.5x the iterations, estimated), and SIMP's contrast adds some (measured: 57 ->
-# 65 iterations at 25 000 dofs, E0 = 1e-6 E1, a 0/1 design).  Hence a threshold between the
-# 25 000 and 56 000 dofs measured.
-DIRECT_MAX_DOFS_3D = 40_000
+# 65 iterations at 25 000 dofs, E0 = 1e-6 E1, a 0/1 design).  Whole optimisation iterations
+# favour the direct route further (docs/benchmarks.md, "3D optimisation iterations", order 2,
+# one thread): with the element-matrix assembly of linear runs it was the faster at every size
+# measured, 8.6 against 11.3 s per iteration at 78 000 dofs (cantilever-3d) and 4.0 against
+# 10.8 s at 50 000 (pneunet-3d); the fitted slopes (1.51 against 1.04, cantilever-3d) cross
+# near 1.4e5 dofs, where the 3D Cholesky needs about 2 GB (pacto_ng/resources3d.py).
+DIRECT_MAX_DOFS_3D = 140_000
 
 ADJOINT_RTOL = 1e-12  # Krylov tolerance of the adjoint, Darcy and filter solves (relative)
 MAX_ITERATIONS = 1000
