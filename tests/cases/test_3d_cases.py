@@ -96,8 +96,21 @@ def test_iterative_route_recorded(tmp_path):
     assert objectives["iterative"] == pytest.approx(objectives["direct"], rel=1e-8)
 
 
+#: pneunet-3d's random grey check design (E0 = 1e-6 E1 = 100 Pa of void beside the chamber) has
+#: no equilibrium at its 1e5 Pa for these three (Newton stops at load factors 0.002-0.09);
+#: measured 2026-12-03 at maxh 0.006: Neo-Hookean with the fixed load passes at 1e3 Pa
+#: (4.5e-8); the follower load's stiffness (of the order of the pressure) needs a void stiffer
+#: than 1e3 Pa even there (linear stops at 0.79 of 1e3 Pa, Neo-Hookean at 0.27), and with
+#: E0 = 1e4 Pa at 1e4 Pa both pass (2.3e-11, 1.4e-9), as for the 2D PneuNet
+#: (tests/cases/test_pa_cases.py)
+_EXTRA = {("pneunet-3d", "neohookean", "fixed"): ["--load", "1e3"],
+          ("pneunet-3d", "linear", "follower"): ["--set", "E0=1e4", "--load", "1e4"],
+          ("pneunet-3d", "neohookean", "follower"): ["--set", "E0=1e4", "--load", "1e4"]}
+
+
 def _check(case, model, load_type):
     extra = ["--set", f"load_type={load_type}"] if case != "cantilever-3d" else []
+    extra += _EXTRA.get((case, model, load_type), [])
     # at the case's own load: at a thousandth of it the strains of E1 = 3e9 Pa material are
     # ~1e-7, and a hyperelastic energy (I1 - 3, ln J: terms of 1e-7 that cancel to 1e-14)
     # keeps ~3 digits; the strain energy's finite differences are then noise (the 2D
