@@ -102,7 +102,7 @@ def first_linear_strain(case, params) -> tuple[float, float]:
     from .case import build_problem
     from .runner import initial_design
 
-    lin = params.replace(model="linear", load_ramp=0)
+    lin = params.replace(model="linear", load_ramp=0, formulation="displacement")
     problem = build_problem(case, lin)
     problem.apply_schedule(*lin.schedule.schedule().values(0))
     problem.evaluate(initial_design(problem), gradients=False)

@@ -237,15 +237,26 @@ class Builder:
                       for ld in setup.loads)
         # a 2D mesh is a slice of thickness t; a 3D mesh is the body itself
         thickness = params.thickness if self.mesh.dim == 2 else 1.0
+        formulation = self.formulation()
         try:
             return Mechanics(self.mesh, order=params.order, energy=model.energy, fields=fields,
                              supports=setup.supports, loads=loads, springs=setup.all_springs,
                              body=pressure.body, thickness=thickness, guard=model.guard,
                              linear=model.linear, newton=params.newton.settings(),
                              residual_density=pressure.follower, realcompile=params.realcompile,
-                             output="u" + suffix)
+                             output="u" + suffix, formulation=formulation)
         except ValueError as err:
             raise InputError(str(err)) from None
+
+    def formulation(self) -> str:
+        """``displacement`` or ``mixed`` (``--set formulation``, :mod:`pacto_ng.physics.mixed`)
+        for this model, material, plane, order and mesh."""
+        from .physics.mixed import formulation_for, has_simplices
+
+        params, mesh = self.params, self.mesh
+        return formulation_for(params.formulation, model=params.model, nu=params.nu,
+                               plane=params.plane, dim=mesh.dim, order=params.order,
+                               simplices=has_simplices(mesh))
 
     def responses(self, mech, pressure: PressureLoad, suffix: str = "") -> Responses:
         """The blocks of the set-up's objective (or ``--set objective``): compliance, strain

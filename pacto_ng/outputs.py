@@ -75,6 +75,7 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
                  "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely, "nelz": p.nelz,
                  "dim": problem.mesh.dim},
         "element_order": p.order,
+        "formulation": problem.mech.formulation,
         "model_choice": problem.model_choice,
         "load_ramp_choice": problem.load_ramp_choice,
         "darcy_solve": problem.pressure_block is not None,

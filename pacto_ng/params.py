@@ -55,13 +55,14 @@ def parts() -> tuple:
         from .physics.darcy import DarcySettings
         from .physics.energy import MaterialSettings
         from .physics.loads import LoadSettings
+        from .physics.mixed import FormulationSettings
         from .physics.newton import NewtonParameters
         from .robust import RobustSettings
 
         _PARTS = (("mesh", MeshSettings), ("material", MaterialSettings),
                   ("design", DesignSettings), ("schedule", ScheduleSettings),
                   ("loads", LoadSettings), ("darcy", DarcySettings),
-                  ("responses", ObjectiveSettings), ("newton", NewtonParameters),
+                  ("responses", ObjectiveSettings), ("newton", NewtonParameters), ("elements", FormulationSettings),
                   ("optimization", OptimizerSettings), ("robustness", RobustSettings))
     return _PARTS
 

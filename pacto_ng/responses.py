@@ -26,8 +26,8 @@ class LinearFunctional:
         # default input: the mechanics block's displacement
         self.inputs = tuple(inputs) if inputs is not None else (mech.output,)
         self.output = output
-        v = mech.fes.TestFunction()
-        lf = LinearForm(mech.fes)
+        v = mech.displacement(mech.space.TestFunction())
+        lf = LinearForm(mech.space)
         lf += terms(v)
         lf.Assemble()
         self.vec = lf.vec
@@ -62,26 +62,26 @@ def output_displacement(mech, port, output="delta"):
 
 
 class StrainEnergy:
-    """Stored strain energy ``SE = t ∫ φ(∇u; fields) dΩ`` (the springs are not part of it)."""
+    """Stored strain energy ``SE = t ∫ φ(∇u; fields) dΩ`` (the springs are not part of it; in
+    the mixed formulation ``φ`` of the modified gradient, of the whole state:
+    :meth:`~pacto_ng.physics.mechanics.Mechanics.stored_density`)."""
 
     def __init__(self, mech, output="se"):
-        from ngsolve import BilinearForm, GridFunction, Grad, Integrate, Variation
+        from ngsolve import BilinearForm, GridFunction, Integrate, Variation
 
         from .physics.sensitivities import FieldGradient
 
         self.mech = mech
         self.inputs = (mech.output,) + mech.inputs
         self.output = output
-        self.gfu = GridFunction(mech.fes)
-        dens = mech.thickness * mech.energy(Grad(self.gfu), mech.coeffs)
-        self._dens = dens.Compile()
+        self.gfu = GridFunction(mech.space)  # the state (the displacement, or u, ϑ, p̃)
+        self._dens = mech.stored_density(self.gfu).Compile()
         # ∂SE/∂u as the residual of the energy alone, Apply of a Variation form: the same
         # integrand and quadrature as a LinearForm of dens.Diff(u, v) (equal to 1e-14), but
         # 2-5x faster to evaluate (measured: benchmarks/profile_nonlinear.py strain_energy_ab)
-        u = mech.fes.TrialFunction()
-        self._energy_form = BilinearForm(mech.fes, symmetric=True)
+        self._energy_form = BilinearForm(mech.space, symmetric=True)
         self._energy_form += Variation(
-            (mech.thickness * mech.energy(Grad(u), mech.coeffs)).Compile() * mech.DX)
+            mech.stored_density(mech.space.TrialFunction()).Compile() * mech.DX)
         self._du_vec = self.gfu.vec.CreateVector()
         # a quadratic energy (linear mechanics): SE, ∂SE/∂u and ∂SE/∂ρ from the tangent's C;
         # otherwise ∂SE/∂field by automatic differentiation (FieldGradient)
@@ -96,8 +96,7 @@ class StrainEnergy:
                 self._dfield[f.name] = lin.field_form(f.name, self.gfu, self.gfu, 0.5)
             else:
                 self._dfield[f.name] = FieldGradient(
-                    f, lambda c: mech.thickness * mech.energy(Grad(self.gfu), c), mech.coeffs,
-                    mech.DX)
+                    f, lambda c: mech.stored_density(self.gfu, c), mech.coeffs, mech.DX)
         self._integrate = Integrate
 
     @property

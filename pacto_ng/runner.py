@@ -129,7 +129,7 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
                               load_cap=float(data["load_cap"]) if "load_cap" in files else 1.0,
                               load_failed_at=(int(data["load_failed_at"])
                                               if "load_failed_at" in files else -1))
-            u, ndof = data["u"], problem.mech.fes.ndof
+            u, ndof = data["u"], problem.mech.space.ndof
             warm = u.size == ndof and bool(data["warm"])
             # (a checkpoint written before the ramp's first increment was kept: None)
             ramp = float(data["ramp_first"]) if "ramp_first" in files else np.nan
@@ -282,8 +282,10 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
         print(f"resuming {case.name} at iteration {state.k}" if resumed else
               f"resuming {case.name}: no checkpoint yet, starting at iteration 0")
     if not quiet:
-        print(f"{case.name}: model {params.model}, {problem.mesh.ne} elements, order {params.order}, "
-              f"{problem.mech.fes.ndof} displacement dofs, {problem.field.n} design variables")
+        mixed = " (mixed formulation)" if problem.mech.formulation == "mixed" else ""
+        print(f"{case.name}: model {params.model}{mixed}, {problem.mesh.ne} elements, order "
+              f"{params.order}, {problem.mech.fes.ndof} displacement dofs, {problem.field.n} "
+              f"design variables")
 
     def on_iteration(st, row):
         save_checkpoint(ckpt, st, problem)

@@ -34,7 +34,7 @@ class Adjoint:
         from ngsolve import GridFunction
 
         self._adjoint_ready = False  # the tangent at the current state is factorised
-        self.lam = GridFunction(self.fes)
+        self.lam = GridFunction(self.space)
         # λᵀ ∂R/∂field, each field by its route (sensitivities.py)
         self._sens = FieldSensitivities(self, self._coupling, self._lin)
         self.self_adjoint_shortcut = True  # compliance: λ = u / s without a solve
@@ -43,9 +43,14 @@ class Adjoint:
 
     def adjoint_lagrangian(self, coeffs):
         """``λᵀ R(u)`` per unit area with the fields ``coeffs`` (u, λ: the block's states)."""
-        lag = self.volume_density(self.gfu, coeffs).Diff(self.gfu, self.lam)
+        dens = self.volume_density(self.gfx, coeffs)
+        # the directional derivative in every component of the state (a Diff in the compound
+        # GridFunction itself would be zero)
+        lag = sum(dens.Diff(x, lam) for x, lam in zip(self.components(self.gfx),
+                                                     self.components(self.lam)))
         if self.has_residual_density:
-            lag = lag + self.residual_density(self.gfu, self.lam, coeffs)  # linear in λ
+            lag = lag + self.residual_density(self.gfu, self.displacement(self.lam),
+                                              coeffs)  # linear in λ
         return lag
 
     def _ensure_tangent(self):
@@ -54,7 +59,7 @@ class Adjoint:
             return
         # a linear problem's tangent does not depend on u: the one Newton factorised is exact
         if not (self.linear and self._tangent_at is not None):
-            self.assemble_tangent(self.gfu.vec, self.target)
+            self.assemble_tangent(self.gfx.vec, self.target)
         self._adjoint_ready = True
 
     def adjoint(self, dJdu):
@@ -65,7 +70,7 @@ class Adjoint:
         (``K u = s f``).  ``adjoint_solves_skipped`` counts the shortcuts, ``adjoint_solves``
         the solves.
         """
-        lam = self.gfu.vec.CreateVector()
+        lam = self.gfx.vec.CreateVector()
         f = self._f_unit
         if (self.self_adjoint_shortcut and self.linear and self._fixed_loads and self.symmetric
                 and f is not None and self.target != 0):
@@ -76,7 +81,7 @@ class Adjoint:
             resid[self.free] -= c * f[self.free]
             resid[~self.free] = 0.0
             if ff > 0 and float(resid @ resid) <= 1e-24 * max(float(g[self.free] @ g[self.free]), 1e-300):
-                lam.data = (c / self.target) * self.gfu.vec
+                lam.data = (c / self.target) * self.gfx.vec
                 self.adjoint_solves_skipped += 1
                 return lam
         self._ensure_tangent()

@@ -38,8 +38,9 @@ class BodyCoupling:
                                    f"field '{field.name}'")
         c = dict(mech.coeffs)
         c[field.name] = field.space.TrialFunction()
-        B = BilinearForm(trialspace=field.space, testspace=mech.fes)
-        B += (mech.thickness * mech.body(mech.fes.TestFunction(), c)).Compile() * mech.DX
+        B = BilinearForm(trialspace=field.space, testspace=mech.space)
+        v = mech.displacement(mech.space.TestFunction())
+        B += (mech.thickness * mech.body(v, c)).Compile() * mech.DX
         B.Assemble()
         rng = np.random.default_rng(97531)
         Bp = body_form.vec.CreateVector()

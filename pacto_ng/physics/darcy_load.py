@@ -132,20 +132,21 @@ class Compliance:
         self.mech, self.pressure = mech, pressure
         self.inputs = tuple(inputs) if inputs is not None else (mech.output, pressure.output)
         self.output = output
-        self.gfu = GridFunction(mech.fes)
+        self.gfu = GridFunction(mech.space)  # the state (the displacement, or u, ϑ, p̃)
         self.gfp = GridFunction(pressure.fes)
-        dens = mech.thickness * InnerProduct(-grad(self.gfp), self.gfu)
+        u = mech.displacement(self.gfu)
+        dens = mech.thickness * InnerProduct(-grad(self.gfp), u)
         self._dens = dens
-        v = mech.fes.TestFunction()
+        v = mech.displacement(mech.space.TestFunction())
         self._fixed = None  # the design-independent point/edge loads (assembled once)
         if mech.loads:
-            lf = LinearForm(mech.fes)
+            lf = LinearForm(mech.space)
             for ld in mech.loads:
                 lf += ld.work(mech.mesh, v)
             lf.Assemble()
             self._fixed = lf.vec
-        self._du = LinearForm(mech.fes)
-        self._du += dens.Diff(self.gfu, v) * mech.DX
+        self._du = LinearForm(mech.space)
+        self._du += dens.Diff(u, v) * mech.DX
         self._dp = LinearForm(pressure.fes)
         self._dp += dens.Diff(self.gfp, pressure.fes.TestFunction()) * mech.DX
 

@@ -57,12 +57,12 @@ class Equilibrium:
         choose the load norm's route."""
         from ngsolve import VOL, GridFunction, Grad, LinearForm
 
-        self._guard = guard
         # the tangent's solver (solvers.py): its preconditioner, if any, is registered on the
         # form before the first assembly; a linear system's K is then assembled by its form
         # at every design (the element-matrix scatter would bypass the preconditioner)
         form = self._lin.a if self._lin is not None else self.a
-        self._solver = LinearSolver(form, self.fes.FreeDofs(), setting=self.settings.solver,
+        self._solver = LinearSolver(form, self.space.FreeDofs(form.condense),
+                                    setting=self.settings.solver,
                                     symmetric=self.symmetric, order=self.order,
                                     inverse=self.inverse_type)
         if self._lin is not None and not self._solver.direct:
@@ -70,13 +70,20 @@ class Equilibrium:
         self._tangent_at = None  # id of the state the factorisation belongs to
         self.result: NewtonResult | None = None
         self._ramp_first = None  # first increment of the last successful ramp from zero
-        self._gtrial = GridFunction(self.fes)
-        if guard is not None:
-            self._guard_cf = guard(Grad(self._gtrial), self.coeffs).Compile()
+        self._gtrial = GridFunction(self.space)
+        guard_cf = None
+        if self.mixed is not None:  # J > 0, Θ > 0 and the model's guard at F̄ (mixed.py)
+            u, theta, _ = self.mixed.split(self._gtrial)
+            guard_cf = self.mixed.guard(guard, Grad(u), theta, self.coeffs)
+        elif guard is not None:
+            guard_cf = guard(Grad(self._gtrial), self.coeffs)
+        self._guard = guard_cf
+        if guard_cf is not None:
+            self._guard_cf = guard_cf.Compile()
             self._guard_pts = self.mesh.MapToAllElements(
                 guard_rules(self.rules, self._traits.guard_points), VOL)
-        self._rhs = self.gfu.vec.CreateVector()
-        self._ext = self.gfu.vec.CreateVector()
+        self._rhs = self.gfx.vec.CreateVector()
+        self._ext = self.gfx.vec.CreateVector()
         # with only design-independent loads the load vector is fixed: its norm is computed once
         self._fixed_loads = fixed_loads
         self._unit_load_norm = None
@@ -85,8 +92,8 @@ class Equilibrium:
         # residual's own LinearForm (_fbody)
         self._load_form = None
         if load_vectors:
-            v = self.fes.TestFunction()
-            self._load_form = LinearForm(self.fes)
+            v = self.displacement(self.space.TestFunction())
+            self._load_form = LinearForm(self.space)
             for ld in self.loads:
                 self._load_form += ld.work(self.mesh, v)
             self._load_form.Assemble()
@@ -248,7 +255,7 @@ class Equilibrium:
     @property
     def state(self) -> WarmState:
         """The warm state (a copy): where the next forward pass starts."""
-        return WarmState(self.gfu.vec.FV().NumPy().copy(),
+        return WarmState(self.gfx.vec.FV().NumPy().copy(),
                          bool(self.result is not None and self.result.converged),
                          self._ramp_first)
 
@@ -256,7 +263,7 @@ class Equilibrium:
         """Start the next forward pass from ``state`` (e.g. :attr:`state` of earlier, or of a
         checkpoint).  ``result`` (a :class:`NewtonResult`) replaces the default record of the
         state: converged at the full load, or none."""
-        self.gfu.vec.FV().NumPy()[:] = state.u
+        self.gfx.vec.FV().NumPy()[:] = state.u
         self._ramp_first = state.ramp_first
         if result is not None:
             self.result = result
@@ -282,14 +289,14 @@ class Equilibrium:
         warm = self.result is not None and (self.result.converged or self.result.load_reached > 0)
         if self.linear:
             warm = True  # one Newton step from any state solves a linear problem
-        res = solve_with_continuation(self, self.gfu.vec, self.target, self.settings, warm=warm,
+        res = solve_with_continuation(self, self.gfx.vec, self.target, self.settings, warm=warm,
                                       linear=self.linear, first_increment=self._ramp_first)
         if res.ramp_first is not None:
             self._ramp_first = res.ramp_first  # where the next ramp from zero starts
         self.result = res
         if not res.converged:
             raise NewtonFailure(res)
-        out = self.gfu.vec.CreateVector()
-        out.data = self.gfu.vec
+        out = self.gfx.vec.CreateVector()
+        out.data = self.gfx.vec
         self._adjoint_ready = False
         return out

@@ -176,7 +176,8 @@ class Mechanics(Equilibrium, Adjoint):
                  newton: NewtonSettings = NewtonSettings(), output: str = "u",
                  inverse: str | None = None, intorder: int | None = None,
                  residual_terms: Callable | None = None, symmetric: bool | None = None,
-                 residual_density: Callable | None = None, realcompile: bool = False):
+                 residual_density: Callable | None = None, realcompile: bool = False,
+                 formulation: str = "displacement"):
         from ngsolve import (L2, BilinearForm, GridFunction, LinearForm, Parameter, VectorH1,
                              Variation, dx)
 
@@ -215,10 +216,23 @@ class Mechanics(Equilibrium, Adjoint):
                 on = [n for n in names if n in known]
                 if on:
                     kw[f"dirichlet{axis}{suffix}"] = "|".join(on)
+        if formulation not in ("displacement", "mixed"):
+            raise ValueError(f"formulation must be 'displacement' or 'mixed' (got "
+                             f"'{formulation}')")
+        if formulation == "mixed":
+            from .mixed import Mixed
+
+            kw.update(Mixed.displacement_options(mesh, order))
         self.fes = VectorH1(mesh, order=order, **kw)
-        self.free = np.array(list(self.fes.FreeDofs()), dtype=bool)
-        if self.free.all():
+        if np.array(list(self.fes.FreeDofs()), dtype=bool).all():
             raise ValueError("the structure has no supports: add a clamp or fixed boundary")
+        self.mixed = None
+        self.space = self.fes  # the unknowns: the displacement, or (u, ϑ, p̃) (mixed.py)
+        if formulation == "mixed":
+            self.mixed = Mixed(mesh, self.fes, order)
+            self.space = self.mixed.space
+        self.formulation = formulation
+        self.free = np.array(list(self.space.FreeDofs()), dtype=bool)
         self.l2 = L2(mesh, order=0)
         for f in self.fields:
             f.space = f.space or self.l2
@@ -228,7 +242,8 @@ class Mechanics(Equilibrium, Adjoint):
         self.one.vec[:] = 1.0
         self.load = Parameter(1.0)
         self.target = 1.0  # load factor of the next forward pass (continuation over iterations)
-        self.rules = integration_rules(intorder or 2 * order)
+        # (the mixed formulation's bubble on simplices is of order + 1)
+        self.rules = integration_rules(intorder or 2 * (order + ("orderinner" in kw)))
         self.DX = dx(intrules=self.rules)
         self._energy, self._body = energy, body
         self._traits = traits_of(energy)
@@ -241,17 +256,21 @@ class Mechanics(Equilibrium, Adjoint):
         self._rdens = residual_density
         self.loads, self.springs = tuple(loads), tuple(springs)
 
-        u = self.fes.TrialFunction()
-        self.gfu = GridFunction(self.fes)
-        self.a = BilinearForm(self.fes, symmetric=self.symmetric)
-        self.a += Variation(self.potential(u))
+        x = self.space.TrialFunction()
+        u, v = self.displacement(x), self.displacement(self.space.TestFunction())
+        self.gfx = GridFunction(self.space)  # the state: u, or (u, ϑ, p̃)
+        self.gfu = self.displacement(self.gfx)  # the displacement (a view of the state)
+        # the mixed formulation's element fields are condensed out of the tangent
+        self.a = BilinearForm(self.space, symmetric=self.symmetric,
+                              condense=self.mixed is not None)
+        self.a += Variation(self.potential(x))
         # the body force is linear in u: its residual is a LinearForm, assembled once per design,
         # not re-evaluated (and differentiated twice) in every Newton iteration (measured: the
         # Darcy body term doubled the cost of AssembleLinearization of a Neo-Hookean form)
         self._fbody = None
         if body is not None:
-            self._fbody = LinearForm(self.fes)
-            self._fbody += (self.thickness * body(self.fes.TestFunction(), self.coeffs)).Compile() * self.DX
+            self._fbody = LinearForm(self.space)
+            self._fbody += (self.thickness * body(v, self.coeffs)).Compile() * self.DX
         self._fbody_stale = True
         # which fields the energy reads (declared); a field that enters only through a body
         # load linear in it (the Darcy pressure) gives the load as B p (BodyCoupling)
@@ -261,13 +280,13 @@ class Mechanics(Equilibrium, Adjoint):
             if field is not None:
                 self._coupling = BodyCoupling.build(self, field, self._fbody)
         if residual_density is not None:
-            self.a += self.hot(self.residual_density(u, self.fes.TestFunction())) * self.DX
+            self.a += self.hot(self.residual_density(u, v)) * self.DX
         if residual_terms is not None:
-            self.a += residual_terms(u, self.fes.TestFunction(), self.load)
+            self.a += residual_terms(u, v, self.load)
         # a linear, conservative problem: R(u) = K u - s f with K independent of u and s (also
         # with a design-dependent body load: f is then assembled once per design)
         self._lin = None
-        if linear and conservative and self._traits.quadratic:
+        if linear and conservative and self._traits.quadratic and self.mixed is None:
             self._lin = LinearSystem(self, self._coupling)
         self._start_equilibrium(
             guard, fixed_loads=body is None and conservative,
@@ -364,29 +383,48 @@ class Mechanics(Equilibrium, Adjoint):
             return cf.Compile(realcompile=True, wait=True)
         return cf.Compile()
 
-    def volume_density(self, u, coeffs=None):
-        """Everything integrated over the volume: ``t (φ - s b·u)`` (a CF, per unit area);
-        ``coeffs`` replaces the fields (default: the block's GridFunctions)."""
+    def displacement(self, x):
+        """The displacement of a state ``x`` (a trial or test function or a GridFunction of
+        :attr:`space`): ``x`` itself, or its first component in the mixed formulation."""
+        return x if self.mixed is None else self.mixed.split(x)[0]
+
+    def components(self, x) -> tuple:
+        """Every component of a state ``x``: ``(u,)``, or ``(u, ϑ, p̃)`` (mixed)."""
+        return (x,) if self.mixed is None else self.mixed.split(x)
+
+    def stored_density(self, x, coeffs=None):
+        """The stored energy density ``t φ`` of a state ``x`` (per unit area in 2D): ``φ(∇u)``,
+        or ``φ(F̄ - I) + p̃ (J - Θ)`` in the mixed formulation (:mod:`~pacto_ng.physics.mixed`;
+        ``J = Θ`` at equilibrium, in the element mean)."""
         from ngsolve import Grad
 
         coeffs = self.coeffs if coeffs is None else coeffs
-        dens = self.thickness * self._energy(Grad(u), coeffs)
+        if self.mixed is None:
+            return self.thickness * self._energy(Grad(x), coeffs)
+        u, theta, p = self.mixed.split(x)
+        return self.thickness * self.mixed.energy(self._energy, Grad(u), theta, p, coeffs)
+
+    def volume_density(self, x, coeffs=None):
+        """Everything integrated over the volume: ``t (φ - s b·u)`` (a CF, per unit area) of a
+        state ``x``; ``coeffs`` replaces the fields (default: the block's GridFunctions)."""
+        coeffs = self.coeffs if coeffs is None else coeffs
+        dens = self.stored_density(x, coeffs)
         if self._body is not None:
-            dens = dens - self.load * self.thickness * self._body(u, coeffs)
+            dens = dens - self.load * self.thickness * self._body(self.displacement(x), coeffs)
         return dens
 
     def residual_density(self, u, v, coeffs=None):
-        """The non-conservative volume term ``t r(u, v; fields, s)`` (a CF, per unit area)."""
+        """The non-conservative volume term ``t r(u, v; fields, s)`` (a CF, per unit area) of
+        the displacements ``u`` and ``v``."""
         return self.thickness * self._rdens(u, v, self.coeffs if coeffs is None else coeffs,
                                             self.load)
 
-    def potential(self, u):
-        """Π(u) as a sum of integrals, without the body-force work (:meth:`residual` subtracts
+    def potential(self, x):
+        """Π(x) as a sum of integrals, without the body-force work (:meth:`residual` subtracts
         ``s t ∫ b·v dΩ``, a LinearForm)."""
         # compiled CFs assemble 2-3x faster (measured: 0.45 -> 0.24 s for 19k quads)
-        from ngsolve import Grad
-
-        total = self.hot(self.thickness * self._energy(Grad(u), self.coeffs)) * self.DX
+        u = self.displacement(x)
+        total = self.hot(self.stored_density(x)) * self.DX
         for ld in self.loads:
             total = total + ld.work(self.mesh, u, scale=-1.0 * self.load)
         for sp in self.springs:

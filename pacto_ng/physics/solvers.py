@@ -172,6 +172,25 @@ class LinearSolver:
         ``rhs`` (default :attr:`rtol`); ``strict``: raise :class:`SolverFailure` when it is
         not reached (Newton, which checks its residual itself, passes False)."""
         self.solves += 1
+        if not self.form.condense:
+            self._solve(rhs, out, rtol, transpose, strict)
+            return
+        # a statically condensed form (local dofs, e.g. the mixed formulation's element fields):
+        # A = [[A_cc, A_cl], [A_lc, A_ll]], its matrix the Schur complement S on the coupling
+        # dofs; x_c = S⁻¹ (b_c - A_cl A_ll⁻¹ b_l), x_l = A_ll⁻¹ (b_l - A_lc x_c), and for Aᵀ
+        # the same with every block transposed
+        a = self.form
+        ext, ext_trans, inner = a.harmonic_extension, a.harmonic_extension_trans, a.inner_solve
+        if transpose and not self.symmetric:
+            ext, ext_trans, inner = ext_trans.T, ext.T, inner.T
+        r = rhs.CreateVector()
+        r.data = rhs
+        r.data += ext_trans * rhs
+        self._solve(r, out, rtol, transpose, strict)
+        out.data += ext * out
+        out.data += inner * rhs
+
+    def _solve(self, rhs, out, rtol, transpose, strict):
         if self.direct:
             inv = self._inv.T if transpose and not self.symmetric else self._inv
             out.data = inv * rhs
