@@ -113,6 +113,7 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
             return simp2_cf(c[fields[0]], c[fields[1]], params.E0, params.E1, params.E2, penal)
         return simp_cf(c[fields[0]], params.E0, params.E1, penal)
 
+    law = _law(params)  # the rubber law and its shape (a preset's, or the default)
     if params.model == "wang":
         from . import wang
 
@@ -121,12 +122,17 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
             from ngsolve import CF
 
             gamma_fn = lambda c: CF(params.wang_gamma)  # noqa: E731
-        # the WangModel itself is the energy (callable), so γ and its measures stay reachable
+        # the WangModel itself is the energy (callable), so γ and its measures stay reachable;
+        # φ_H is the preset's law if a preset is selected, else Neo-Hookean
         model = wang.wang_model(modulus, params.nu, params.plane, fields[0], penal,
                                 beta=params.wang_beta, eta=params.wang_eta, gamma_fn=gamma_fn,
-                                reads=fields)
+                                reads=fields, hyper=law if law is not None else "neohookean")
         return model, model.guard, False
     mat = get_material(params.model)
+    if law is not None:
+        from dataclasses import replace
+
+        mat = replace(mat, energy=law)
 
     def energy(G, c):
         return mat.energy(G, modulus(c), params.nu, params.plane)
@@ -147,6 +153,21 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
             modulus=modulus_np if mat.proportional_to_E else None, guard_points="quadrature")
     guard = (lambda G, c: jacobian(G)) if mat.needs_positive_J else None
     return energy, guard, mat.linear
+
+
+def _law(params):
+    """The :class:`~pacto_ng.physics.hyperelastic.Law` of the run's model with its shape (the
+    preset's fit if ``material`` names one), or None (a model without one)."""
+    from .presets import law_for
+
+    return law_for(params.model, material_name(params))
+
+
+def material_name(params) -> str:
+    """The preset name of ``params`` (a Parameters or a MaterialSettings): on Parameters,
+    ``params.material`` is the whole part of that name, the preset is its field."""
+    name = params.material
+    return name if isinstance(name, str) else name.material
 
 
 #: what carries a load that a model's Newton cannot reach, said in the last line of a run that
@@ -179,6 +200,43 @@ class MaterialSettings(Settings):
     wang_eta: float = setting(0.001, "", "Wang interpolation threshold η1", range="(0, 1)")
     wang_gamma: float = setting(-1.0, "", "Wang: a constant γ in [0, 1] instead of eq. 5.2 "
                                 "(-1: eq. 5.2)", range="[-1, 1]")
+    material: str = setting("", "", "a material preset (physics/presets.py): the rubber law, its "
+                            "coefficients and E1 = 2 μ0 (1 + ν), E0 scaled with E1, the preset's "
+                            "ν unless nu is set ('': none)")
+    nu_case: float = setting(0.4, "", "the ν the case set, recorded while material is '': a "
+                             "preset replaces nu only while nu equals it", range="(-1, 0.5)")
+
+    def __post_init__(self):
+        self._apply_material()
+        super().__post_init__()
+
+    def _apply_material(self):
+        """The preset's E1, E0 and ν (physics/presets.py, the rule); without a preset, record
+        the case's ν in ``nu_case``."""
+        if not self.material:
+            object.__setattr__(self, "nu_case", self.nu)
+            return
+        from .hyperelastic import LAWS
+        from .presets import PRESETS, fit_for
+
+        preset = PRESETS.get(self.material)
+        if preset is None:
+            known = ", ".join(PRESETS) or "none is registered: a case file registers its own, "
+            raise InputError(f"material: unknown preset '{self.material}' (known: {known}"
+                             f"{'' if PRESETS else 'pacto_ng.physics.presets.register'})")
+        try:
+            fit = fit_for(preset, self.model)
+        except KeyError:
+            raise InputError(f"model: material '{self.material}' has no {self.model} fit (it "
+                             f"has {', '.join(preset.laws())})") from None
+        nu = self.nu if self.nu != self.nu_case else preset.nu  # a --set nu= wins
+        E1 = 2.0 * fit.mu0 * (1.0 + nu)
+        object.__setattr__(self, "E0", self.E0 * (E1 / self.E1))  # the case's E0/E1 kept
+        object.__setattr__(self, "E1", E1)
+        object.__setattr__(self, "nu", nu)
+        if self.model not in LAWS + ("linear", "gnl", "neohookean", "wang", "auto"):
+            raise InputError(f"model: '{self.model}' cannot be used with material "
+                             f"'{self.material}'")
 
     def check(self):
         if not self.E0 < self.E1:

@@ -241,7 +241,21 @@ MATERIALS = {
                            stress_free=True, proportional_to_E=True),
 }
 
-#: the mechanics models: every material, and the Wang interpolation of the hyperelastic one
+
+def _rubber_laws():
+    """Mooney–Rivlin, Yeoh and Ogden (physics/hyperelastic.py), each with its default shape
+    (the isochoric Neo-Hookean; a preset, physics/presets.py, gives a published one)."""
+    from .hyperelastic import LAWS, Law
+    from .presets import DEFAULT_SHAPES
+
+    return {name: Material(name, Law(name, DEFAULT_SHAPES[name]), needs_positive_J=True,
+                           linear=False, stress_free=True, proportional_to_E=True)
+            for name in LAWS}
+
+
+MATERIALS.update(_rubber_laws())
+
+#: the mechanics models: every material, and the Wang interpolation of a hyperelastic one
 #: with the linear one (physics/wang.py)
 MODELS = tuple(MATERIALS) + ("wang",)
 

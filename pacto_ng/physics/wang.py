@@ -8,7 +8,8 @@ do not stop Newton.  With ``G = ∇u`` and an element-wise interpolation factor 
     φ_W(G) = φ_H(γ G) - φ_L(γ G) + φ_L(G),
 
 where ``φ_H`` is a hyperelastic energy (Neo-Hookean, thesis eq. 4.4, by default; St
-Venant–Kirchhoff possible) and ``φ_L`` the linear energy (thesis eqs 2.11–2.12), both with the
+Venant–Kirchhoff, Mooney–Rivlin, Yeoh or Ogden possible, :data:`HYPERELASTIC`, or a preset's
+law, :mod:`~pacto_ng.physics.presets`) and ``φ_L`` the linear energy (thesis eqs 2.11–2.12), both with the
 SIMP modulus ``E(ρ̄)``, in the dimension of the mesh (3D, or 2D with its ``plane`` setting,
 :mod:`~pacto_ng.physics.materials`).  ``γ = 0`` gives ``φ_L(G)`` exactly
 (``φ_H(0) = φ_L(0) = 0``), ``γ = 1`` gives ``φ_H(G)`` exactly.  The interpolation factor is (thesis eq. 5.2)
@@ -40,7 +41,18 @@ from typing import Callable
 from .materials import (PLANES, dimension, first_piola_kirchhoff, linear_energy,
                         neohookean_energy, svk_energy)
 
-HYPERELASTIC = {"neohookean": (neohookean_energy, True), "gnl": (svk_energy, False)}
+def _rubber():
+    """Mooney–Rivlin, Yeoh and Ogden with their default shapes (the isochoric Neo-Hookean;
+    :class:`~pacto_ng.physics.hyperelastic.Law` instances carry a preset's), all needing J > 0."""
+    from .hyperelastic import LAWS, Law
+    from .presets import DEFAULT_SHAPES
+
+    return {name: (Law(name, DEFAULT_SHAPES[name]), True) for name in LAWS}
+
+
+#: the hyperelastic energies φ_H by name, and whether each needs det(I + γG) > 0
+HYPERELASTIC = {"neohookean": (neohookean_energy, True), "gnl": (svk_energy, False),
+                **_rubber()}
 
 
 def wang_gamma_cf(rho, penal=3.0, beta: float = 100.0, eta: float = 0.001):
@@ -58,8 +70,9 @@ def wang_gamma_cf(rho, penal=3.0, beta: float = 100.0, eta: float = 0.001):
 def wang_energy(G, E, nu, gamma, plane: str = "strain", hyper: str | Callable = "neohookean"):
     """``φ_W = φ_H(γG) - φ_L(γG) + φ_L(G)`` (thesis eq. 5.1) for a given ``γ`` (a CF).
 
-    ``hyper`` names a hyperelastic model of :mod:`~pacto_ng.physics.materials` (``neohookean``,
-    ``gnl``) or is a callable ``(G, E, nu, plane) -> CF``.
+    ``hyper`` names a hyperelastic model (``neohookean``, ``gnl``, ``mooney_rivlin``, ``yeoh``,
+    ``ogden``: :data:`HYPERELASTIC`) or is a callable ``(G, E, nu, plane) -> CF``, e.g. a
+    :class:`~pacto_ng.physics.hyperelastic.Law` with a preset's shape.
     """
     phi_h = _hyper(hyper)[0]
     gG = gamma * G
@@ -164,7 +177,10 @@ class WangModel:
         points, the only points where ``φ_H(γG)`` is evaluated."""
         from .energy import EnergyTraits
 
-        named = isinstance(self.hyper, str)
+        from .hyperelastic import Law
+
+        # every named φ_H and every rubber Law is stress-free at G = 0 (P_H(0) = 0)
+        named = isinstance(self.hyper, (str, Law))
         return EnergyTraits(reads=self.reads, stress_free=named, guard_points="quadrature")
 
     def __call__(self, G, coeffs):
