@@ -234,12 +234,17 @@ class Reanalysis:
     body_pressure : float
         The inlet pressure ``body`` belongs to; the load scales with ``P / body_pressure``.
     newton : NewtonSettings
+    formulation : str
+        ``auto`` (the mixed formulation from ν >= 0.45 at order >= 2,
+        :func:`~pacto_ng.physics.mixed.formulation_for`), ``displacement`` or ``mixed``;
+        :attr:`formulation` is the one used.
     """
 
     def __init__(self, mesh, kind: str, *, E: float | dict, nu: float, thickness: float,
                  supports: Supports, output: Port | tuple[Port, ...], order: int = 2,
                  boundary: str = "pressure", body: Callable | None = None,
-                 body_pressure: float = 1.0, newton: NewtonSettings = NewtonSettings()):
+                 body_pressure: float = 1.0, newton: NewtonSettings = NewtonSettings(),
+                 formulation: str = "auto"):
         from ngsolve import QUAD, TRIG, VOL, Grad, InnerProduct, IntegrationRule, Parameter
 
         if kind not in KINDS:
@@ -274,10 +279,15 @@ class Reanalysis:
             bodyf = lambda u, coeffs: (self.P / self.body_pressure) * InnerProduct(b, u)
         energy = declare(lambda G, coeffs: neohookean_energy(G, modulus, self.nu, "strain"),
                          reads=(), stress_free=True)
+        from ..physics.mixed import formulation_for, has_simplices
+
+        self.formulation = formulation_for(formulation, model="neohookean", nu=self.nu,
+                                           plane="strain", dim=mesh.dim, order=order,
+                                           simplices=has_simplices(mesh))
         self.mech = Mechanics(mesh, order=order, energy=energy, fields=(), supports=supports,
                               loads=loads, springs=springs, body=bodyf, thickness=thickness,
                               guard=lambda G, coeffs: jacobian(G), newton=newton,
-                              residual_terms=terms)
+                              residual_terms=terms, formulation=self.formulation)
         rule = {TRIG: IntegrationRule(TRIG, 2 * order), QUAD: IntegrationRule(QUAD, 2 * order)}
         self._pts = mesh.MapToAllElements(rule, VOL)
         self._J = jacobian(Grad(self.mech.gfu))

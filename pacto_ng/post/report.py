@@ -179,7 +179,9 @@ def post_analyse(mesh, rho, out_dir, *, pressures, E: float, nu: float, thicknes
         "materials": None if stiff is None else {
             "threshold2": stiff.threshold, "mode": rm.materials,
             "areas": material_areas(rm.mesh), "interface_length": interface_length(rm.mesh)},
-        "elements": rm.mesh.ne, "geometry": rm.geometry, "order": order, "E": E, "nu": nu, "thickness": thickness,
+        "elements": rm.mesh.ne, "geometry": rm.geometry, "order": order,
+        "formulation": sorted({sw.analysis.formulation for sw in sweeps.values()}),
+        "E": E, "nu": nu, "thickness": thickness,
         "supports": dataclasses.asdict(supports),
         "wet_boundaries": list(wet_boundaries),
         "output_ports": ports_json(output_ports(output)),
