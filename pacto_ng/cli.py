@@ -14,7 +14,8 @@
     pacto analyse DIR [--pressures P1,P2,...] [--threshold T|volume] [--keep-threshold]
                   [--threshold2 T2] [--maxh H] [--order K]
                   [--kinds darcy,fixed,follower] [--quiet]
-    pacto export DIR --format stl|vtk|msh [--out FILE] [--threshold T] [--threshold2 T2] [--maxh H]
+    pacto export DIR --format stl|vtk|vtu|msh [--out FILE] [--units mm|m] [--no-mirror]
+                 [--threshold T] [--threshold2 T2] [--maxh H]
     pacto compare DIR1 DIR2 ... [--out FILE.png]
 
 Bad input gives a one-line error on stderr and exit code 2; a run stopped by a Newton failure
@@ -156,11 +157,20 @@ def _post_parsers(sub):
     a.add_argument("--kinds", default="darcy,fixed,follower",
                    help="analyses to run (darcy, fixed, follower)")
     a.add_argument("--quiet", action="store_true", help="no progress output")
-    x = sub.add_parser("export", help="the thresholded, remeshed part of a run as STL, VTK or MSH")
+    x = sub.add_parser("export", help="the thresholded, remeshed part of a run as STL, VTK, "
+                       "VTU or MSH")
     x.add_argument("dir", help="a finished run folder")
-    x.add_argument("--format", required=True, choices=("stl", "vtk", "msh"),
-                   help="stl: extruded by the thickness (closed); vtk: 2D triangles; msh: Gmsh "
+    x.add_argument("--format", required=True, choices=("stl", "vtk", "vtu", "msh"),
+                   help="stl: extruded by the case's thickness (closed, binary); vtk, vtu: the "
+                   "2D cells with the run's final rho_bar, u, p, strain and stress; msh: Gmsh "
                    "2.2 with the boundary names as physical groups")
+    x.add_argument("--units", choices=("mm", "m"),
+                   help="length unit of the file (default: mm for stl, as slicers and CAD read "
+                   "it; m, the solver's SI unit, for vtk, vtu and msh)")
+    x.add_argument("--mirror", action=argparse.BooleanOptionalAction, default=True,
+                   help="a case solved on a symmetric half: write the whole mechanism, the half "
+                   "and its mirror image joined along the symmetry line (default); --no-mirror: "
+                   "the half as solved")
     x.add_argument("--out", help="output file (default DIR/export/design.FORMAT)")
     x.add_argument("--threshold", type=float, help="density threshold in (0, 1) (default: the "
                    "analysis's, else 0.5)")
@@ -186,7 +196,8 @@ def _post_command(args) -> int:
                               connect=not args.keep_threshold, threshold2=args.threshold2)
     if args.command == "export":
         return pc.export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
-                             maxh=args.maxh, quiet=args.quiet, threshold2=args.threshold2)
+                             maxh=args.maxh, quiet=args.quiet, threshold2=args.threshold2,
+                             units=args.units, mirror=args.mirror)
     from .post.compare import compare_runs
 
     return compare_runs(args.dirs, out=args.out, quiet=args.quiet)

@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import json
 import math
-import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -52,6 +51,7 @@ import numpy as np
 from ..files import atomic_path, atomic_write_text
 from ..params import InputError
 from ..threads import compute
+from .export import UNITS as UNITS_OF
 from .materials import material_areas
 from .post3d import analyse_run_3d, export_run_3d, is_3d
 from .report import analysis_dict, fmt_value, report_md, short_table
@@ -362,7 +362,10 @@ def _add_pressure_field(files, mesh, sample, scale):
 
 # ------------------------------------------------------------------------------------------
 # pacto export
-EXPORT_FORMATS = ("stl", "vtk", "msh")
+EXPORT_FORMATS = ("stl", "vtk", "vtu", "msh")
+#: ``pacto export``'s length unit when ``--units`` is not given: the STL (for slicers and CAD,
+#: which read it in mm) in mm; the analysis files (vtk, vtu, msh) in the solver's SI metres
+DEFAULT_UNITS = {"stl": "mm", "vtk": "m", "vtu": "m", "msh": "m"}
 
 
 def _boundary_names(mesh) -> list[str]:
@@ -372,39 +375,42 @@ def _boundary_names(mesh) -> list[str]:
     return sorted({el.mat for el in mesh.Elements(BND)})
 
 
-def write_msh(path, mesh):
-    """Gmsh 2.2 file of a 2D NGSolve mesh through meshio: the triangles, whose physical group
+def check_units(units, fmt: str) -> str:
+    """``--units``: mm or m (None: :data:`DEFAULT_UNITS` of the format)."""
+    from .export import UNITS
+
+    if units is None:
+        return DEFAULT_UNITS[fmt]
+    if units not in UNITS:
+        raise InputError(f"--units: choose from {', '.join(UNITS)} (got '{units}')")
+    return units
+
+
+def write_msh(path, mesh, *, units: str = "m"):
+    """Gmsh 2.2 file of a 2D part through meshio: the triangles, whose physical group
     is their material (``solid``; ``soft`` and ``stiff`` for a two-material part), and every
     boundary edge as a line whose physical group is its boundary name (the materials are
-    groups 1, 2, ..., the boundaries follow)."""
+    groups 1, 2, ..., the boundaries follow).  ``mesh`` is a 2D NGSolve mesh or a
+    :class:`~pacto_ng.post.export.PartMesh` (e.g. the whole, mirrored part); coordinates in
+    ``units``."""
     import meshio
-    from ngsolve import BND
 
-    from .export import material_ids
+    from .export import UNITS, PartMesh, part_mesh
 
-    pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
-    mat_ids, mat_groups = material_ids(mesh)
-    tris, quads, tri_ids, quad_ids = [], [], [], []
-    for el, mid in zip(mesh.ngmesh.Elements2D(), mat_ids):
-        vs = [v.nr - 1 for v in el.vertices]
-        (tris if len(vs) == 3 else quads).append(vs)
-        (tri_ids if len(vs) == 3 else quad_ids).append(mid)
-    names = _boundary_names(mesh)
+    part = mesh if isinstance(mesh, PartMesh) else part_mesh(mesh)
+    mat_groups = part.material_groups
+    names = sorted(set(part.edge_names))
     tag = {n: i + 1 + len(mat_groups) for i, n in enumerate(names)}
-    lines, ltag = [], []
-    for el in mesh.Elements(BND):
-        lines.append([v.nr for v in el.vertices])
-        ltag.append(tag[el.mat])
     cells, phys = [], []
-    if lines:
-        cells.append(("line", np.array(lines, dtype=np.int64)))
-        phys.append(np.array(ltag, dtype=np.int64))
-    for kind, block, ids in (("triangle", tris, tri_ids), ("quad", quads, quad_ids)):
-        if block:
-            cells.append((kind, np.array(block, dtype=np.int64)))
-            phys.append(np.array(ids, dtype=np.int64))
+    if len(part.edges):
+        cells.append(("line", part.edges))
+        phys.append(np.array([tag[n] for n in part.edge_names], dtype=np.int64))
+    for (kind, block), idx in zip(part.blocks(), part.block_order()):
+        cells.append((kind, block))
+        phys.append(part.material[idx].astype(np.int64))
     field_data = dict(mat_groups)
     field_data.update({n: np.array([t, 1]) for n, t in tag.items()})
+    pts = part.points / UNITS[units]
     m = meshio.Mesh(np.c_[pts, np.zeros(len(pts))], cells,
                     cell_data={"gmsh:physical": phys, "gmsh:geometrical": phys},
                     field_data=field_data)
@@ -414,22 +420,33 @@ def write_msh(path, mesh):
 
 
 def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
-               quiet: bool = False, threshold2=None) -> int:
-    """``pacto export``: the thresholded, remeshed part of a run as stl | vtk | msh.
+               quiet: bool = False, threshold2=None, units=None, mirror: bool = True) -> int:
+    """``pacto export``: the thresholded, remeshed part of a run as stl | vtk | vtu | msh.
 
     Without ``--threshold``/``--maxh`` the settings of ``DIR/analysis/analysis.json`` are used
     when it exists (the exported part is then the analysed one), else 0.5 and half the run's
-    element size.  STL: extruded by the thickness (closed); VTK: the 2D triangles (meshio, from
-    the VTU the analysis writes); MSH: Gmsh 2.2 with the boundary names as physical groups.
-    A two-material part (``threshold2``: ρ̄2's, default the analysis's, else 0.5) has the
-    regions ``soft`` and ``stiff``: the STL is the whole part; the VTK has cell data
-    ``material`` (named in its field data) and ``E``; the MSH the materials as physical
-    groups of the triangles.
+    element size.
+
+    * ``mirror`` (default): a case solved on a symmetric half (a straight ``symmetry``
+      boundary) is written whole: the part and its mirror image merged along the line
+      (:func:`~pacto_ng.post.export.part_mesh`); False: the half as solved.
+    * ``units``: ``mm`` or ``m``, default :data:`DEFAULT_UNITS` (mm for STL, m otherwise).
+    * STL: the part extruded by the case's thickness (``params.json``), closed, binary, the
+      unit in its header.  VTK / VTU: the 2D cells with the run's final state on them
+      (:func:`~pacto_ng.post.export.part_fields`: ρ̄, u, p, the model's strain and stress; the
+      coordinates and u in ``units``, p and stress in Pa).  MSH: Gmsh 2.2 with the boundary
+      names as physical groups.
+    * A two-material part (``threshold2``: ρ̄2's, default the analysis's, else 0.5) has the
+      regions ``soft`` and ``stiff``: the STL is the whole part; the VTK/VTU has cell data
+      ``material`` (named in its field data) and ``E``; the MSH the materials as physical
+      groups of the triangles.
     """
-    from .export import write_stl, write_vtu
+    from .domain import symmetry_line
+    from .export import part_fields, part_mesh, write_part_stl, write_part_vtu
 
     if fmt not in EXPORT_FORMATS:
         raise InputError(f"--format: choose from {', '.join(EXPORT_FORMATS)} (got '{fmt}')")
+    units = check_units(units, fmt)
     if threshold_value is not None:
         check_threshold(threshold_value)
     if threshold2 is not None:
@@ -452,28 +469,43 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
     threshold2 = 0.5 if threshold2 is None else threshold2
     th, rm, problem = part_of_run(run, threshold_value, maxh, threshold2)
     two = rm.materials is not None
+    # the whole mechanism: the symmetry line of the run's own mesh (the part may not reach it)
+    line = symmetry_line(problem.mesh) if mirror else None
+    part = part_mesh(rm.mesh, line)
     dst = export_destination(run, out, fmt)
+    t = float(run.params.thickness)
+    scale = 1.0 / UNITS_OF[units]
+    notes = []
+    if mirror and line is None and run.summary.get("symmetric_half_domain"):
+        notes.append("not mirrored: the run's symmetry boundary is not a straight line")
     if fmt == "stl":
-        write_stl(dst, rm.mesh, run.params.thickness)
+        write_part_stl(dst, part, t, units=units,
+                       header=f"pacto_ng {run.case.name} part, thickness {t * scale:g}"
+                              + (", whole (mirrored)" if line is not None else ""))
     elif fmt == "msh":
-        write_msh(dst, rm.mesh)
+        write_msh(dst, part, units=units)
     else:
-        import meshio
-
         E = {"soft": run.params.E1, "stiff": run.params.E2} if two else None
-        with tempfile.TemporaryDirectory() as tmp:
-            m = write_vtu(Path(tmp) / "remeshed.vtu", rm.mesh, E=E)
-        with atomic_path(dst) as tmp:
-            meshio.write(str(tmp), m, file_format="vtk")
-    _say(quiet, f"{dst}: {run.case.name} part, threshold {th.threshold:g}, {rm.mesh.ne} "
-                f"triangles, area {rm.area:.6g} m² (thresholded {th.area:.6g}), boundaries "
-                f"{', '.join(_boundary_names(rm.mesh))}"
-                + (f", extruded by {run.params.thickness:g} m" if fmt == "stl" else "")
+        try:
+            point, cell, field_notes = part_fields(problem, part)
+        except ValueError as err:
+            raise InputError(f"export: {err}") from None
+        notes += field_notes
+        write_part_vtu(dst, part, point_data=point, cell_data=cell, units=units, fmt=fmt, E=E)
+        notes.append("fields " + ", ".join([*point, *cell]) + " of the run's final state")
+    _say(quiet, f"{dst}: {run.case.name} part"
+                + (" (whole: the half and its mirror image)" if line is not None else "")
+                + f", threshold {th.threshold:g}, {len(part.elements)} "
+                f"{'triangles' if all(len(e) == 3 for e in part.elements) else 'elements'}, "
+                f"area {part.area() * scale ** 2:.6g} {units}² (the half: remeshed "
+                f"{rm.area:.6g} m², thresholded {th.area:.6g} m²), boundaries "
+                f"{', '.join(sorted(set(part.edge_names)))}"
+                + (f", extruded by the thickness {t * scale:g} {units}" if fmt == "stl" else "")
+                + f"; units {units}"
                 + ("; materials " + ", ".join(f"{k} {v:.6g} m²" for k, v in
                                               material_areas(rm.mesh).items())
                    + f" (ρ̄2 at {threshold2:g}, {rm.materials})" if two else "")
                 + {"domain": ", on the case's own geometry", "traced": ""}.get(
-                    rm.geometry, f"; {rm.geometry}"))
+                    rm.geometry, f"; {rm.geometry}")
+                + "".join(f"; {n}" for n in notes))
     return 0
-
-
