@@ -212,12 +212,13 @@ def closed_checks(surface) -> dict:
                 manifold=bool(surface.is_manifold))
 
 
-def write_part_stl(path, part: Part3D):
-    """The part's closed surface as a binary STL (its facets oriented outward)."""
-    from ..files import atomic_path
+def write_part_stl(path, part: Part3D, units: str = "m", header: str = ""):
+    """The part's closed surface as a binary STL (its facets oriented outward), coordinates in
+    ``units`` (``m`` or ``mm``: :data:`~pacto_ng.post.export.UNITS`), stated in the header."""
+    from .export import UNITS, write_binary_stl
 
-    surf = part.surface.copy()
+    surf = part.surface.copy().triangulate()
     surf.clear_data()
-    with atomic_path(path) as tmp:
-        surf.save(str(tmp), binary=True)
+    unit = f"units {units}"
+    write_binary_stl(path, surf, f"{header}; {unit}" if header else unit, 1.0 / UNITS[units])
     return surf

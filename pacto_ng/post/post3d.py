@@ -63,10 +63,12 @@ def part_of_run_3d(run, threshold_value: float):
     return part, problem, setup, exclude
 
 
-def write_part_solid(path, part) -> None:
+def write_part_solid(path, part, scale: float = 1.0) -> None:
     """The clipped solid (tetrahedra and wedges of the source mesh, not smoothed) with its
-    nodal ρ̄, as VTU or legacy VTK (by the extension of ``path``)."""
+    nodal ρ̄, as VTU or legacy VTK (by the extension of ``path``), coordinates times
+    ``scale``."""
     solid = part.solid.copy()
+    solid.points = np.asarray(solid.points) * scale
     for name in [n for n in solid.point_data if n != "rho"]:
         del solid.point_data[name]
     solid.clear_cell_data()
@@ -74,10 +76,13 @@ def write_part_solid(path, part) -> None:
         solid.save(str(tmp), binary=True)
 
 
-def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False) -> int:
+def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
+                  units: str = "m") -> int:
     """``pacto export`` of a 3D run: stl (the closed, smoothed part) or vtk (the clipped
     solid), at ``threshold_value``, else the analysis's (``DIR/analysis/analysis.json``), else
-    0.5."""
+    0.5; coordinates in ``units`` (m or mm).  The part is the half or quarter the case is
+    solved on (not mirrored)."""
+    from .export import UNITS
     from .part3d import closed_checks, write_part_stl
     from .runs import export_destination
 
@@ -91,13 +96,18 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False)
             threshold_value = None
     part, _, _, _ = part_of_run_3d(run, 0.5 if threshold_value is None else threshold_value)
     dst = export_destination(run, out, fmt)
-    (write_part_stl if fmt == "stl" else write_part_solid)(dst, part)
+    if fmt == "stl":
+        write_part_stl(dst, part, units, header=f"pacto_ng {run.case.name} part (3D)")
+    else:
+        write_part_solid(dst, part, 1.0 / UNITS[units])
     chk = closed_checks(part.surface)
     _say(quiet, f"{dst}: {run.case.name} part (3D), threshold {part.threshold:g}, volume "
                 f"{part.volume:.6g} m³ (thresholded, kept pieces {part.volume_kept:.6g}: "
                 f"{100 * part.volume_error:+.2f} %; {part.dropped} of {part.pieces} pieces off "
                 f"the clamp dropped), {part.surface.n_cells} triangles, "
-                f"{chk['n_open_edges']} open edges, manifold {chk['manifold']}")
+                f"{chk['n_open_edges']} open edges, manifold {chk['manifold']}; units {units}"
+                + ("; the part as solved (a 3D part is not mirrored)"
+                   if run.summary.get("symmetric_half_domain") else ""))
     return 0
 
 
