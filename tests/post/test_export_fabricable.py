@@ -141,6 +141,33 @@ def test_the_vtu_carries_the_run_fields_on_the_whole_part(half_run, exported):
     assert whole.point_data["p"].max() == pytest.approx(1e5, rel=1e-3)
 
 
+def test_the_thickness_is_the_runs(half_run, exported, tmp_path):
+    """The STL's thickness is params.json's: the same run with thickness 4 mm in its
+    params.json (the design, and so the part, do not depend on it) exports 4 mm thick, with
+    four times the volume, here in m (--units m)."""
+    import shutil
+
+    import pyvista as pv
+
+    run = tmp_path / "thick"
+    shutil.copytree(half_run, run, ignore=shutil.ignore_patterns("export"))
+    info = json.loads((run / "params.json").read_text())
+    t1 = info["params"]["thickness"]
+    info["params"]["thickness"] = 4e-3
+    (run / "params.json").write_text(json.dumps(info))
+    out = tmp_path / "thick.stl"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("PACTO_THREADS", "1")
+        assert main(["export", str(run), "--format", "stl", "--threshold", THRESHOLD, "--units",
+                     "m", "--out", str(out), "--quiet"]) == 0
+    thick, ref = pv.read(out).clean(), pv.read(exported["stl"]).clean()
+    assert out.read_bytes()[:80].rstrip().endswith(b"units m")
+    assert thick.n_open_edges == 0
+    assert np.ptp(thick.points[:, 2]) == pytest.approx(4e-3, rel=1e-6)
+    # ref is in mm and t1 thick
+    assert thick.volume == pytest.approx(ref.volume * 1e-9 * 4e-3 / t1, rel=1e-6)
+
+
 def test_units_inch_is_refused_in_one_line(half_run, capsys):
     capsys.readouterr()
     assert main(["export", str(half_run), "--format", "stl", "--units", "inch"]) == 2
