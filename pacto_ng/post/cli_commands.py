@@ -481,7 +481,7 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
         notes.append("not mirrored: the run's symmetry boundary is not a straight line")
     if fmt == "stl":
         write_part_stl(dst, part, t, units=units,
-                       header=f"pacto_ng {run.case.name} part, thickness {t * scale:g}"
+                       header=f"pacto_ng {run.case.name} part, thickness {t * scale:g} {units}"
                               + (", whole (mirrored)" if line is not None else ""))
     elif fmt == "msh":
         write_msh(dst, part, units=units)
