@@ -498,8 +498,9 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
                 + (" (whole: the half and its mirror image)" if line is not None else "")
                 + f", threshold {th.threshold:g}, {len(part.elements)} "
                 f"{'triangles' if all(len(e) == 3 for e in part.elements) else 'elements'}, "
-                f"area {part.area() * scale ** 2:.6g} {units}² (the half: remeshed "
-                f"{rm.area:.6g} m², thresholded {th.area:.6g} m²), boundaries "
+                f"area {part.area() * scale ** 2:.6g} {units}² ("
+                + ("the half: " if line is not None else "")
+                + f"remeshed {rm.area:.6g} m², thresholded {th.area:.6g} m²), boundaries "
                 f"{', '.join(sorted(set(part.edge_names)))}"
                 + (f", extruded by the thickness {t * scale:g} {units}" if fmt == "stl" else "")
                 + f"; units {units}"
