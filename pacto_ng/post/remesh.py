@@ -40,6 +40,18 @@ from .traced import build_geometry
 PRESSURE = "pressure"
 
 
+def _mesher_errors() -> tuple:
+    """The exceptions OCC and Netgen raise on a shape they cannot build or mesh: Netgen's
+    ``NgException`` (e.g. "OCC-Triangulation could not be built for face 1", "error in wire
+    builder"), netgen.occ's ``OCCException``, and OCC's ``Standard_Failure``, which the bindings
+    raise as a RuntimeError (e.g. "Standard_ConstructionError: Bnd_Box is void" for an empty
+    shape)."""
+    from netgen.libngpy._meshing import NgException
+    from netgen.occ import OCCException
+
+    return NgException, OCCException, RuntimeError
+
+
 @dataclass
 class Remeshed:
     """The result of :func:`remesh`.
@@ -96,7 +108,7 @@ def _generate(shape, maxh: float, threshold: float):
 
     try:
         ngm = occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh)
-    except Exception as err:  # netgen's NgException, e.g. "OCC-Triangulation could not be built"
+    except _mesher_errors() as err:
         what = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
     else:
         bad = _unmeshed_edges(ngm)
@@ -115,7 +127,7 @@ def _generate_part(part, maxh: float, threshold: float, stiff, domain, source):
         return _generate(part, maxh, threshold), None
     try:
         return _generate(split_part(part, stiff, domain), maxh, threshold), "body-fitted"
-    except Exception as err:  # OCC's and Netgen's errors: materials element by element
+    except (ValueError, *_mesher_errors()) as err:  # _generate's, split_part's: element by element
         what = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
     ngm = _generate(part, maxh, threshold)
     assign_elementwise(ngm, stiff, source)
@@ -241,7 +253,7 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
             part = domain_shape(th, kept, domain, min_spacing, spline_tol)
             ngm, materials = _generate_part(part, maxh, th.threshold, stiff, domain, src)
             geometry = "domain"
-        except Exception as err:  # OCC's and Netgen's errors: the traced part instead
+        except (ValueError, *_mesher_errors()) as err:  # the traced part instead
             what = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
             geometry = f"traced (the part on the domain's geometry failed: {what})"
     if ngm is None:

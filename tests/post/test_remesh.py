@@ -123,6 +123,54 @@ def test_a_netgen_failure_is_one_line(chamber_quads, monkeypatch):
     assert "\n" not in str(err.value) and "maxh 0.003" in str(err.value)
 
 
+def test_netgen_s_own_exception_is_one_line():
+    """Not mocked: a face OCC cannot triangulate (1 x 1e-12) makes Netgen raise its
+    NgException, which becomes the one-line ValueError."""
+    from netgen import occ
+
+    from pacto_ng.post.remesh import _generate
+
+    with pytest.raises(ValueError, match="^Netgen could not mesh the part: OCC-Triangulation "
+                                         "could not be built") as err:
+        _generate(occ.Rectangle(1.0, 1e-12).Face(), 0.1, 0.5)
+    assert "\n" not in str(err.value) and "maxh 0.1" in str(err.value)
+
+
+def test_only_the_mesher_s_errors_fall_back_to_element_wise_materials(monkeypatch):
+    """A body-fitted cut that fails as OCC and Netgen fail (Netgen's NgException, OCC's
+    Standard_Failure raised as a RuntimeError, split_part's own ValueError) falls back to the
+    element-wise materials, its first line recorded; any other exception (a bug) is raised."""
+    import importlib
+
+    from netgen import occ
+    from netgen.libngpy._meshing import NgException
+
+    remesh_module = importlib.import_module("pacto_ng.post.remesh")
+    part = occ.Rectangle(1.0, 0.5).Face()
+    assigned = []
+    monkeypatch.setattr(remesh_module, "assign_elementwise",
+                        lambda ngm, stiff, source: assigned.append(stiff))
+    for err in (NgException("error in wire builder"),
+                RuntimeError("Standard_ConstructionError: Bnd_Box is void\nmore"),
+                ValueError("the part and its material regions do not overlap")):
+        def fail(*args, _err=err, **kwargs):
+            raise _err
+
+        monkeypatch.setattr(remesh_module, "split_part", fail)
+        ngm, materials = remesh_module._generate_part(part, 0.25, 0.5, "stiff", None, None)
+        assert len(ngm.Elements2D()) > 0
+        first = str(err).splitlines()[0]
+        assert materials == f"element-wise (the interface as a boundary failed: {first})"
+    assert assigned == ["stiff"] * 3
+
+    def bug(*args, **kwargs):
+        raise TypeError("a bug in the cut")
+
+    monkeypatch.setattr(remesh_module, "split_part", bug)
+    with pytest.raises(TypeError, match="a bug in the cut"):
+        remesh_module._generate_part(part, 0.25, 0.5, "stiff", None, None)
+
+
 def test_unmeshed_edges_counts_segments_without_a_triangle():
     from netgen.meshing import Element1D, Element2D, FaceDescriptor, Mesh, MeshPoint, Pnt
 
