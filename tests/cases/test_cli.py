@@ -150,8 +150,14 @@ def test_resume_raises_the_iteration_cap(tmp_path):
 
 @pytest.mark.parametrize("args", [
     ["mbb"], ["cantilever"], ["cantilever", "--model", "neohookean", "--load", "1e5"],
-    ["cantilever", "--model", "wang", "--load", "1e5"], ["inverter"],
-    ["inverter", "--model", "gnl", "--load", "0.05"],
+    # slow (11 s and 13 s of the default run): the Wang and GNL chains are checked by default
+    # in tests/gradients/test_nonlinear_gradients.py::
+    # test_adjoint_matches_finite_differences[wang-*, gnl-*] (this
+    # cantilever's chain), the command with the Wang model in
+    # tests/cases/test_pa_cases.py::test_check_gradients_nonlinear[pa-inverter-wang-*]
+    pytest.param(["cantilever", "--model", "wang", "--load", "1e5"], marks=pytest.mark.slow),
+    ["inverter"],
+    pytest.param(["inverter", "--model", "gnl", "--load", "0.05"], marks=pytest.mark.slow),
 ])
 def test_check_gradients_passes(args, capsys):
     assert main(["check-gradients", *args, "--tol", "1e-5"]) == 0

@@ -179,8 +179,13 @@ def _chain_3d(model, load, solver):
     return chain, mech, [r.output for r in responses], x0
 
 
-@pytest.mark.parametrize("model,load", [("linear", "force"), ("neohookean", "force"),
-                                        ("neohookean", "follower")])
+@pytest.mark.parametrize("model,load", [
+    ("linear", "force"), ("neohookean", "force"),
+    # slow (12 s of the default run): the unsymmetric follower tangent by GMRES and the Darcy
+    # pressure on the iterative route are checked by default in 2D
+    # (test_iterative_gradients[neohookean-follower]), BDDC in 3D with Newton by
+    # [neohookean-force] here
+    pytest.param("neohookean", "follower", marks=pytest.mark.slow)])
 def test_iterative_gradients_3d(model, load):
     """The 3D chain's gradients through the iterative route (CG or GMRES with BDDC on the
     vertex coarse space, h1amg for the filter) pass the FD check (five-point stencil at
