@@ -165,7 +165,7 @@ def test_export_round_trips(pa_run, analysed, tmp_path):
     ref = meshio.read(folder / "remeshed.vtu")
     for fmt in ("stl", "vtk", "msh"):
         assert main(["export", str(pa_run), "--format", fmt, "--out", str(tmp_path / f"p.{fmt}"),
-                     "--quiet"]) == 0
+                     "--no-mirror", "--units", "m", "--quiet"]) == 0  # the half, in metres
     stl = pv.read(tmp_path / "p.stl").clean()
     assert stl.n_open_edges == 0 and stl.volume == pytest.approx(area * t, rel=1e-6)
     vtk = meshio.read(tmp_path / "p.vtk")

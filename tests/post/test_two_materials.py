@@ -219,7 +219,8 @@ def mm_run(tmp_path_factory):
         assert main(["analyse", str(out), "--pressures", ",".join(map(str, MM_PRESSURES)),
                      "--quiet"]) == 0
         for fmt in ("stl", "vtk", "msh"):
-            assert main(["export", str(out), "--format", fmt, "--quiet"]) == 0
+            assert main(["export", str(out), "--format", fmt, "--no-mirror", "--units", "m",
+                         "--quiet"]) == 0  # the half, in metres
     return out
 
 
