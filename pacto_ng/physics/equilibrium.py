@@ -74,7 +74,7 @@ class Equilibrium:
         guard_cf = None
         if self.mixed is not None:  # J > 0, Θ > 0 and the model's guard at F̄ (mixed.py)
             u, theta, _ = self.mixed.split(self._gtrial)
-            guard_cf = self.mixed.guard(guard, Grad(u), theta, self.coeffs)
+            guard_cf = self.mixed.guard(self._energy, guard, Grad(u), theta, self.coeffs)
         elif guard is not None:
             guard_cf = guard(Grad(self._gtrial), self.coeffs)
         self._guard = guard_cf

@@ -34,8 +34,10 @@ has no incompressibility constraint (the thickness is free to change): refused, 
 linear model (whose small-strain energy this formulation would make nonlinear).
 
 The guard: ``J > 0`` and ``Θ > 0`` at the quadrature points (``(Θ/J)^(1/d)`` is real), and the
-model's own guard at ``F̄``.  With the Wang model this asks ``J > 0`` in the void too, where the
-displacement formulation accepts any ``J``.
+model's own guard at ``F̄``.  The Wang model brings its own mixed form
+(:meth:`~pacto_ng.physics.wang.WangModel.mixed_energy`): the dilatation acts on its
+large-strain part ``I + γ∇u`` only, so that void keeps its linear energy and accepts any
+``det(I + ∇u)``, as in the displacement formulation.
 """
 from __future__ import annotations
 
@@ -145,15 +147,23 @@ class Mixed:
         return (Theta / J) ** (1.0 / self.dim) * F - Id(self.dim), J, Theta
 
     def energy(self, energy, G, theta, p, coeffs):
-        """``φ(Ḡ) + p̃ (J - Θ)`` per unit reference volume."""
+        """``φ(Ḡ) + p̃ (J - Θ)`` per unit reference volume, or the energy's own mixed form (its
+        method ``mixed_energy``: the Wang model's,
+        :meth:`~pacto_ng.physics.wang.WangModel.mixed_energy`)."""
+        own = getattr(energy, "mixed_energy", None)
+        if own is not None:
+            return own(G, theta, p, coeffs, self)
         Gbar, J, Theta = self.deformation(G, theta)
         return energy(Gbar, coeffs) + p * (J - Theta)
 
-    def guard(self, guard, G, theta, coeffs):
+    def guard(self, energy, guard, G, theta, coeffs):
         """Positive where the state is admissible: ``Θ > 0``, ``J > 0`` and the model's guard
-        (if any) at ``Ḡ``."""
+        (if any) at ``Ḡ``; or the energy's own (its method ``mixed_guard``)."""
         from ngsolve import IfPos
 
+        own = getattr(energy, "mixed_guard", None)
+        if own is not None:
+            return own(G, theta, coeffs, self)
         Gbar, J, Theta = self.deformation(G, theta)
         inner = J if guard is None else IfPos(J, guard(Gbar, coeffs), J)
         return IfPos(Theta, inner, Theta)

@@ -183,6 +183,30 @@ class WangModel:
         named = isinstance(self.hyper, (str, Law))
         return EnergyTraits(reads=self.reads, stress_free=named, guard_points="quadrature")
 
+    def mixed_energy(self, G, theta, p, coeffs, mixed):
+        """The model in the mixed formulation (:class:`~pacto_ng.physics.mixed.Mixed`): the
+        element dilatation ``Θ`` and pressure ``p̃`` act on the large-strain part's deformation
+        ``F_γ = I + γG`` alone,
+
+            φ_H(F̄_γ - I) - φ_L(γG) + φ_L(G) + p̃ (det F_γ - Θ),  F̄_γ = (Θ / det F_γ)^(1/d) F_γ,
+
+        so that solid (``γ = 1``) is the mixed hyperelastic model and void (``γ = 0``, where
+        ``Θ = 1``) the linear energy with any ``det(I + G)``, as in the displacement
+        formulation."""
+        E, nu, plane = self.modulus(coeffs), self.nu, self.plane
+        gG = self.gamma(coeffs) * G
+        Gbar, Jg, Theta = mixed.deformation(gG, theta)
+        return (_hyper(self.hyper)[0](Gbar, E, nu, plane) - linear_energy(gG, E, nu, plane)
+                + linear_energy(G, E, nu, plane) + p * (Jg - Theta))
+
+    def mixed_guard(self, G, theta, coeffs, mixed):
+        """The guard in the mixed formulation: ``Θ > 0`` and ``det(I + γG) > 0`` (positive where
+        admissible)."""
+        from ngsolve import IfPos
+
+        _, Jg, Theta = mixed.deformation(self.gamma(coeffs) * G, theta)
+        return IfPos(Theta, Jg, Theta)
+
     def __call__(self, G, coeffs):
         """The model as an energy density ``(G, coeffs) -> CF`` (same as :meth:`energy`)."""
         return self.energy(G, coeffs)
