@@ -161,9 +161,9 @@ def _chain(kind, model, load_type, nu=0.49):
 @pytest.mark.parametrize("kind, model, load_type", [
     ("trig", "neohookean", "fixed"), ("trig", "neohookean", "follower"),
     ("quad", "gnl", "fixed"), ("quad", "wang", "follower"), ("trig", "yeoh", "follower"),
-    # Ogden's and Mooney-Rivlin's forms are minutes to assemble here: the slow matrix
-    pytest.param("quad", "ogden", "fixed", marks=pytest.mark.slow),
-    pytest.param("quad", "mooney_rivlin", "follower", marks=pytest.mark.slow)])
+    ("quad", "mooney_rivlin", "follower"),
+    # Ogden's spectral sums at F-bar: 443 s here (measured, a loaded machine): -m slow
+    pytest.param("quad", "ogden", "fixed", marks=pytest.mark.slow)])
 def test_mixed_chain_gradient(kind, model, load_type):
     """-Δ/SE, Δ and SE through the whole chain (filter, projection, Darcy, mixed mechanics with
     the element dilatation and pressure, responses) against the five-point central
