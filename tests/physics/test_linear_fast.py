@@ -124,9 +124,13 @@ def test_design_dependent_body_load_takes_the_symbolic_route(kind, order):
         assert _rel(-a, gen.vec.FV().NumPy()) <= 1e-12, f.name
 
 
-def test_pressure_case_finite_differences_at_the_round_off_floor():
+@pytest.mark.parametrize("seed", [0, 1] + [pytest.param(s, marks=pytest.mark.slow)
+                                           for s in (2, 3, 4)])
+def test_pressure_case_finite_differences_at_the_round_off_floor(seed):
     """The symbolic route with a Darcy load, end to end: the PneuNet's gradients against
-    five-point finite differences on five random designs.  Measured 5e-10 - 2.4e-9 with the
+    five-point finite differences on five random designs (seeds 0-4; 2-4 are slow: each
+    design is one more whole check of the same route, 2.7 s of the default run apiece).
+    Measured 5e-10 - 2.4e-9 with the
     residual and SE evaluated element by element; with K u and ½ u·K_φ u from the assembled
     matrix (whose entries cancel where the structure moves rigidly) 5e-7 - 1.2e-5.  Since K
     comes from element matrices (pacto_ng/physics/scatter.py) and Newton's predictor from K u
@@ -137,8 +141,7 @@ def test_pressure_case_finite_differences_at_the_round_off_floor():
 
     case = get_case("pneunet")
     params = case.defaults.with_overrides({"load_sensitivity": "1"})
-    worst = max(check_case(case, params, seed=s, quiet=True) for s in range(5))
-    assert worst <= 1e-7
+    assert check_case(case, params, seed=seed, quiet=True) <= 1e-7
 
 
 def _undeclared_and_declared(energy):
