@@ -33,38 +33,41 @@ where two coincide (uniaxial and equibiaxial states) and a closed-form eigen-sol
 derivatives there and at ``F = I``.  It is evaluated from the invariants ``Ī1, Ī2`` (``det C̄ =
 1``) in two branches, switched with ``IfPos``:
 
-* near the triple coincidence (``J2 = Ī1²/3 - Ī2 < τ3 m²``, ``m = Ī1/3``, ``τ3 = 1e-4``): the
+* near the triple coincidence (``J2 = Ī1²/3 - Ī2 < τ3 m²``, ``m = Ī1/3``, ``τ3 = 1e-6``): the
   Taylor series about ``m`` in the deviator ``D = C̄ - m I``, ``Σ_k f^(k)(m)/k! tr(D^k)`` with
-  ``tr D^k`` from the recurrence ``p_{k+3} = J2 p_{k+1} + J3 p_k`` (Cayley–Hamilton), to
-  ``k = 10``: a polynomial in the invariants, exact in value and derivatives to round-off at
-  ``F = I`` (every eigenvalue is within 1.2 % of ``m`` there; the first term left out is below
-  1e-20 of ``f(m)``);
+  ``tr D^k`` as monomials in ``J2`` and ``J3 = det D`` (Cayley–Hamilton), to ``k = 6``: a
+  polynomial in the invariants, exact in value and derivatives to round-off at ``F = I``
+  (every eigenvalue is within 0.12 % of ``m`` there; the first term left out is below 3e-18
+  of ``f(m)`` for ``|α| <= 10``);
 * elsewhere the eigenvalue farthest from ``m`` (a simple root of ``p(c) = c³ - Ī1 c² + Ī2 c -
   1``, separated from the two others by at least ``sqrt(2 J2 / 3)``) from the trigonometric
-  formula and one Newton step, both frozen (no derivatives), then two live Newton steps: their
-  value is the root and their first *and second* derivatives are those of the root (the
-  implicit function theorem; one live step gives the first only).  The two other eigenvalues
-  are ``b ± δ`` with ``b = (Ī1 - c1)/2`` and ``δ² = b² - 1/c1``, and ``f(b + δ) + f(b - δ)``
-  (even in δ) is evaluated as it is for ``δ² > τ2 b²`` (``τ2 = 1e-4``) and as its Taylor series
-  ``2 Σ_k f^(2k)(b)/(2k)! δ^{2k}`` (to ``k = 6``) below: smooth at the equal pair of a uniaxial
-  or equibiaxial state.
+  formula, frozen (no derivatives), then one Chebyshev step ``c + δ - p''/(2p') δ²``,
+  ``δ = -p/p'``, with the live invariants: its value is the root and its first *and second*
+  derivatives are those of the root (implicit function theorem; a Newton step alone gives the
+  first only).  The two other eigenvalues are ``b ± δ`` with ``b = (Ī1 - c1)/2`` and
+  ``δ²/b² = t = 1 - 1/(c1 b²)``, and ``f(b + δ) + f(b - δ) = b^a ((1 + √t)^a + (1 - √t)^a)``
+  (even in δ) is evaluated as it is for ``t > τ2`` (``τ2 = 1e-6``) and as its Taylor series
+  ``b^a (2 + 2 Σ_k binom(a, 2k) t^k)`` (to ``k = 3``) below: smooth at the equal pair of a
+  uniaxial or equibiaxial state.
 
-The branch not taken is evaluated on a fixed, well-separated state (eigenvalues 1/2, 1, 2), so
-that it never produces a NaN that the tangent could pick up.
+The expressions are written to keep the expression *tree* short (symbolic ``Diff`` and
+uncompiled evaluation walk the tree, not the DAG).  The branch not taken is evaluated on a
+fixed, well-separated state (eigenvalues 1/2, 1, 2), so that it never produces a NaN that the
+tangent could pick up.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from math import comb, fsum
+from math import fsum
 from typing import Callable
 
 #: the rubber laws of this module (``--model``)
 LAWS = ("mooney_rivlin", "yeoh", "ogden")
 
-TAU_TRIPLE = 1e-4  # J2 / m² below which the triple-coincidence Taylor series is used
-TAU_PAIR = 1e-4    # δ² / b² below which the equal-pair Taylor series is used
-TRIPLE_ORDER = 10  # highest power of the deviator in the triple series
-PAIR_ORDER = 6     # highest power of δ² in the pair series
+TAU_TRIPLE = 1e-6  # J2 / m² below which the triple-coincidence Taylor series is used
+TAU_PAIR = 1e-6    # δ² / b² below which the equal-pair Taylor series is used
+TRIPLE_ORDER = 6   # highest power of the deviator in the triple series
+PAIR_ORDER = 3     # highest power of δ²/b² in the pair series
 _SAFE = (3.5, 3.5)  # Ī1, Ī2 of eigenvalues (1/2, 1, 2): the state of the branch not taken
 
 
@@ -186,63 +189,85 @@ def _clamp(x, lo, hi):
     return IfPos(x - hi, hi, IfPos(lo - x, lo, x))
 
 
+def _traceless_power_sums(J2, J3):
+    """``tr D^k`` for k = 0..:data:`TRIPLE_ORDER` of a traceless 3x3 ``D`` with ``J2 = tr D²/2``
+    and ``J3 = det D``, as monomials in J2, J3 (Cayley–Hamilton ``D³ = J2 D + J3 I``):
+    ``p_{k+3} = J2 p_{k+1} + J3 p_k`` expanded (a short expression tree, not a recurrence)."""
+    table = {0: {(0, 0): 3.0}, 1: {}, 2: {(1, 0): 2.0}}
+    for k in range(3, TRIPLE_ORDER + 1):
+        row = {}
+        for (i, j), c in table[k - 2].items():
+            row[(i + 1, j)] = row.get((i + 1, j), 0.0) + c
+        for (i, j), c in table[k - 3].items():
+            row[(i, j + 1)] = row.get((i, j + 1), 0.0) + c
+        table[k] = row
+    return table
+
+
 def stretch_power_sums(I1b, I2b, exponents):
     """``[Σ_i c_i^a for a in exponents]`` for the eigenvalues ``c_i`` of an isochoric right
     Cauchy–Green tensor with invariants ``Ī1, Ī2`` (``det = 1``), as CFs that are smooth (value,
     first and second derivatives) everywhere, including ``C̄ = I`` and equal pairs (module
-    docstring)."""
+    docstring).  Written to keep the expression *tree* short: symbolic ``Diff`` and uncompiled
+    evaluation walk it as a tree."""
     from ngsolve import IfPos, acos, cos, sqrt
 
     exponents = [float(a) for a in exponents]
     m = I1b / 3.0
     J2 = I1b * I1b / 3.0 - I2b
-    J3 = 2.0 * I1b ** 3 / 27.0 - I1b * I2b / 3.0 + 1.0
+    J3 = (2.0 / 27.0) * I1b ** 3 - I1b * I2b / 3.0 + 1.0
     spread = J2 - TAU_TRIPLE * m * m  # > 0: the spectral branch
 
     # -- the triple-coincidence branch: Taylor series about m in the deviator ------------------
-    p = [3.0, 0.0 * J2, 2.0 * J2]  # tr D^0, tr D^1, tr D^2
-    for k in range(3, TRIPLE_ORDER + 1):
-        p.append(J2 * p[k - 2] + J3 * p[k - 3])
+    table = _traceless_power_sums(J2, J3)
+    monomials = {}
+    for k in range(2, TRIPLE_ORDER + 1):
+        for ij in table[k]:
+            if ij not in monomials:
+                i, j = ij
+                monomials[ij] = (J2 ** i if i else 1.0) * (J3 ** j if j else 1.0)
     triple = []
     for a in exponents:
-        s = 3.0 * m ** a
+        s = 3.0
         for k in range(2, TRIPLE_ORDER + 1):
             c = _binom(a, k)
             if c != 0.0:
-                s = s + c * m ** (a - k) * p[k]
-        triple.append(s)
+                poly = sum(coef * monomials[ij] for ij, coef in table[k].items())
+                s = s + c * poly / m ** k
+        triple.append(m ** a * s)
 
     # -- the spectral branch, on a safe state where it is not taken -----------------------------
     i1 = IfPos(spread, I1b, _SAFE[0])
     i2 = IfPos(spread, I2b, _SAFE[1])
-    j2 = i1 * i1 / 3.0 - i2
-    j3 = 2.0 * i1 ** 3 / 27.0 - i1 * i2 / 3.0 + 1.0
-
-    def newton(c, a1, a2):
-        return c - (c ** 3 - a1 * c * c + a2 * c - 1.0) / (3.0 * c * c - 2.0 * a1 * c + a2)
-
+    # the eigenvalue farthest from the mean, frozen (no derivatives): trigonometric formula
     i1f, i2f = i1.Freeze(), i2.Freeze()
-    sf = sqrt(j2.Freeze() / 3.0)
-    r = _clamp(j3.Freeze() / (2.0 * sf ** 3), -1.0, 1.0)
-    rabs = IfPos(r, r, -r)
-    sign = IfPos(j3.Freeze(), 1.0, -1.0)
-    c0 = i1f / 3.0 + sign * 2.0 * sf * cos(acos(rabs) / 3.0)  # the eigenvalue farthest from m
-    c0 = newton(c0, i1f, i2f).Compile().Freeze()
-    c1 = newton(newton(c0, i1, i2), i1, i2)  # live: value, 1st and 2nd derivatives of the root
+    j2f = i1f * i1f / 3.0 - i2f
+    j3f = (2.0 / 27.0) * i1f ** 3 - i1f * i2f / 3.0 + 1.0
+    sf = sqrt(j2f / 3.0)
+    # |r| < 1 strictly: Freeze does not stop NGSolve's automatic differentiation from forming
+    # acos'(r) = -1/sqrt(1 - r²) (infinite at |r| = 1, uniaxial states) before zeroing it; the
+    # clamp moves c0 by ~1e-15 relative, which the Chebyshev step below removes
+    r = _clamp(j3f / (2.0 * sf ** 3), -1.0 + 1e-14, 1.0 - 1e-14)
+    c0 = i1f / 3.0 + IfPos(r, 1.0, -1.0) * 2.0 * sf * cos(acos(IfPos(r, r, -r)) / 3.0)
+    c0 = c0.Compile().Freeze()
+    # one Chebyshev step with the live invariants: c0 + δ - p''/(2 p') δ², δ = -p/p'; its value
+    # is the root and its first and second derivatives are the root's (implicit function
+    # theorem: the δ² term supplies -p'' c'² / p' of the second derivative)
+    dp = (3.0 * c0 - 2.0 * i1) * c0 + i2
+    delta = -(((c0 - i1) * c0 + i2) * c0 - 1.0) / dp
+    c1 = c0 + delta - (3.0 * c0 - i1) / dp * delta * delta
     b = 0.5 * (i1 - c1)
-    d2 = b * b - 1.0 / c1  # δ² of the other two, b ± δ (their product is 1/c1)
-    pair_split = d2 - TAU_PAIR * b * b
-    delta = sqrt(IfPos(pair_split, d2, TAU_PAIR * b * b))
+    t = 1.0 - 1.0 / (c1 * b * b)  # δ²/b² of the other two eigenvalues b ± δ (product 1/c1)
+    pair_open = t - TAU_PAIR
+    root = sqrt(IfPos(pair_open, t, TAU_PAIR))
     spectral = []
     for a in exponents:
-        open_pair = (b + delta) ** a + (b - delta) ** a
-        taylor = 2.0 * b ** a
-        for k in range(1, PAIR_ORDER + 1):
-            c = _binom(a, 2 * k)
-            if c != 0.0:
-                taylor = taylor + 2.0 * c * b ** (a - 2 * k) * d2 ** k
-        spectral.append(c1 ** a + IfPos(pair_split, open_pair, taylor))
-    return [IfPos(spread, s, t) for s, t in zip(spectral, triple)]
+        open_pair = (1.0 + root) ** a + (1.0 - root) ** a
+        taylor = 0.0
+        for k in range(PAIR_ORDER, 0, -1):  # Horner in t: 2 Σ_k binom(a, 2k) t^k
+            taylor = (taylor + 2.0 * _binom(a, 2 * k)) * t
+        spectral.append(c1 ** a + b ** a * IfPos(pair_open, open_pair, 2.0 + taylor))
+    return [IfPos(spread, s, t3) for s, t3 in zip(spectral, triple)]
 
 
 # ----------------------------------------------------------------------------------------

@@ -194,7 +194,10 @@ def first_piola_kirchhoff(phi, G):
         The displacement gradient at which ``P`` is wanted (e.g. ``Grad(gfu)``).
     """
     Gv = G.MakeVariable()
-    return phi(Gv).Diff(Gv)
+    # compiled: symbolic Diff expands the energy's expression DAG into a tree, which uncompiled
+    # evaluation walks node by node (measured, Ogden, 100 quads of order 2: S_xx set element-
+    # wise in 110 s uncompiled, 0.8 s compiled); the values are the same
+    return phi(Gv).Diff(Gv).Compile()
 
 
 def second_piola_kirchhoff(phi, G):
