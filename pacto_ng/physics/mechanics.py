@@ -161,9 +161,15 @@ class Mechanics(Equilibrium, Adjoint):
     inverse : str or None
         Direct solver of the tangent; default ``sparsecholesky`` for a symmetric tangent and
         ``umfpack`` otherwise.  With an unsymmetric tangent the adjoint solves ``Kᵀ λ = ∂J/∂u``.
+    formulation : {"displacement", "mixed"}
+        ``mixed``: the displacement with an element dilatation and pressure, condensed out of
+        the tangent, against volumetric locking (:mod:`~pacto_ng.physics.mixed`).  The state
+        is then ``(u, ϑ, p̃)`` on :attr:`space` (``gfx``; ``gfu`` is its displacement): the
+        vectors the block passes to and takes from the responses are states.
 
     Public state: ``result`` (the :class:`~pacto_ng.physics.newton.NewtonResult` of the last
-    forward pass: iterations, load reached, ...; None before), ``gfu`` (the displacement),
+    forward pass: iterations, load reached, ...; None before), ``space`` and ``gfx`` (the
+    unknowns' space and the state on it), ``fes`` and ``gfu`` (the displacement's),
     ``lam`` (the adjoint state), :attr:`state` / :meth:`set_state` (the warm start: a
     :class:`~pacto_ng.physics.equilibrium.WarmState`),
     ``adjoint_solves`` / ``adjoint_solves_skipped`` and ``self_adjoint_shortcut`` (set False
