@@ -35,11 +35,13 @@ from math import fsum
 from .hyperelastic import LAWS
 
 #: the Poisson ratio of a preset unless it states its own.  Silicones are nearly incompressible
-#: (ν ≈ 0.49-0.4999), but the displacement formulation locks as ν -> 0.5: in the stability map
-#: of docs/benchmarks.md (pa-inverter, 2026-12-02) Neo-Hookean completes 3e6 Pa at ν = 0.3 and
+#: (ν ≈ 0.49-0.4999), but the displacement formulation locks as ν -> 0.5: docs/benchmarks.md,
+#: "Volumetric locking": Q1 quadrilaterals bend 4.9 % too little at ν = 0.45 and 19 % at 0.49;
+#: its stability map (pa-inverter, 2026-12-02): Neo-Hookean completes 3e6 Pa at ν = 0.3 and
 #: 0.45 but 1e6 Pa at 0.49, and Wang 1e7 Pa at 0.45 but fails by inversion in the locked solid
 #: after 3e6 Pa at 0.49.  0.45 (K = 9.7 μ0) is the most nearly incompressible value measured
-#: there without that loss; a run with a locking-free formulation may set ``--set nu=0.49``.
+#: without that loss, and the value from which ``formulation=auto`` takes the mixed
+#: formulation (physics/mixed.py, NU_MIXED); ``--set nu=0.49`` asks for more.
 DEFAULT_NU = 0.45
 
 #: the shape of each law without a preset: the isochoric Neo-Hookean (documented default)
