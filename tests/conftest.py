@@ -27,3 +27,17 @@ def one_thread():
     SetNumThreads(1)
     yield
     SetNumThreads(2)
+
+
+@pytest.fixture(scope="module")
+def pacto_one_thread():
+    """PACTO_THREADS=1 for the commands a module's tests and module fixtures run (``main([...])``,
+    ``pacto`` subprocesses, ``optimise_case``), for the modules whose tests run pacto commands
+    on small runs (``pytestmark = pytest.mark.usefixtures("pacto_one_thread")``).  Measured on
+    the shared, loaded 2-core machine: run + analyse 95 s with two threads instead of 20 s;
+    tests/cases/test_rewrite_pins.py 71 s (52 s of CPU) instead of 53 s (21 s); pneunet-3d's
+    and the other 3D cases' smoke runs with the iterative route 113 s (67 s) instead of 22 s
+    (16 s).  The modules without it, and tests/unit/test_threads.py, keep running on two."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("PACTO_THREADS", "1")
+        yield

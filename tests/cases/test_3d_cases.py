@@ -15,6 +15,8 @@ import pytest
 
 from pacto_ng.cli import main
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 #: meshes coarse enough for a test (pneunet-3d's half is 0.015 m deep)
 COARSE = {"cantilever-3d": ["--maxh", "0.06"], "pneunet-3d": ["--maxh", "0.006"],
           "pa-inverter-3d": ["--maxh", "0.01"], "pa-gripper-3d": ["--maxh", "0.01"]}

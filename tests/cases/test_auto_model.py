@@ -10,6 +10,8 @@ from pacto_ng.auto import choose_ramp, material_strain
 from pacto_ng.cli import main
 from pacto_ng.optimize.schedules import Schedule
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 
 def _choice(tmp_path, load, model="auto", iterations=1):
     out = tmp_path / f"{model}-{load}"

@@ -10,6 +10,8 @@ import pytest
 from pacto_ng.cli import main
 from pacto_ng.template import TEMPLATE
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 FAST = ["--maxh", "0.003", "--quiet"]
 
 

@@ -9,6 +9,8 @@ import pytest
 
 from pacto_ng.cli import main
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 
 def run_cli(*args):
     return subprocess.run([sys.executable, "-m", "pacto_ng.cli", *args], capture_output=True,

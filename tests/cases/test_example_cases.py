@@ -14,6 +14,8 @@ import pytest
 
 from pacto_ng.cli import main
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 ROOT = Path(__file__).resolve().parents[2]
 CAD_EXAMPLE = ROOT / "examples" / "cad_actuator"
 

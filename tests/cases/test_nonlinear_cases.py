@@ -15,6 +15,8 @@ import pytest
 
 from pacto_ng.cli import main
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 OUTPUT_FILES = ("params.json", "checkpoint.npz", "summary.json", "history.csv", "design.vtu",
                 "design.png", "convergence.png")
 

@@ -19,6 +19,8 @@ import pytest
 
 from pacto_ng.cli import main
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 COARSE = {"pa-inverter": ["--maxh", "0.01"], "pa-gripper": ["--maxh", "0.01"],
           "pneunet": ["--maxh", "0.005"], "mm-gripper": ["--maxh", "0.01"]}
 OUTPUTS = ("summary.json", "history.csv", "design.vtu", "design.png", "convergence.png",

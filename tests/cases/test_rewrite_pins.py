@@ -11,6 +11,8 @@ import pytest
 
 from pacto_ng.cli import main
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 #: key: (pacto run options, elements, objective history of commit ed63e52)
 PINS = {
     'mbb': (['--optimizer', 'mma', '--iterations', '3'], 1200, [1007.0221007367791, 671.4110628090416, 464.7119626284639]),

@@ -22,6 +22,8 @@ from pacto_ng.physics.materials import linear_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.responses import MechanismRatio, StrainEnergy, output_displacement
 
+pytestmark = pytest.mark.usefixtures("one_thread")
+
 L, H = PA_L, PA_H  # the small pa-inverter of tests/small_cases.py
 
 

@@ -25,6 +25,8 @@ from pacto_ng.physics.newton import NewtonSettings
 from pacto_ng.physics.wang import wang_model
 from pacto_ng.responses import MechanismRatio, StrainEnergy, output_displacement
 
+pytestmark = pytest.mark.usefixtures("one_thread")
+
 L, H = PA_L, PA_H  # the small pa-inverter of tests/small_cases.py
 
 

@@ -19,6 +19,8 @@ import sys
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 COARSE = ["--maxh", "0.01"]
 
 

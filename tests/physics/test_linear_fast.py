@@ -16,6 +16,8 @@ from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.responses import StrainEnergy
 from tests.small_cases import small_pa_mesh
 
+pytestmark = pytest.mark.usefixtures("one_thread")
+
 SUP = Supports(clamp=("fixed",), fix_y=("symmetry",))
 
 

@@ -29,6 +29,8 @@ from pacto_ng.physics.newton import NewtonSettings
 from pacto_ng.physics.solvers import DIRECT_MAX_DOFS_3D, choose
 from pacto_ng.responses import MechanismRatio, StrainEnergy, output_displacement
 
+pytestmark = pytest.mark.usefixtures("one_thread")
+
 ORDER = 2
 FD_TOL = 1e-6  # as tests/gradients/test_follower_gradients.py
 SAME_TOL = 1e-8  # direct against iterative: objective and displacement (relative)

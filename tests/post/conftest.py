@@ -19,15 +19,6 @@ OUTPUT = (0.05, 0.005)  # middle of the frame's bottom wall
 P_IN = 1e5
 
 
-@pytest.fixture
-def pacto_one_thread(monkeypatch):
-    """PACTO_THREADS=1 for the commands a test runs (``main([...])``), for the modules whose
-    tests run pacto commands on small runs (``pytestmark = pytest.mark.usefixtures(
-    "pacto_one_thread")``): two threads on the shared, loaded 2-core machine made run +
-    analyse 95 s instead of 20 s."""
-    monkeypatch.setenv("PACTO_THREADS", "1")
-
-
 def chamber_layout():
     from pacto_ng.mesh import Layout, Region, Segment
 

@@ -7,6 +7,8 @@ import pytest
 
 from pacto_ng.cli import main
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 
 def _summary(folder):
     return json.loads((folder / "summary.json").read_text())

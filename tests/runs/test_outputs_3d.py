@@ -14,6 +14,8 @@ from pacto_ng.outputs import write_vtu
 from pacto_ng.post.plots import density_png, pressure_png
 from pacto_ng.post.plots3d import WINDOW
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 BOX = Box(0.04, 0.02, 0.01, blocks=(Block("chamber", "void", (0.01, 0.005, 0.0025),
                                           (0.03, 0.015, 0.0075), boundary="inlet"),))
 

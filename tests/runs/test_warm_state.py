@@ -8,6 +8,8 @@ from pacto_ng.case import build_problem, get_case
 from pacto_ng.cli import main
 from pacto_ng.runner import load_checkpoint
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 ARGS = ["pa-inverter", "--model", "neohookean", "--nelx", "20", "--nely", "10"]
 
 

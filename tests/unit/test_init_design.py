@@ -1,7 +1,10 @@
 """``--set init_design=DIR``: a run starts from another run's design (a warm start across loads)."""
 import numpy as np
+import pytest
 
 from pacto_ng.cli import main
+
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
 BASE = ["run", "mbb", "--nelx", "12", "--nely", "4", "--quiet"]
 

@@ -11,6 +11,8 @@ from pacto_ng.optimize.schedules import Schedule
 from pacto_ng.physics.equilibrium import NewtonFailure
 from pacto_ng.physics.newton import NewtonResult
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 
 class _Mech:
     def __init__(self):

@@ -13,6 +13,8 @@ from pacto_ng.optimize.mma import Optimizer
 from pacto_ng.params import InputError
 from pacto_ng.robust import VolumeTarget, WorstCase
 
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
 
 def _terms(x, offset):
     # f1 = (x0 - 0.2)² + (x1 - 0.3)², f2 = (x0 - 0.8)² + (x1 - 0.3)² (+ offset):
