@@ -14,6 +14,7 @@ from pacto_ng import Case, Parameters, Setup
 from pacto_ng.cases.pa_inverter_3d import DEFAULTS_3D, DEPTH, HEIGHT, LENGTH, setup_3d
 from pacto_ng.geometries import solids
 
+
 def _geometry(p: Parameters):
     return solids.pa_mechanism(LENGTH, HEIGHT, DEPTH, gripper=True)
 
