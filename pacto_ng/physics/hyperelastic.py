@@ -210,7 +210,7 @@ def stretch_power_sums(I1b, I2b, exponents):
     first and second derivatives) everywhere, including ``C̄ = I`` and equal pairs (module
     docstring).  Written to keep the expression *tree* short: symbolic ``Diff`` and uncompiled
     evaluation walk it as a tree."""
-    from ngsolve import IfPos, acos, cos, sqrt
+    from ngsolve import CF, IfPos, acos, cos, sqrt
 
     exponents = [float(a) for a in exponents]
     m = I1b / 3.0
@@ -240,7 +240,8 @@ def stretch_power_sums(I1b, I2b, exponents):
     i1 = IfPos(spread, I1b, _SAFE[0])
     i2 = IfPos(spread, I2b, _SAFE[1])
     # the eigenvalue farthest from the mean, frozen (no derivatives): trigonometric formula
-    i1f, i2f = i1.Freeze(), i2.Freeze()
+    frozen = CF((i1, i2)).Compile().Freeze()  # one compiled evaluation of both per point
+    i1f, i2f = frozen[0], frozen[1]
     j2f = i1f * i1f / 3.0 - i2f
     j3f = (2.0 / 27.0) * i1f ** 3 - i1f * i2f / 3.0 + 1.0
     sf = sqrt(j2f / 3.0)

@@ -457,8 +457,8 @@ def _chain(model, load):
     return chain, mech, x0, [r.output for r in responses]
 
 
-#: the fast ones (measured forward passes on 200 quads: Mooney–Rivlin and Yeoh 0.1 s, Ogden
-#: 1.4 s, Wang over Ogden 12 s; the others carry the ``slow`` mark)
+#: the fast ones (measured first forward passes on 200 quads: Mooney–Rivlin and Yeoh 0.1 s,
+#: Ogden 0.6 s, Wang over Ogden 0.54 s; the others carry the ``slow`` mark)
 FAST_CHAINS = {("mooney_rivlin", "fixed"), ("yeoh", "follower")}
 
 
