@@ -221,9 +221,9 @@ class MaterialSettings(Settings):
 
         preset = PRESETS.get(self.material)
         if preset is None:
-            known = ", ".join(PRESETS) or "none is registered: a case file registers its own, "
-            raise InputError(f"material: unknown preset '{self.material}' (known: {known}"
-                             f"{'' if PRESETS else 'pacto_ng.physics.presets.register'})")
+            known = (f"known: {', '.join(PRESETS)}" if PRESETS else "none is registered: a case "
+                     "file registers one with pacto_ng.physics.presets.register")
+            raise InputError(f"material: unknown preset '{self.material}' ({known})")
         try:
             fit = fit_for(preset, self.model)
         except KeyError:
