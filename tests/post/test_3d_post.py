@@ -61,7 +61,8 @@ def test_export_stl_closed_with_the_thresholded_volume(run3d, part, capsys):
     assert p.volume_kept == pytest.approx(float(cell_volumes(p.solid).sum()), rel=1e-12)
     assert p.volume_kept == pytest.approx(p.volume_thresholded, rel=1e-12)
     # measured 2026-12-03: +0.006 %
-    assert abs(abs(stl.volume) / p.volume_thresholded - 1.0) < 0.02
+    # the STL is in millimetres (export's default for STL): 1 m³ = 1e9 mm³
+    assert abs(abs(stl.volume) * 1e-9 / p.volume_thresholded - 1.0) < 0.02
     # the box below y = 0.03 without the chamber: 3.9e-5 m³ (measured 3.88e-5)
     assert 0.6 < p.volume_thresholded / (0.1 * 0.03 * 0.015 - 0.06 * 0.01 * 0.01) < 1.4
     assert "0 open edges" in capsys.readouterr().out
@@ -159,7 +160,7 @@ def test_export_of_a_short_optimisation(tmp_path):
     assert stl.n_open_edges == 0 and stl.is_manifold
     part = part_of_run_3d(load_run(out, "test"), 0.5)[0]
     assert part.pieces - part.dropped >= 1
-    assert abs(abs(stl.volume) / part.volume_kept - 1.0) < 0.02
+    assert abs(abs(stl.volume) * 1e-9 / part.volume_kept - 1.0) < 0.02  # mm³ -> m³
 
 
 def _named_beam(shape, parts):
