@@ -36,3 +36,24 @@ def chain_fd(chain, name, x0, **options):
         return chain.gradient(name)
 
     return check_gradient(fun, grad, x0, **options)
+
+
+def pa_chain(mesh, dar, mech):
+    """The small pa-inverter's chain around a Darcy block ``dar`` and a mechanics block ``mech``
+    on ``mesh``: x -> Embed -> Helmholtz filter (2 mm) -> projection (β = 2) -> FixPassive ->
+    Darcy -> mechanics -> output displacement at "output" (inward), strain energy, -Δ/SE;
+    returns ``(chain, x0)`` with a random design ``x0`` in [0.2, 0.8]."""
+    import numpy as np
+
+    from pacto_ng.core import Chain
+    from pacto_ng.design import DesignField, Embed, FixPassive
+    from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
+    from pacto_ng.physics.loads import Port
+    from pacto_ng.responses import MechanismRatio, StrainEnergy, output_displacement
+
+    field = DesignField(mesh, solid=("block",))
+    chain = Chain([Embed(field), HelmholtzFilter(mesh, 0.002), HeavisideProjection(2.0),
+                   FixPassive(field), dar, mech,
+                   output_displacement(mech, Port("output", (-1.0, 0.0))), StrainEnergy(mech),
+                   MechanismRatio(scale=1.0)])
+    return chain, np.random.default_rng(1).uniform(0.2, 0.8, field.n)

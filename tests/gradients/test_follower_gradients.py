@@ -11,10 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from small_cases import PA_H, PA_L, chain_fd, small_pa_layout, small_pa_mesh
-from pacto_ng.core import Chain
-from pacto_ng.design import DesignField, Embed, FixPassive
-from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
+from small_cases import PA_H, PA_L, chain_fd, pa_chain, small_pa_layout, small_pa_mesh
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.physics.darcy import DarcyPressure
 from pacto_ng.physics.darcy_load import darcy_follower
@@ -23,7 +20,6 @@ from pacto_ng.physics.materials import jacobian, neohookean_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.physics.newton import NewtonSettings
 from pacto_ng.physics.wang import wang_model
-from pacto_ng.responses import MechanismRatio, StrainEnergy, output_displacement
 
 pytestmark = pytest.mark.usefixtures("one_thread")
 
@@ -46,12 +42,7 @@ def _chain(kind, model):
                      springs=(Spring("output", 1e4, (1.0, 0.0)),),
                      residual_density=darcy_follower("p"), thickness=1e-3, guard=guard,
                      newton=NewtonSettings(rtol=1e-12))
-    field = DesignField(mesh, solid=("block",))
-    chain = Chain([Embed(field), HelmholtzFilter(mesh, 0.002), HeavisideProjection(2.0),
-                   FixPassive(field), dar, mech,
-                   output_displacement(mech, Port("output", (-1.0, 0.0))), StrainEnergy(mech),
-                   MechanismRatio(scale=1.0)])
-    x0 = np.random.default_rng(1).uniform(0.2, 0.8, field.n)
+    chain, x0 = pa_chain(mesh, dar, mech)
     return chain, dar, mech, x0
 
 

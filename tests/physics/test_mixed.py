@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from small_cases import PA_H, PA_L, chain_fd, small_pa_mesh
+from small_cases import chain_fd, pa_chain, small_pa_mesh
 from pacto_ng.core import Chain
 from pacto_ng.design import DesignField, Embed, FixPassive
 from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
@@ -26,7 +26,7 @@ from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.physics.mixed import formulation_for
 from pacto_ng.physics.newton import NewtonSettings
 from pacto_ng.physics.wang import wang_model
-from pacto_ng.responses import MechanismRatio, StrainEnergy, output_displacement
+from pacto_ng.responses import StrainEnergy, output_displacement
 
 E1, E0 = 3e8, 3e2
 
@@ -149,12 +149,7 @@ def _chain(kind, model, load_type, nu=0.49):
                      supports=Supports(clamp=("fixed",), fix_y=("symmetry",)),
                      springs=(Spring("output", 1e4, (1.0, 0.0)),), thickness=1e-3, guard=guard,
                      newton=NewtonSettings(rtol=1e-12), formulation="mixed", **load)
-    field = DesignField(mesh, solid=("block",))
-    chain = Chain([Embed(field), HelmholtzFilter(mesh, 0.002), HeavisideProjection(2.0),
-                   FixPassive(field), dar, mech,
-                   output_displacement(mech, Port("output", (-1.0, 0.0))), StrainEnergy(mech),
-                   MechanismRatio(scale=1.0)])
-    x0 = np.random.default_rng(1).uniform(0.2, 0.8, field.n)
+    chain, x0 = pa_chain(mesh, dar, mech)
     return chain, mech, x0
 
 
