@@ -59,7 +59,7 @@ def parts() -> tuple:
         from .physics.newton import NewtonParameters
         from .robust import RobustSettings
 
-        _PARTS = (("mesh", MeshSettings), ("material", MaterialSettings),
+        _PARTS = (("mesh", MeshSettings), ("mechanics", MaterialSettings),
                   ("design", DesignSettings), ("schedule", ScheduleSettings),
                   ("loads", LoadSettings), ("darcy", DarcySettings),
                   ("responses", ObjectiveSettings), ("newton", NewtonParameters), ("elements", FormulationSettings),

@@ -160,14 +160,7 @@ def _law(params):
     preset's fit if ``material`` names one), or None (a model without one)."""
     from .presets import law_for
 
-    return law_for(params.model, material_name(params))
-
-
-def material_name(params) -> str:
-    """The preset name of ``params`` (a Parameters or a MaterialSettings): on Parameters,
-    ``params.material`` is the whole part of that name, the preset is its field."""
-    name = params.material
-    return name if isinstance(name, str) else name.material
+    return law_for(params.model, params.material)
 
 
 #: what carries a load that a model's Newton cannot reach, said in the last line of a run that
