@@ -391,11 +391,12 @@ def write_msh(path, mesh, *, units: str = "m"):
     is their material (``solid``; ``soft`` and ``stiff`` for a two-material part), and every
     boundary edge as a line whose physical group is its boundary name (the materials are
     groups 1, 2, ..., the boundaries follow).  ``mesh`` is a 2D NGSolve mesh or a
-    :class:`~pacto_ng.post.export.PartMesh` (e.g. the whole, mirrored part); coordinates in
+    :class:`~pacto_ng.post.part2d.PartMesh` (e.g. the whole, mirrored part); coordinates in
     ``units``."""
     import meshio
 
-    from .export import UNITS, PartMesh, part_mesh
+    from .export import UNITS
+    from .part2d import PartMesh, part_mesh
 
     part = mesh if isinstance(mesh, PartMesh) else part_mesh(mesh)
     mat_groups = part.material_groups
@@ -429,11 +430,11 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
 
     * ``mirror`` (default): a case solved on a symmetric half (a straight ``symmetry``
       boundary) is written whole: the part and its mirror image merged along the line
-      (:func:`~pacto_ng.post.export.part_mesh`); False: the half as solved.
+      (:func:`~pacto_ng.post.part2d.part_mesh`); False: the half as solved.
     * ``units``: ``mm`` or ``m``, default :data:`DEFAULT_UNITS` (mm for STL, m otherwise).
     * STL: the part extruded by the case's thickness (``params.json``), closed, binary, the
       unit in its header.  VTK / VTU: the 2D cells with the run's final state on them
-      (:func:`~pacto_ng.post.export.part_fields`: ρ̄, u, p, the model's strain and stress; the
+      (:func:`~pacto_ng.post.part2d.part_fields`: ρ̄, u, p, the model's strain and stress; the
       coordinates and u in ``units``, p and stress in Pa).  MSH: Gmsh 2.2 with the boundary
       names as physical groups.
     * A two-material part (``threshold2``: ρ̄2's, default the analysis's, else 0.5) has the
@@ -442,7 +443,7 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
       groups of the triangles.
     """
     from .domain import symmetry_line
-    from .export import part_fields, part_mesh, write_part_stl, write_part_vtu
+    from .part2d import part_fields, part_mesh, write_part_stl, write_part_vtu
 
     if fmt not in EXPORT_FORMATS:
         raise InputError(f"--format: choose from {', '.join(EXPORT_FORMATS)} (got '{fmt}')")
