@@ -207,6 +207,29 @@ def _block_order(mesh):
     return [np.array(b, dtype=np.int64) for b in (tri, quad) if b]
 
 
+def write_binary_stl(path, solid, header: str = "", scale: float = 1.0):
+    """Write a triangulated pyvista surface as a binary STL, coordinates times ``scale``,
+    with ``header`` (ASCII, at most 80 characters, not starting with ``solid``) in its
+    header; facet normals from the vertex order."""
+    faces = np.asarray(solid.faces).reshape(-1, 4)
+    if not np.all(faces[:, 0] == 3):
+        raise ValueError("the STL surface must be triangles")
+    v = np.asarray(solid.points, dtype=float)[faces[:, 1:]] * scale
+    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    head = header.encode("ascii", "replace")[:80]
+    if head[:5].lower() == b"solid":
+        raise ValueError("a binary STL header must not start with 'solid'")
+    rec = np.zeros(len(v), dtype=[("n", "<f4", (3,)), ("v", "<f4", (3, 3)), ("a", "<u2")])
+    rec["n"], rec["v"] = n, v
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:
+            f.write(head.ljust(80, b" "))
+            f.write(np.uint32(len(v)).tobytes())
+            f.write(rec.tobytes())
+    return path
+
+
 def convert(src, dst):
     """Convert a mesh file between stl, vtk, vtu and msh (by extension) with meshio.
 

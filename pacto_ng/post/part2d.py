@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..files import atomic_path
-from .export import UNITS, _mesh_arrays, extrude_solid, material_ids
+from .export import UNITS, _mesh_arrays, extrude_solid, material_ids, write_binary_stl
 
 
 @dataclass
@@ -250,29 +250,6 @@ def part_polydata(part: PartMesh):
     tris = part.triangles()
     faces = np.c_[np.full(len(tris), 3), tris].ravel()
     return pv.PolyData(np.c_[part.points, np.zeros(part.n_points)], faces)
-
-
-def write_binary_stl(path, solid, header: str = "", scale: float = 1.0):
-    """Write a triangulated pyvista surface as a binary STL, coordinates times ``scale``,
-    with ``header`` (ASCII, at most 80 characters, not starting with ``solid``) in its
-    header; facet normals from the vertex order."""
-    faces = np.asarray(solid.faces).reshape(-1, 4)
-    if not np.all(faces[:, 0] == 3):
-        raise ValueError("the STL surface must be triangles")
-    v = np.asarray(solid.points, dtype=float)[faces[:, 1:]] * scale
-    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
-    head = header.encode("ascii", "replace")[:80]
-    if head[:5].lower() == b"solid":
-        raise ValueError("a binary STL header must not start with 'solid'")
-    rec = np.zeros(len(v), dtype=[("n", "<f4", (3,)), ("v", "<f4", (3, 3)), ("a", "<u2")])
-    rec["n"], rec["v"] = n, v
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as f:
-            f.write(head.ljust(80, b" "))
-            f.write(np.uint32(len(v)).tobytes())
-            f.write(rec.tobytes())
-    return path
 
 
 def write_part_stl(path, part: PartMesh, thickness: float, *, units: str = "mm",
