@@ -141,6 +141,7 @@ class LinearSolver:
         self.preconditioner = None
         self._pre = None
         self._inv = None
+        self._condensed_rhs = None
         self.iterations = 0  # Krylov iterations of the last solve
         self.total_iterations = 0
         self.solves = 0
@@ -183,7 +184,9 @@ class LinearSolver:
         ext, ext_trans, inner = a.harmonic_extension, a.harmonic_extension_trans, a.inner_solve
         if transpose and not self.symmetric:
             ext, ext_trans, inner = ext_trans.T, ext.T, inner.T
-        r = rhs.CreateVector()
+        if self._condensed_rhs is None:  # one work vector, kept for every solve
+            self._condensed_rhs = rhs.CreateVector()
+        r = self._condensed_rhs
         r.data = rhs
         r.data += ext_trans * rhs
         self._solve(r, out, rtol, transpose, strict)
