@@ -22,10 +22,10 @@ The rule (:func:`apply`, called by :class:`~pacto_ng.physics.energy.MaterialSett
   replaces ``nu`` only while it equals ``nu_case``, the ν the case set (recorded while no preset
   is selected).  A ``--set nu=`` equal to the case's own ν cannot be told from it.
 
-No preset is shipped with the toolkit: published fits for Ecoflex 00-30, Dragon Skin 30 and an
-SLA elastomer were looked for and not retrieved with their tables, and a value that cannot be
-sourced is not shipped.  A case file (or any script) registers its own with :func:`register`,
-stating its source; ``--set material=NAME`` then selects it.
+Shipped (:data:`SHIPPED`): Ecoflex 00-30, Dragon Skin 30 (Smooth-On cast silicones) and Elastic
+50A (Formlabs SLA elastomer), Yeoh fits, each with its source.  A case file (or any script)
+registers more with :func:`register`, stating its source; ``--set material=NAME`` then selects
+it.
 """
 from __future__ import annotations
 
@@ -122,7 +122,7 @@ class Preset:
         return tuple(f.law for f in self.fits)
 
 
-#: the registered presets, by name (none is shipped: see the module docstring)
+#: the registered presets, by name (the shipped ones, and any a case file registers)
 PRESETS: dict[str, Preset] = {}
 
 
@@ -164,3 +164,26 @@ def law_for(model: str, material: str):
     if model in LAWS:
         return Law(model, DEFAULT_SHAPES[model])
     return None
+
+
+# --------------------------------------------------------------------------------------------
+# shipped presets: Yeoh fits in Pa (the sources give MPa with mm; converted here, nothing else)
+# --------------------------------------------------------------------------------------------
+_SOROTOKI = ("SOROTOKI, the soft-robotics toolkit of B. Caasenbrood (Eindhoven University of "
+             "Technology), material preset +preset/+material/{}.m, Yeoh C1, C2, C3 in MPa "
+             "(github.com/BJCaasenbrood/SorotokiCode, commit f3c63b6)")
+
+#: the presets the toolkit ships (registered on import)
+SHIPPED = (
+    Preset("ecoflex-00-30", "Smooth-On Ecoflex 00-30 (cast silicone, Shore 00-30)", (
+        Fit("yeoh", (17.0e3, -0.2e3, 0.023e3), _SOROTOKI.format("Ecoflex0030")),)),
+    Preset("dragonskin-30", "Smooth-On Dragon Skin 30 (cast silicone, Shore 30A)", (
+        Fit("yeoh", (0.1536e6, 0.0016e6, 0.0), _SOROTOKI.format("Dragonskin30")),)),
+    Preset("elastic-50a", "Formlabs Elastic 50A (SLA-printed elastomer)", (
+        Fit("yeoh", (0.5056e6, 0.0, 0.002562e6),
+            "M. S. Xavier, C. D. Tawk, Y. K. Yong, A. J. Fleming (2021), Sensors and Actuators "
+            "A: Physical, doi:10.1016/j.sna.2021.113199, Yeoh fit of Elastic 50A, as given in "
+            + _SOROTOKI.format("Elastic50A")),)),
+)
+for _preset in SHIPPED:
+    register(_preset)

@@ -407,6 +407,40 @@ def test_preset_rule(preset):
         unregister("yeoh-only")
 
 
+#: the shipped presets' published Yeoh coefficients (C10, C20, C30) in Pa, transcribed here
+#: from their sources (the MPa values of the sources times 1e6), independently of presets.py
+PUBLISHED_YEOH = {
+    "ecoflex-00-30": (17e3, -200.0, 23.0),
+    "dragonskin-30": (153.6e3, 1.6e3, 0.0),
+    "elastic-50a": (505.6e3, 0.0, 2.562e3),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PUBLISHED_YEOH))
+@pytest.mark.parametrize("kind", ["uniaxial", "equibiaxial", "planar"])
+@pytest.mark.parametrize("lam", [0.8, 1.5, 3.0])
+def test_shipped_preset_against_published_yeoh(name, kind, lam):
+    """Each shipped preset through ``--set material=NAME`` (the settings' E1 and ν, the law the
+    yeoh and wang models use) gives, at isochoric homogeneous states, ``σ1 - σ3 = λ P`` with
+    Rivlin's nominal stress of the published Yeoh coefficients in Pa, to 1e-9."""
+    from pacto_ng.params import Parameters
+    from pacto_ng.physics.presets import law_for
+
+    p = Parameters(model="yeoh", E1=3e9, E0=3e3, nu=0.3).with_overrides({"material": name})
+    C = PUBLISHED_YEOH[name]
+    assert p.nu == 0.45 and p.E1 == pytest.approx(2 * 2 * C[0] * 1.45, rel=1e-14)
+    s = states(kind, lam, None)
+    x = np.sum(s ** 2) - 3
+    W1 = C[0] + 2 * C[1] * x + 3 * C[2] * x ** 2
+    nominal = {"uniaxial": 2 * (lam - lam ** -2), "equibiaxial": 2 * (lam - lam ** -5),
+               "planar": 2 * (lam - lam ** -3)}[kind] * W1
+    law = law_for("yeoh", name)
+    assert law_for("wang", name) == law
+    _, P = code_w_p(lambda G: law(G, p.E1, p.nu), np.diag(s), key=("preset", name))
+    sigma = P @ np.diag(s)  # J = 1
+    assert sigma[0, 0] - sigma[2, 2] == pytest.approx(lam * nominal, rel=1e-9)
+
+
 # --------------------------------------------------------------------------------------------
 # finite-difference checks of the whole chain (the small pa-inverter of tests/small_cases.py)
 # --------------------------------------------------------------------------------------------
