@@ -212,12 +212,13 @@ def closed_checks(surface) -> dict:
                 manifold=bool(surface.is_manifold))
 
 
-def write_part_stl(path, part: Part3D, units: str = "m", header: str = ""):
-    """The part's closed surface as a binary STL (its facets oriented outward), coordinates in
-    ``units`` (``m`` or ``mm``: :data:`~pacto_ng.post.export.UNITS`), stated in the header."""
+def write_part_stl(path, surface, units: str = "m", header: str = ""):
+    """A part's closed surface (pyvista PolyData, e.g. :attr:`Part3D.surface`) as a binary STL
+    (its facets oriented outward), coordinates in ``units`` (``m`` or ``mm``:
+    :data:`~pacto_ng.post.export.UNITS`), stated in the header."""
     from .export import UNITS, write_binary_stl
 
-    surf = part.surface.copy().triangulate()
+    surf = surface.copy().triangulate()
     surf.clear_data()
     unit = f"units {units}"
     write_binary_stl(path, surf, f"{header}; {unit}" if header else unit, 1.0 / UNITS[units])

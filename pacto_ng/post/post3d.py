@@ -1,8 +1,11 @@
 """``pacto export`` and ``pacto analyse`` of a 3D run (docs/postprocessing.md, "3D runs").
 
 ``export DIR --format stl`` writes the part of :mod:`.part3d` (the closed, smoothed surface of
-{ρ̄ >= threshold}, pieces off the clamp dropped) as binary STL; ``--format vtk`` the clipped
-tetrahedral solid (not smoothed) with its nodal ρ̄.  ``analyse DIR`` remeshes that surface
+{ρ̄ >= threshold}, pieces off the clamp dropped) as binary STL; ``--format vtk`` or ``vtu`` the
+clipped tetrahedral solid (not smoothed) with the run's final state on it (:func:`part_solid`:
+ρ̄, u, p, the model's strain and stress).  With ``mirror`` (the default) a case solved on a
+half or a quarter is written whole, reflected about its symmetry planes (:mod:`.mirror3d`).
+``analyse DIR`` remeshes that surface (the half or quarter as solved)
 with Netgen tetrahedra (:func:`~.reanalysis3d.remesh_part`: the case's face names carried over
 by position, the wetted faces named ``pressure``) and sweeps the pressures with the
 Neo-Hookean ``fixed`` and ``follower`` analyses of :class:`~.reanalysis3d.Reanalysis3D`,
@@ -25,7 +28,7 @@ from ..files import atomic_path, atomic_write_text
 from ..params import InputError
 from ..threads import compute
 
-EXPORT_FORMATS_3D = ("stl", "vtk")
+EXPORT_FORMATS_3D = ("stl", "vtk", "vtu")
 
 
 def is_3d(run) -> bool:
@@ -63,26 +66,87 @@ def part_of_run_3d(run, threshold_value: float):
     return part, problem, setup, exclude
 
 
-def write_part_solid(path, part, scale: float = 1.0) -> None:
-    """The clipped solid (tetrahedra and wedges of the source mesh, not smoothed) with its
-    nodal ρ̄, as VTU or legacy VTK (by the extension of ``path``), coordinates times
-    ``scale``."""
+def part_solid(part, problem=None):
+    """The part's clipped solid (tetrahedra and wedges of the source mesh, not smoothed) with
+    point data ``rho`` (the nodal ρ̄ it is clipped at) and, given the run's ``problem``
+    (rebuilt and analysed: :func:`part_of_run_3d`), the run's final state on it, in SI units:
+
+    * cell data ``rho_bar``: ρ̄ of the optimisation element the cell was clipped from;
+    * point data ``p`` (Pa, pressure cases) and ``u`` (m): the run's Darcy pressure and
+      displacement at the points;
+    * cell data of the run model's strain and stress measures
+      (:func:`~pacto_ng.outputs.strain_stress_measures`: ``strain`` and ``stress`` (σ) for a
+      linear run, Green–Lagrange ``E_GL`` and second Piola–Kirchhoff ``S`` for the
+      hyperelastic ones, ``E_W1``, ``E_W2``, ``S`` for Wang): the element means of the source
+      element (design.vtu's values), each a symmetric tensor of 6 components in VTK's order xx,
+      yy, zz, xy, yz, xz.
+
+    Returns ``(solid, notes)``.  A run that stopped on a Newton failure has no equilibrium at
+    its load: ρ̄ and p only, and ``notes`` says so.  ValueError when a point of the part is not
+    found in the run's mesh or a field is not finite."""
+    from ngsolve import GridFunction
+
+    from ..outputs import strain_stress_measures, tensor_components
+
     solid = part.solid.copy()
-    solid.points = np.asarray(solid.points) * scale
+    cid = np.asarray(solid.cell_data["cid"])
     for name in [n for n in solid.point_data if n != "rho"]:
         del solid.point_data[name]
     solid.clear_cell_data()
+    if problem is None:
+        return solid, []
+    mesh, vals = problem.mesh, problem.values
+    solid.cell_data["rho_bar"] = np.asarray(vals["rho_bar"], dtype=float)[cid]
+    pts = np.asarray(solid.points, dtype=float)
+    mips = mesh(pts[:, 0].copy(), pts[:, 1].copy(), pts[:, 2].copy())
+    if np.any(mips["nr"] < 0):
+        raise ValueError(f"{int(np.sum(mips['nr'] < 0))} points of the part lie outside the "
+                         f"run's mesh: its fields cannot be sampled there")
+    if "p" in vals and problem.pressure_block is not None:
+        solid.point_data["p"] = np.asarray(problem.pressure_block.gfp(mips)).ravel()
+    notes = []
+    if problem.failure:
+        notes.append("no displacement, strain or stress: the run's own model has no "
+                     f"equilibrium on its final design at the full load ({problem.failure})")
+    else:
+        solid.point_data["u"] = np.asarray(problem.mech.gfu(mips)).reshape(-1, 3)
+        for name, cf in strain_stress_measures(problem).items():
+            T = np.empty((mesh.ne, 6))
+            for k, ((i, j), _) in enumerate(tensor_components(3)):
+                gf = GridFunction(problem.mech.l2)
+                gf.Set(cf[i, j])  # element mean (P0 projection), as design.vtu
+                T[:, k] = gf.vec.FV().NumPy()
+            solid.cell_data[name] = T[cid]
+    for key, val in [*solid.point_data.items(), *solid.cell_data.items()]:
+        if not np.all(np.isfinite(val)):
+            raise ValueError(f"the field {key} on the part has non-finite values")
+    return solid, notes
+
+
+def write_part_solid(path, solid, scale: float = 1.0) -> None:
+    """A solid of :func:`part_solid` as VTU or legacy VTK (by the extension of ``path``),
+    coordinates and ``u`` times ``scale``."""
+    solid = solid.copy()
+    solid.points = np.asarray(solid.points, dtype=float) * scale
+    if "u" in solid.point_data:
+        solid.point_data["u"] = np.asarray(solid.point_data["u"]) * scale
     with atomic_path(path) as tmp:
         solid.save(str(tmp), binary=True)
 
 
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
 def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
-                  units: str = "m") -> int:
-    """``pacto export`` of a 3D run: stl (the closed, smoothed part) or vtk (the clipped
-    solid), at ``threshold_value``, else the analysis's (``DIR/analysis/analysis.json``), else
-    0.5; coordinates in ``units`` (m or mm).  The part is the half or quarter the case is
-    solved on (not mirrored)."""
+                  units: str = "m", mirror: bool = True) -> int:
+    """``pacto export`` of a 3D run: stl (the closed, smoothed part) or vtk / vtu (the clipped
+    solid with the run's final state: :func:`part_solid`), at ``threshold_value``, else the
+    analysis's (``DIR/analysis/analysis.json``), else 0.5; coordinates (and u) in ``units`` (m
+    or mm).  ``mirror``: the part reflected about the mesh's symmetry planes
+    (:func:`~.mirror3d.symmetry_planes`), whole; else the half or quarter as solved."""
     from .export import UNITS
+    from .mirror3d import is_symmetry_name, mirror_solid, mirror_surface, symmetry_planes
     from .part3d import closed_checks, write_part_stl
     from .runs import export_destination
 
@@ -94,20 +158,35 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
             threshold_value = float(json.loads(prev.read_text())["settings"]["threshold"])
         except (ValueError, KeyError, TypeError):
             threshold_value = None
-    part, _, _, _ = part_of_run_3d(run, 0.5 if threshold_value is None else threshold_value)
+    part, problem, _, _ = part_of_run_3d(run, 0.5 if threshold_value is None else threshold_value)
+    planes = symmetry_planes(problem.mesh) if mirror else []
+    surface = mirror_surface(part.surface, planes) if planes else part.surface
+    whole = f"mirrored about {_plural(len(planes), 'plane')}"
     dst = export_destination(run, out, fmt)
+    notes = []
     if fmt == "stl":
-        write_part_stl(dst, part, units, header=f"pacto_ng {run.case.name} part (3D)")
+        write_part_stl(dst, surface, units, header=f"pacto_ng {run.case.name} part (3D)"
+                       + (f", whole ({whole})" if planes else ""))
     else:
-        write_part_solid(dst, part, 1.0 / UNITS[units])
-    chk = closed_checks(part.surface)
+        try:
+            solid, notes = part_solid(part, problem)
+        except ValueError as err:
+            raise InputError(f"export: {err}") from None
+        write_part_solid(dst, mirror_solid(solid, planes), 1.0 / UNITS[units])
+        notes.append("fields " + ", ".join([*solid.point_data, *solid.cell_data])
+                     + " of the run's final state")
+    if planes:
+        notes.insert(0, f"whole: {whole} ({', '.join(map(str, planes))}), volume "
+                        f"{surface.volume:.6g} m³")
+    elif not mirror and any(map(is_symmetry_name, problem.mesh.GetBoundaries())):
+        notes.insert(0, "the part as solved (--no-mirror)")
+    chk = closed_checks(surface)
     _say(quiet, f"{dst}: {run.case.name} part (3D), threshold {part.threshold:g}, volume "
-                f"{part.volume:.6g} m³ (thresholded, kept pieces {part.volume_kept:.6g}: "
-                f"{100 * part.volume_error:+.2f} %; {part.dropped} of {part.pieces} pieces off "
-                f"the clamp dropped), {part.surface.n_cells} triangles, "
+                f"{part.volume:.6g} m³ as solved (thresholded, kept pieces "
+                f"{part.volume_kept:.6g}: {100 * part.volume_error:+.2f} %; {part.dropped} of "
+                f"{part.pieces} pieces off the clamp dropped), {surface.n_cells} triangles, "
                 f"{chk['n_open_edges']} open edges, manifold {chk['manifold']}; units {units}"
-                + ("; the part as solved (a 3D part is not mirrored)"
-                   if run.summary.get("symmetric_half_domain") else ""))
+                + "".join(f"; {n}" for n in notes))
     return 0
 
 
@@ -184,8 +263,8 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
         sweeps[kind] = ana.sweep(pressures)
     out_dir = run.path / "analysis"
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_part_stl(out_dir / "design.stl", part)
-    write_part_solid(out_dir / "part.vtu", part)
+    write_part_stl(out_dir / "design.stl", part.surface)
+    write_part_solid(out_dir / "part.vtu", part_solid(part)[0])
     shown = next((sweeps[k] for k in ("follower", "fixed") if k in sweeps
                   and sweeps[k].converged.any()), None)
     if shown is not None:
