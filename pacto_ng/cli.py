@@ -161,16 +161,17 @@ def _post_parsers(sub):
                        "VTU or MSH")
     x.add_argument("dir", help="a finished run folder")
     x.add_argument("--format", required=True, choices=("stl", "vtk", "vtu", "msh"),
-                   help="stl: extruded by the case's thickness (closed, binary); vtk, vtu: the "
-                   "2D cells with the run's final rho_bar, u, p, strain and stress; msh: Gmsh "
-                   "2.2 with the boundary names as physical groups")
+                   help="stl: extruded by the case's thickness (closed, binary; 3D: the smoothed "
+                   "iso-surface); vtk, vtu: the part's cells with the run's final rho_bar, u, p, "
+                   "strain and stress; msh: Gmsh 2.2 with the boundary names as physical groups "
+                   "(2D)")
     x.add_argument("--units", choices=("mm", "m"),
                    help="length unit of the file (default: mm for stl, as slicers and CAD read "
                    "it; m, the solver's SI unit, for vtk, vtu and msh)")
     x.add_argument("--mirror", action=argparse.BooleanOptionalAction, default=True,
-                   help="a case solved on a symmetric half: write the whole mechanism, the half "
-                   "and its mirror image joined along the symmetry line (default); --no-mirror: "
-                   "the half as solved")
+                   help="a case solved on a symmetric half (or quarter): write the whole mechanism, "
+                   "the part and its mirror images joined along the symmetry lines or planes "
+                   "(default); --no-mirror: the part as solved")
     x.add_argument("--out", help="output file (default DIR/export/design.FORMAT)")
     x.add_argument("--threshold", type=float, help="density threshold in (0, 1) (default: the "
                    "analysis's, else 0.5)")

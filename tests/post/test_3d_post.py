@@ -52,7 +52,7 @@ def test_export_stl_closed_with_the_thresholded_volume(run3d, part, capsys):
 
     from pacto_ng.post.grid import cell_volumes
 
-    assert main(["export", str(run3d), "--format", "stl"]) == 0
+    assert main(["export", str(run3d), "--format", "stl", "--no-mirror"]) == 0
     stl = pv.read(str(run3d / "export" / "design.stl"))
     assert stl.n_open_edges == 0 and stl.is_manifold
     p = part[0]
@@ -155,7 +155,7 @@ def test_export_of_a_short_optimisation(tmp_path):
     out = tmp_path / "opt"
     assert main(["run", "pneunet-3d", "--maxh", "0.006", "--iterations", "15", "--out",
                  str(out), "--quiet"]) == 0
-    assert main(["export", str(out), "--format", "stl", "--quiet"]) == 0
+    assert main(["export", str(out), "--format", "stl", "--quiet", "--no-mirror"]) == 0
     stl = pv.read(str(out / "export" / "design.stl"))
     assert stl.n_open_edges == 0 and stl.is_manifold
     part = part_of_run_3d(load_run(out, "test"), 0.5)[0]
