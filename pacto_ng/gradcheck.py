@@ -54,9 +54,20 @@ def check_case(case, params, *, seed: int = 0, quiet: bool = False, explicit_mes
     x0 = rng.uniform(0.3, 0.7, n)
     names = [problem.objective] + problem.constraints + [r for r in problem.reports
                                                           if r != problem.objective]
+    # every response's check draws the same first directions (one seed): the perturbed designs
+    # are analysed once, and their responses kept for the checks of the others
+    analysed: dict[bytes, dict[str, float]] = {}
+
+    def responses(x):
+        key = x.tobytes()
+        if key not in analysed:
+            out = problem.chain.forward(x=x)
+            analysed[key] = {nm: float(out[nm]) for nm in names}
+        return analysed[key]
+
     worst = 0.0
     for name in names:
-        fun = lambda x, nm=name: float(problem.chain.forward(x=x)[nm])
+        fun = lambda x, nm=name: responses(x)[nm]
 
         def grad(x, nm=name):
             problem.chain.forward(x=x)
