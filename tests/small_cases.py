@@ -1,4 +1,6 @@
 """Small shared set-ups of the tests."""
+import numpy as np
+
 from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
 
 #: a small pa-inverter (Δs = 0.002 is resolved by the meshes of :func:`small_pa_mesh`)
@@ -57,3 +59,21 @@ def pa_chain(mesh, dar, mech):
                    output_displacement(mech, Port("output", (-1.0, 0.0))), StrainEnergy(mech),
                    MechanismRatio(scale=1.0)])
     return chain, np.random.default_rng(1).uniform(0.2, 0.8, field.n)
+
+
+def run_with_design(out, argv, design):
+    """``pacto run`` of ``argv`` (one short run) into ``out``, then its checkpoint's design
+    replaced by ``design(centroids)`` of the design elements: a run folder whose final design a
+    test chose (for the post-analysis tests)."""
+    from pacto_ng.cli import main
+    from pacto_ng.post.runs import load_run, rebuild
+
+    assert main(["run", *argv, "--out", str(out), "--quiet"]) == 0
+    problem = rebuild(load_run(out, "test"))
+    x = design(problem.field.centroids()[problem.field.design_index]).astype(float)
+    ck = out / "checkpoint.npz"
+    with np.load(ck) as data:
+        saved = {k: data[k] for k in data.files}
+    saved["x"] = x
+    np.savez(ck, **saved)
+    return out
