@@ -49,6 +49,7 @@ CASE_MODULES = {
     "pa-inverter-3d": "pacto_ng.cases.pa_inverter_3d",
     "pa-gripper-3d": "pacto_ng.cases.pa_gripper_3d",
     "topress-3d": "pacto_ng.cases.topress_3d",
+    "gripper-silicone": "pacto_ng.cases.gripper_silicone",
 }
 
 
