@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import sys
 
-from pacto_ng import Case, domain_size, Parameters, Port, Pressure, Setup, Spring, Supports
-from pacto_ng.cases.pa_inverter import objective_ref
+from pacto_ng import Case, domain_size, Parameters, Setup
+from pacto_ng.cases.pa_gripper import gripper_setup
 from pacto_ng.geometries import pa_mechanism as geo
 
 WIDTH, HEIGHT = 0.04, 0.02
@@ -34,12 +34,7 @@ def _geometry(p: Parameters):
 
 
 def _setup(p: Parameters) -> Setup:
-    return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",)),
-                 springs=(Spring("output", p.k_out, (0.0, 1.0)),),
-                 port=Port("output", (0.0, -1.0)), solid=("block", "jaw_pad"),
-                 void=("jaw_void",), objective="mechanism",
-                 pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
-                 objective_ref=objective_ref(p, WIDTH, HEIGHT, 3.0))
+    return gripper_setup(p, WIDTH, HEIGHT)
 
 
 CASE = Case(

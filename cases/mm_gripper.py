@@ -28,7 +28,7 @@ from pacto_ng.cases.pa_inverter import PA_DEFAULTS
 
 
 def _setup(p: Parameters) -> Setup:
-    return dataclasses.replace(pa_gripper._setup(p), materials=2)
+    return dataclasses.replace(pa_gripper.gripper_setup(p), materials=2)
 
 
 CASE = Case(

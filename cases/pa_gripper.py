@@ -33,14 +33,16 @@ def _geometry(p: Parameters):
     return geo.layout(L, H, gripper=True)
 
 
-def _setup(p: Parameters) -> Setup:
+def gripper_setup(p: Parameters, width: float = 0.2, height: float = 0.1) -> Setup:
+    """The gripper's set-up on its ``width`` x ``height`` half (geometries/pa_mechanism.py's
+    layout with ``gripper=True``); also gripper-silicone's."""
     return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",)),
                  springs=(Spring("output", p.k_out, (0.0, 1.0)),),
                  port=Port("output", (0.0, -1.0)), solid=("block", "jaw_pad"),
                  void=("jaw_void",), objective="mechanism",
                  pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
-                 se_max=se_default(p, 0.2, 0.1),
-                 objective_ref=objective_ref(p, 0.2, 0.1, 3.0))
+                 se_max=se_default(p, width, height),
+                 objective_ref=objective_ref(p, width, height, 3.0))
 
 
 CASE = Case(
@@ -49,7 +51,7 @@ CASE = Case(
     source="Thesis §6.2 (Table 6.1); Kumar, Frouws & Langelaar (2020), Struct Multidisc Optim 61",
     defaults=PA_DEFAULTS.replace(maxh=0.002),
     geometry=_geometry,
-    setup=_setup,
+    setup=gripper_setup,
     load_unit="Pa",
 )
 

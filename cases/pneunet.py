@@ -31,13 +31,17 @@ def _geometry(p: Parameters):
     return geo.layout(L, H, chamber=(0.2 * L, 0.2 * H, 0.8 * L, 0.4 * H))
 
 
-def _setup(p: Parameters) -> Setup:
+def member_setup(p: Parameters, width: float = 0.1, height: float = 0.05,
+                 ratio: float = 0.1) -> Setup:
+    """The member's set-up on its ``width`` x ``height`` domain (geometries/pneunet.py's
+    layout), ``ratio`` the objective's typical magnitude (pa_inverter.objective_ref); also
+    pneunet-silicone's."""
     return Setup(supports=Supports(clamp=("fixed",)),
                  springs=(Spring("output", p.k_out, (0.0, 1.0)),),
                  port=Port("output", (0.0, -1.0)), void=("chamber",), objective="mechanism",
                  pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
-                 se_max=se_default(p, 0.1, 0.05),
-                 objective_ref=objective_ref(p, 0.1, 0.05, 0.1))
+                 se_max=se_default(p, width, height),
+                 objective_ref=objective_ref(p, width, height, ratio))
 
 
 CASE = Case(
@@ -52,7 +56,7 @@ CASE = Case(
                         iterations=160, move=0.05, tol=0.01,
                         obj_tol=1e-3),
     geometry=_geometry,
-    setup=_setup,
+    setup=member_setup,
     load_unit="Pa",
 )
 
