@@ -50,6 +50,7 @@ CASE_MODULES = {
     "pa-gripper-3d": "pacto_ng.cases.pa_gripper_3d",
     "topress-3d": "pacto_ng.cases.topress_3d",
     "gripper-silicone": "pacto_ng.cases.gripper_silicone",
+    "pneunet-silicone": "pacto_ng.cases.pneunet_silicone",
 }
 
 

@@ -18,7 +18,7 @@ from pacto_ng.cli import main
 
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
-CASES = ("gripper-silicone",)
+CASES = ("gripper-silicone", "pneunet-silicone")
 COARSE = ["--nelx", "40", "--nely", "20"]
 #: Dragon Skin 30's published Yeoh C10 (Pa), transcribed from its source for this test
 C10 = 153.6e3
@@ -37,13 +37,14 @@ def test_smoke_run(case, tmp_path):
 
 
 #: the Yeoh law everywhere (void included, E0 = 1e-6 E1 ≈ 0.9 Pa) under the follower load at
-#: the cases' 10 kPa: the void's equilibrium beside the pressure gradients is nearly singular
-#: and the finite differences carry its noise (gripper-silicone: 3.6e-5, measured 2026-12-03);
-#: at 1e3 Pa, or with E0 = 1e4 Pa at 10 kPa, the same check gives 1.6e-7 and 8.8e-8.  Wang's
-#: void is linear, and its check passes at the full load.
+#: the cases' 10 kPa: the void's equilibrium beside the pressure gradients is nearly singular,
+#: and the finite differences carry its noise (gripper-silicone: 3.6e-5) or Newton does not
+#: find it (pneunet-silicone, also at 1e3 Pa: load factor 0.88; measured 2026-12-03).  With
+#: E0 = 1e4 Pa the same checks pass at 10 kPa (8.8e-8 and 2.1e-9), and pneunet-silicone's at
+#: 1e2 Pa with the case's E0 (2.0e-9).  Wang's void is linear: its check passes as it is.
 @pytest.mark.parametrize("case", CASES)
 @pytest.mark.parametrize("extra", [[], ["--set", "load_type=fixed"],
-                                   ["--model", "yeoh", "--load", "1e3"]],
+                                   ["--model", "yeoh", "--set", "E0=1e4"]],
                          ids=["wang-follower", "wang-fixed", "yeoh-follower"])
 def test_check_gradients(case, extra, capsys):
     code = main(["check-gradients", case, *extra])
