@@ -19,8 +19,8 @@ reaches 3 (every 15: still at the move limit after 160 iterations).  Load 10 kPa
 
 Why this chamber and volume: with a 20 x 6 mm chamber and volume fraction 0.3 the optimiser
 thinned the chamber's walls to a one- or two-element membrane that balloons (its top wall moved
-12 mm at 10 kPa), and Newton lost the follower equilibrium at 0.3-0.9 of the load in most
-iterations (docs/guide.md, "Silicone cases", has the measurements).
+12 mm at 10 kPa), and Newton lost the follower equilibrium every few iterations, at 0.29-0.95
+of the load (docs/guide.md, "Silicone cases", has the measurements).
 """
 from __future__ import annotations
 
