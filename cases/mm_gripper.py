@@ -16,6 +16,12 @@ The Darcy pressure sees the total solid ρ̄1.  Passive solids (clamp block, jaw
 stiff material.  Load 5e5 Pa by default (the thesis limit of its Neo-Hookean model).
 Triangles of 0.002 m: the thesis mesh (0.004 m, ``--maxh 0.004``) is 1.9 % from the finest
 objective of the trade study (docs/benchmarks.md), 0.002 m 1.0 % at 4.6x its time.
+β doubles every 7 iterations (final problem from iteration 85 of 160) and the move limit is
+0.1: with the pa-inverter's every 15 and 0.05 (final from 125) the objective still fell by
+0.1-0.4 % per iteration at the cap, −0.0939; every 10 and 0.1 reached −0.103 at the cap, still
+falling by about 0.1 % per iteration; every 8 and 0.1 the same (−0.1037, the last 4 changes below
+1e-3 at the cap); every 7 and 0.1 converged at iteration 151, −0.1030 (one run each,
+docs/benchmarks.md, "Convergence at defaults", measured 2026-12-03).
 """
 from __future__ import annotations
 
@@ -36,7 +42,7 @@ CASE = Case(
     summary="two-material pressure-actuated gripper (E1 soft, E2 stiff), minimise -Δ/SE",
     source="Thesis §6.4 (eq. 6.1); Pinskier, Kumar et al. (2023); Sigmund & Torquato (1997)",
     defaults=PA_DEFAULTS.replace(maxh=0.002, E1=3e8, E2=3e9, E0=3e2, load=5e5,
-                                 volfrac2=0.1),
+                                 volfrac2=0.1, beta_every=7, move=0.1),
     geometry=pa_gripper._geometry,
     setup=_setup,
     load_unit="Pa",

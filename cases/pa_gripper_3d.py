@@ -4,7 +4,13 @@ The body, supports, pressure boundaries and quarter model of pa-inverter-3d (see
 docstring), with a passive void x ∈ [0.8L, L], y ∈ [0, 0.2H] through the whole depth (the
 gripped object's place) and a passive solid jaw pad x ∈ [0.8L, L], y ∈ [0.2H, 0.25H].
 Output: the jaw pad's inner face y = 0.2H, Δ = the mean of -u_y over it (the jaw closes), with
-the output spring k_out = 2e5 N/m on the same mean.  Defaults as pa-inverter-3d.
+the output spring k_out = 2e5 N/m on the same mean.  Defaults as pa-inverter-3d but for a
+shorter continuation: p from 2 to 3 in steps of 0.1 and β doubling every 10 iterations, so that
+the final problem starts at iteration 60 of 160.  With pa-inverter-3d's (steps of 0.04, every
+15: final from iteration 100) the run did not meet the convergence test by the cap, −4.13e-3;
+with every 10 alone (final from 75) neither, −4.23e-3, still falling by about 0.1 % per
+iteration; with both it converged at iteration 139, −4.42e-3 (one run each, docs/benchmarks.md,
+"3D cases at defaults", measured 2026-12-03).
 """
 from __future__ import annotations
 
@@ -27,7 +33,7 @@ CASE = Case(
     name="pa-gripper-3d",
     summary="3D pressure-actuated gripper (Darcy), minimise -Δ/SE, the jaw closes",
     source="the 2D pa-gripper (thesis §6.2; Kumar, Frouws & Langelaar 2020) in 3D",
-    defaults=DEFAULTS_3D,
+    defaults=DEFAULTS_3D.replace(penal_step=0.1, beta_every=10),
     geometry=_geometry,
     setup=_setup,
     load_unit="Pa",
