@@ -136,6 +136,7 @@ class Builder:
         from ngsolve import Parameter
 
         from .design import DesignField, Embed, FixPassive
+        from .parallel import bounding_box
         from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
 
         mesh, setup, params = self.mesh, self.setup, self.params
@@ -144,8 +145,8 @@ class Builder:
         except ValueError as err:
             raise InputError(str(err)) from None
         radius = params.filter_radius or 3.0 * self.meshed.h
-        corners = np.array([v.point for v in mesh.vertices])
-        diameter = float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
+        lo, hi = bounding_box(mesh)
+        diameter = float(np.linalg.norm(hi - lo))
         if radius > diameter:
             raise InputError(f"filter_radius: {radius:g} is larger than the domain ({diameter:g} "
                              "across): the filter would average the whole design")

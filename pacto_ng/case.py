@@ -397,6 +397,12 @@ class Problem:
     #: ``f(k, history)`` called at the start of iteration k (the robust formulation's volume
     #: target), or None
     before_iteration: Callable | None = None
+    #: on a distributed mesh (:func:`pacto_ng.parallel.distribute`) where the local elements
+    #: sit in the serial order; None on a serial mesh
+    numbering: object = None
+    #: and where its design variables sit in the serial design vector
+    #: (:class:`pacto_ng.parallel.DesignNumbering`); None on a serial mesh
+    design_numbering: object = None
 
     # -- schedules ----------------------------------------------------------------------------
     def apply_schedule(self, penal: float, beta: float, load: float) -> None:
@@ -421,15 +427,33 @@ class Problem:
         return lines
 
     # -- evaluation -------------------------------------------------------------------------------
+    @property
+    def n_design(self) -> int:
+        """Design variables per material: of the whole mesh, also on a distributed one."""
+        return self.field.n if self.design_numbering is None else self.design_numbering.n
+
+    def _forward(self, x):
+        """The chain at the design ``x`` (the serial design vector; on a distributed mesh this
+        rank's part of rank 0's)."""
+        if self.design_numbering is not None:
+            x = self.design_numbering.local(x)
+        return self.chain.forward(x=x)
+
+    def _gradient(self, name) -> np.ndarray:
+        g = np.asarray(self.chain.gradient(name))
+        if self.design_numbering is not None:
+            g = self.design_numbering.whole(g, self.n_design_fields)
+        return g
+
     def evaluate(self, x: np.ndarray, gradients: bool = True):
         """Return ``f0, fvals`` and, with ``gradients``, ``df0, dfvals`` (shape (m, n))."""
-        vals = self.chain.forward(x=x)
+        vals = self._forward(x)
         f0 = float(vals[self.objective])
         f = np.array([vals[c] for c in self.constraints], dtype=float)
         if not gradients:
             return f0, f
-        df0 = np.asarray(self.chain.gradient(self.objective))
-        df = np.array([np.asarray(self.chain.gradient(c)) for c in self.constraints])
+        df0 = self._gradient(self.objective)
+        df = np.array([self._gradient(c) for c in self.constraints])
         return f0, f, df0, df
 
     def evaluate_terms(self, x: np.ndarray, gradients: bool = True):
@@ -437,13 +461,13 @@ class Problem:
         maximum is the objective; K = 1 without :attr:`objective_terms`), ``f`` and, with
         ``gradients``, ``dF0`` (shape (K, n)) and ``df`` (shape (m, n))."""
         names = self.objective_terms or (self.objective,)
-        vals = self.chain.forward(x=x)
+        vals = self._forward(x)
         F0 = np.array([vals[t] for t in names], dtype=float)
         f = np.array([vals[c] for c in self.constraints], dtype=float)
         if not gradients:
             return F0, f
-        dF0 = np.array([np.asarray(self.chain.gradient(t)) for t in names])
-        df = np.array([np.asarray(self.chain.gradient(c)) for c in self.constraints])
+        dF0 = np.array([self._gradient(t) for t in names])
+        df = np.array([self._gradient(c) for c in self.constraints])
         return F0, f, dF0, df
 
     @property
@@ -472,7 +496,9 @@ class Problem:
         vol = self._volume_block()
         rho = np.clip(np.asarray(self.values.get("rho_bar", self.values.get("rho_bar1"))),
                       0.0, 1.0)
-        return float(vol.w @ (4.0 * rho * (1.0 - rho)) / vol.total)
+        from .parallel import total
+
+        return total(self.mesh, vol.w @ (4.0 * rho * (1.0 - rho))) / vol.total
 
 
 def domain_size(params: Parameters, width: float, height: float) -> tuple[float, float]:
@@ -498,9 +524,12 @@ def mesh_for(case: Case, params: Parameters):
                          linear_solver=params.solver)
 
 
-def build_problem(case: Case, params: Parameters) -> Problem:
+def build_problem(case: Case, params: Parameters, comm=None) -> Problem:
     """The case's problem: its set-up and mesh, checked against each other, then its chain
-    (``case.chain``, :mod:`pacto_ng.builders`)."""
+    (``case.chain``, :mod:`pacto_ng.builders`).  With an mpi4py communicator ``comm`` of
+    several ranks, rank 0 meshes and checks, then the mesh is distributed
+    (:func:`pacto_ng.parallel.distribute`) and every rank builds the chain on its part; every
+    rank must call this."""
     from .geometry import check_inlet_touches_design, check_setup_names, check_vectors
 
     if case.analysis_only:
@@ -513,11 +542,27 @@ def build_problem(case: Case, params: Parameters) -> Problem:
     if params.volfrac2 > 0 and setup.materials == 1:
         raise InputError(f"volfrac2: case '{case.name}' has one material (volfrac2 limits the "
                          "stiff material of a two-material case)")
-    meshed = mesh_for(case, params)
-    check_setup_names(meshed.mesh, setup)
-    check_vectors(meshed.mesh, setup)
-    if setup.pressure is not None:
-        check_inlet_touches_design(meshed.mesh, setup.pressure.inlet, setup.void)
+    parallel = comm is not None and comm.size > 1
+    meshed, failure = None, None
+    if not parallel or comm.rank == 0:
+        try:
+            meshed = mesh_for(case, params)
+            check_setup_names(meshed.mesh, setup)
+            check_vectors(meshed.mesh, setup)
+            if setup.pressure is not None:
+                check_inlet_touches_design(meshed.mesh, setup.pressure.inlet, setup.void)
+        except InputError as err:
+            if not parallel:
+                raise
+            failure = str(err)
+    numbering = None
+    if parallel:
+        failure = comm.bcast(failure, root=0)
+        if failure is not None:
+            raise InputError(failure)
+        from .parallel import distribute
+
+        meshed, numbering = distribute(meshed, comm)
 
     builder = Builder(case, params, meshed, setup)
     if params.robust:
@@ -526,5 +571,12 @@ def build_problem(case: Case, params: Parameters) -> Problem:
                              "formulation replaces the standard chain only")
         from .robust import robust_chain
 
-        return robust_chain(builder)
-    return case.make_problem(builder)
+        problem = robust_chain(builder)
+    else:
+        problem = case.make_problem(builder)
+    if numbering is not None:
+        from .parallel import DesignNumbering
+
+        problem.numbering = numbering
+        problem.design_numbering = DesignNumbering(numbering, problem.field)
+    return problem

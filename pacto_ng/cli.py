@@ -273,6 +273,16 @@ def _interrupted(err: KeyboardInterrupt) -> int:
     return 128 + int(signum)
 
 
+def _abort_other_ranks(code: int) -> None:
+    """In an MPI run, stop every rank (the others wait in a collective call for this one)."""
+    from .parallel import world
+
+    comm = world()
+    if comm is not None:
+        sys.stderr.flush()
+        comm.Abort(code)
+
+
 def main(argv=None) -> int:
     import signal
 
@@ -285,6 +295,7 @@ def main(argv=None) -> int:
             return _main(argv)
     except InputError as err:
         print(f"pacto: error: {err}", file=sys.stderr)
+        _abort_other_ranks(2)
         return 2
     except KeyboardInterrupt as err:
         return _interrupted(err)

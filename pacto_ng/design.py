@@ -25,8 +25,8 @@ class DesignField:
                                  f"(materials: {sorted(known)})")
         self.mesh = mesh
         self.ne = mesh.ne
-        self.solid = np.array([m in solid for m in mats])
-        self.void = np.array([m in void for m in mats])
+        self.solid = np.array([m in solid for m in mats], dtype=bool)
+        self.void = np.array([m in void for m in mats], dtype=bool)
         self.design = ~(self.solid | self.void)
         self.design_index = np.flatnonzero(self.design)
         self.n = int(self.design.sum())

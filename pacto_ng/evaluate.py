@@ -95,7 +95,7 @@ def _checkpoint_design(fp: Path, problem: Problem) -> np.ndarray:
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"--density: '{fp}' is not a readable checkpoint ({type(err).__name__}: "
                          f"{err})") from None
-    n = problem.field.n * problem.n_design_fields
+    n = problem.n_design * problem.n_design_fields
     if x.size != n:
         raise InputError(f"--density: checkpoint '{fp}' holds {x.size} design variables, this "
                          f"case and mesh have {n} (another case or mesh)")

@@ -50,7 +50,7 @@ def check_case(case, params, *, seed: int = 0, quiet: bool = False, explicit_mes
     sched_beta = params.beta_max if params.beta_max > 0 else params.beta
     problem.apply_schedule(params.penal, sched_beta, 1.0)
     rng = np.random.default_rng(seed)
-    n = problem.field.n * problem.n_design_fields
+    n = problem.n_design * problem.n_design_fields
     x0 = rng.uniform(0.3, 0.7, n)
     names = [problem.objective] + problem.constraints + [r for r in problem.reports
                                                           if r != problem.objective]

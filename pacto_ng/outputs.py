@@ -226,6 +226,17 @@ def _finite(name, arr):
         raise RuntimeError(f"{name} has non-finite values: nothing written")
 
 
+def write_history(target: Path, history: list, problem: Problem) -> None:
+    """history.csv (atomically): a row per iteration; written even when no iteration finished
+    (a Newton failure in the first one): a header only."""
+    keys = list(history[0].keys()) if history else list(HISTORY_COLUMNS) + list(problem.reports)
+    buf = io.StringIO(newline="")
+    w = csv.DictWriter(buf, fieldnames=keys)
+    w.writeheader()
+    w.writerows(history)
+    atomic_write_text(target, buf.getvalue())
+
+
 def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, result,
                   wall: float) -> dict:
     """Write the run's results into ``path``; returns the summary (summary.json)."""
@@ -235,13 +246,7 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
     for key in ("objective", "volume_fraction"):
         if summ[key] is not None and not np.isfinite(summ[key]):
             raise RuntimeError(f"{key} is not finite: nothing written")
-    # written even when no iteration finished (a Newton failure in the first one): a header only
-    keys = list(history[0].keys()) if history else list(HISTORY_COLUMNS) + list(problem.reports)
-    buf = io.StringIO(newline="")
-    w = csv.DictWriter(buf, fieldnames=keys)
-    w.writeheader()
-    w.writerows(history)
-    atomic_write_text(path / "history.csv", buf.getvalue())
+    write_history(path / "history.csv", history, problem)
     write_vtu(path / "design", problem, x)
     density_png(path / "design.png", problem)  # the pictures are written atomically too
     if problem.pressure_block is not None:

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .parallel import total
+
 
 class LinearFunctional:
     """``J = ℓ(u)`` for a design-independent linear functional ℓ (assembled once).
@@ -112,7 +114,7 @@ class StrainEnergy:
         # quadratic form ½ u·K_φ u sums the entries of K u, which cancel where the structure
         # moves rigidly, and carried a round-off of 4e-11 of SE (measured on a PneuNet design;
         # finite differences at h = 1e-4 turned it into errors of 1e-6 - 8e-6)
-        return float(self._integrate(self._dens * self.mech.DX, self.mech.mesh))
+        return total(self.mech.mesh, self._integrate(self._dens * self.mech.DX, self.mech.mesh))
 
     def backward(self, g):
         if self._quad is not None:
@@ -172,12 +174,13 @@ class Volume:
         if not 0.0 < volfrac < 1.0:
             raise ValueError(f"volfrac must lie in (0, 1) (got {volfrac})")
         self.inputs, self.output = tuple(inputs), output
+        self.mesh = field.mesh
         self.w = np.where(field.design, field.areas, 0.0)
-        self.total = self.w.sum()
+        self.total = total(self.mesh, self.w.sum())
         self.volfrac = volfrac
 
     def fraction(self, rho):
-        return float(self.w @ rho / self.total)
+        return total(self.mesh, self.w @ rho) / self.total
 
     def forward(self, rho):
         return self.fraction(rho) / self.volfrac - 1.0

@@ -49,9 +49,9 @@ def initial_design(problem: Problem) -> np.ndarray:
     if p.init_design:
         return design_of_run(p.init_design, problem)
     x0 = p.seed_density if p.seed_density > 0 else p.volfrac
-    x = np.full(problem.field.n, x0)
+    x = np.full(problem.n_design, x0)
     if problem.n_design_fields == 2:
-        x = np.concatenate([x, np.full(problem.field.n, 0.5)])
+        x = np.concatenate([x, np.full(problem.n_design, 0.5)])
     return x
 
 
@@ -65,7 +65,7 @@ def design_of_run(folder: str | os.PathLike, problem: Problem) -> np.ndarray:
         raise InputError(f"init_design: no checkpoint.npz in '{folder}'") from None
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"init_design: cannot read '{ckpt}' ({err})") from None
-    n = problem.field.n * problem.n_design_fields
+    n = problem.n_design * problem.n_design_fields
     if x.shape != (n,):
         raise InputError(f"init_design: '{ckpt}' holds {x.size} design variables, this run has {n} "
                          "(another case or mesh)")
@@ -85,9 +85,12 @@ def _progress(row: dict, total: int) -> str:
 def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
     """Everything :func:`load_checkpoint` needs to continue exactly (written atomically)."""
     warm = problem.mech.state
+    # on a distributed mesh the displacement is rank 0's part (none): no warm start, so that a
+    # resume may use another number of ranks
+    local = problem.numbering is not None
     arrays = dict(k=state.k, x=state.x, scale=np.nan if state.scale is None else state.scale,
                   stable=state.stable, history=json.dumps(state.history),
-                  u=warm.u, warm=warm.converged,
+                  u=np.zeros(0) if local else warm.u, warm=warm.converged and not local,
                   load_cap=state.load_cap, load_failed_at=state.load_failed_at,
                   # Newton's first increment of its last ramp: a Neo-Hookean pa-inverter
                   # resumed without it ended 5e-4 away from the uninterrupted run
@@ -130,14 +133,14 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
                               load_failed_at=(int(data["load_failed_at"])
                                               if "load_failed_at" in files else -1))
             u, ndof = data["u"], problem.mech.space.ndof
-            warm = u.size == ndof and bool(data["warm"])
+            warm = problem.numbering is None and u.size == ndof and bool(data["warm"])
             # (a checkpoint written before the ramp's first increment was kept: None)
             ramp = float(data["ramp_first"]) if "ramp_first" in files else np.nan
             problem.mech.set_state(WarmState(u if warm else np.zeros(ndof), converged=warm,
                                              ramp_first=None if np.isnan(ramp) else ramp))
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"resume: cannot read '{path}' ({type(err).__name__}: {err})") from None
-    n = problem.field.n * problem.n_design_fields
+    n = problem.n_design * problem.n_design_fields
     for name, x in (("x", state.x), ("last_good", state.last_good)):
         if x is not None and x.shape != (n,):
             raise InputError(f"resume: '{path}' holds {x.size} design variables ({name}), this "
@@ -218,6 +221,12 @@ class _Progress:
 def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
               resume: bool = False, overwrite: bool = False,
               model_choice: dict | None = None, ramp_choice: dict | None = None) -> Finished:
+    from .parallel import leads
+
+    if not leads():  # another rank of an MPI run: rank 0 owns the folder
+        return _optimise(case, params, Path(out), _Progress(Path(out), params.iterations),
+                         quiet=True, resume=resume, model_choice=model_choice,
+                         ramp_choice=ramp_choice)
     path = prepare_output(out)
     if overwrite and params.init_design and Path(params.init_design).resolve() == path.resolve():
         raise InputError("run --overwrite: init_design is the --out folder, whose checkpoint it "
@@ -256,7 +265,10 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
         if not quiet and ramp_choice is not None and ramp_choice["chosen"] > 0:
             print(f"load ramp -> {ramp_choice['chosen']} iterations: {ramp_choice['reason']}")
     params = case.resolve(params)  # order 0: the case's order for the (chosen) model
-    problem = build_problem(case, params)
+    from .parallel import leads, world
+
+    lead = leads()
+    problem = build_problem(case, params, comm=world())
     problem.model_choice = model_choice
     problem.load_ramp_choice = ramp_choice
     # an optimisation: every design assembled one way, from the process's first on (a resumed
@@ -277,17 +289,22 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     # resume refused for its checkpoint, leaves the folder as it was
     info = {"case": case.name, "case_file": case.file, "params": params.to_dict(),
             "model_choice": model_choice, "load_ramp_choice": ramp_choice}
-    _write_params(path / "params.json", info)
+    if lead:
+        _write_params(path / "params.json", info)
     if resume and not quiet:
         print(f"resuming {case.name} at iteration {state.k}" if resumed else
               f"resuming {case.name}: no checkpoint yet, starting at iteration 0")
     if not quiet:
         mixed = " (mixed formulation)" if problem.mech.formulation == "mixed" else ""
-        print(f"{case.name}: model {params.model}{mixed}, {problem.mesh.ne} elements, order "
-              f"{params.order}, {problem.mech.fes.ndof} displacement dofs, {problem.field.n} "
-              f"design variables")
+        ne = problem.mesh.ne if problem.numbering is None else problem.numbering.ne
+        ranks = "" if problem.numbering is None else f" on {problem.numbering.comm.size} ranks"
+        print(f"{case.name}: model {params.model}{mixed}, {ne} elements{ranks}, order "
+              f"{params.order}, {problem.mech.fes.ndofglobal} displacement dofs, "
+              f"{problem.n_design} design variables")
 
     def on_iteration(st, row):
+        if not lead:
+            return
         save_checkpoint(ckpt, st, problem)
         progress.saved = st.k
         if not quiet:
@@ -336,8 +353,14 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     if failed and params.model in WHEN_NEWTON_FAILS:
         result.message += "; " + WHEN_NEWTON_FAILS[params.model]
     wall = time.perf_counter() - t_start
-    summary = write_outputs(path, problem, final_x, state.history, result, wall)
-    if not quiet or failed:
+    if problem.numbering is None:
+        summary = write_outputs(path, problem, final_x, state.history, result, wall)
+    else:
+        from .parallel_outputs import write_distributed_outputs
+
+        summary = write_distributed_outputs(path, problem, final_x, state.history, result,
+                                            wall, write=lead)
+    if lead and (not quiet or failed):
         print(("run stopped: " if failed else "") + result.message + f" — output in {path}")
     return Finished(1 if failed else 0, problem, final_x, state.history, summary)
 

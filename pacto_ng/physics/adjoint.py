@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..parallel import distributed
 from .sensitivities import FieldSensitivities
 
 
@@ -68,12 +69,13 @@ class Adjoint:
         Self-adjoint shortcut: for a linear problem with design-independent loads, when
         ``dJ/du = c f`` (compliance) the adjoint is ``λ = (c / s) u`` with no solve at all
         (``K u = s f``).  ``adjoint_solves_skipped`` counts the shortcuts, ``adjoint_solves``
-        the solves.
+        the solves.  On a distributed mesh the adjoint is always solved (a distributed vector's
+        local part does not tell whether the whole is a multiple of ``f``).
         """
         lam = self.gfx.vec.CreateVector()
         f = self._f_unit
         if (self.self_adjoint_shortcut and self.linear and self._fixed_loads and self.symmetric
-                and f is not None and self.target != 0):
+                and f is not None and self.target != 0 and not distributed(self.mesh)):
             g = dJdu.FV().NumPy()
             ff = float(f @ f)
             c = float(g[self.free] @ f[self.free]) / ff if ff > 0 else 0.0

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..parallel import everywhere, largest
 from .energy import DeclarationError
 from .linear_system import fields_restored, random_fields
 
@@ -50,9 +51,9 @@ class BodyCoupling:
                 body_form.Assemble()
                 Bp.data = B.mat * field.gf.vec
                 ref, got = body_form.vec.FV().NumPy(), Bp.FV().NumPy()
-                scale = float(np.max(np.abs(ref)))
-                if not (scale > 0 and np.all(np.isfinite(got))
-                        and np.max(np.abs(ref - got)) <= tol * scale):
+                scale = largest(mech.mesh, np.abs(ref))
+                if not (scale > 0 and everywhere(mech.mesh, np.all(np.isfinite(got)))
+                        and largest(mech.mesh, np.abs(ref - got)) <= tol * scale):
                     raise DeclarationError(
                         f"the body load is taken as linear in the field '{field.name}' alone, "
                         f"but its load vector is not B {field.name} on random fields (it reads "

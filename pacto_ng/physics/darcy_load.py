@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..parallel import total
 from .darcy import DarcyPressure, DarcySettings
 
 
@@ -158,7 +159,7 @@ class Compliance:
             self.gfp.vec.FV().NumPy()[:] = p
         else:
             self.gfp.vec.data = p
-        val = float(Integrate(self._dens * self.mech.DX, self.mech.mesh))
+        val = total(self.mech.mesh, Integrate(self._dens * self.mech.DX, self.mech.mesh))
         if self._fixed is not None:
             val += float(self._fixed.InnerProduct(self.gfu.vec))
         return val

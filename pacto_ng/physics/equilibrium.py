@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..parallel import everywhere, free_norm
+
 from .newton import NewtonResult, solve_with_continuation
 from .solvers import LinearSolver
 from .quadrature import guard_rules
@@ -158,7 +160,7 @@ class Equilibrium:
         solves to the first bound in its one step."""
         rtol = None
         if not self._solver.direct:
-            res = float(np.linalg.norm(rhs.FV().NumPy()[self.free]))
+            res = free_norm(rhs, self.free)
             ref = self.load_norm(self.target)
             if res > 0 and ref > 0:
                 floor = 0.1 * self.settings.rtol * ref / res
@@ -174,10 +176,10 @@ class Equilibrium:
 
     def admissible(self, vec) -> bool:
         if self._guard is None:
-            return bool(np.all(np.isfinite(vec.FV().NumPy())))
+            return everywhere(self.mesh, np.all(np.isfinite(vec.FV().NumPy())))
         self._gtrial.vec.data = vec
         vals = self._guard_cf(self._guard_pts)
-        return bool(np.all(np.isfinite(vals)) and np.min(vals) > 0.0)
+        return everywhere(self.mesh, np.all(np.isfinite(vals)) and np.all(vals > 0.0))
 
     def lowest_jacobian(self, points: str = "quadrature") -> dict:
         """Where ``det F`` (``F = I + ∇u`` of the current displacement; in 2D of the in-plane
@@ -217,12 +219,13 @@ class Equilibrium:
             # R(0) = -s f: the norm of the (design-dependent) load vector, no residual needed
             return abs(load) * self._lin.load_norm()
         if self._load_form is not None:
-            f = self._load_form.vec.FV().NumPy() + self._body_load().FV().NumPy()
-            return abs(load) * float(np.linalg.norm(f[self.free]))
+            f = self._load_form.vec.CreateVector()
+            f.data = self._load_form.vec + self._body_load()
+            return abs(load) * free_norm(f, self.free)
         if self._fixed_loads:
             self._ext[:] = 0.0
             self.residual(self._ext, self._rhs, 1.0)
-            self._unit_load_norm = float(np.linalg.norm(self._rhs.FV().NumPy()[self.free]))
+            self._unit_load_norm = free_norm(self._rhs, self.free)
             # the unit external load vector f (R(0) = -f), kept for the self-adjoint shortcut
             self._f_unit = self._rhs.FV().NumPy().copy()
             self._f_unit[~self.free] = 0.0
@@ -230,7 +233,7 @@ class Equilibrium:
             return abs(load) * self._unit_load_norm
         self._ext[:] = 0.0
         self.residual(self._ext, self._rhs, load)
-        return float(np.linalg.norm(self._rhs.FV().NumPy()[self.free]))
+        return free_norm(self._rhs, self.free)
 
     @property
     def load_norm_route(self) -> str:

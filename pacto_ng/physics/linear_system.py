@@ -28,6 +28,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from ..parallel import free_norm
 from .energy import DeclarationError
 
 
@@ -52,6 +53,8 @@ def random_fields(mech, rng):
 def _close(got, ref, tol, floor=1e-300):
     """``max |got - ref| <= tol max |ref|``, and ``got`` finite."""
     got, ref = np.asarray(got), np.asarray(ref)
+    if ref.size == 0:  # a rank without elements (pacto_ng.parallel)
+        return True
     return bool(np.all(np.isfinite(got))
                 and np.max(np.abs(got - ref)) <= tol * max(float(np.max(np.abs(ref))), floor))
 
@@ -196,8 +199,8 @@ class LinearSystem:
         with fields_restored(mech):
             for _ in range(2):
                 random_fields(mech, rng)
-                states.append((np.asarray(self.C(self._centroids)).reshape(ne, -1),
-                               np.asarray(gcf(self._centroids)).reshape(ne, -1),
+                states.append((np.asarray(self.C(self._centroids)).reshape(ne, self.C.dim),
+                               np.asarray(gcf(self._centroids)).reshape(ne, gcf.dim),
                                {n: v.copy() for n, v in self._field_values(names).items()}))
         (c1, v1, f1), (c2, v2, f2) = states
         E1 = np.asarray(modulus(f1)[0], dtype=float).copy()
@@ -295,7 +298,7 @@ class LinearSystem:
 
     def load_norm(self):
         self.assemble()
-        return float(np.linalg.norm(self.f.vec.FV().NumPy()[self.mech.free]))
+        return free_norm(self.f.vec, self.mech.free)
 
     # -- strain energy and its derivatives from C ----------------------------------------------
     def energy_gradient(self, vec, out):

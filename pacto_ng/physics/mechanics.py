@@ -50,6 +50,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..parallel import total
 from .adjoint import Adjoint
 from .body_coupling import BodyCoupling
 from .energy import EnergyTraits, traits_of
@@ -230,7 +231,7 @@ class Mechanics(Equilibrium, Adjoint):
 
             kw.update(Mixed.displacement_options(mesh, order))
         self.fes = VectorH1(mesh, order=order, **kw)
-        if np.array(list(self.fes.FreeDofs()), dtype=bool).all():
+        if total(mesh, np.count_nonzero(~np.array(list(self.fes.FreeDofs()), dtype=bool))) == 0:
             raise ValueError("the structure has no supports: add a clamp or fixed boundary")
         self.mixed = None
         self.space = self.fes  # the unknowns: the displacement, or (u, ϑ, p̃) (mixed.py)

@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..params import InputError
+from ..parallel import free_norm
 from ..settings import Settings, setting
 from .solvers import DIRECT_MAX_DOFS_3D, SOLVERS
 
@@ -103,11 +104,6 @@ class NewtonResult:
     ramp_first: float | None = None  # first accepted increment of a ramp from zero (fraction)
 
 
-def _norm_free(vec, free):
-    a = vec.FV().NumPy()
-    return float(np.linalg.norm(a[free]))
-
-
 def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
     """Newton iterations at a fixed load factor.  Returns (converged, iterations, reason, res).
 
@@ -121,7 +117,7 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
     # assembled K); the residuals that decide convergence are always problem.residual
     first = getattr(problem, "predictor_residual", None) if linear else None
     (first or problem.residual)(u, r, load)
-    res = _norm_free(r, problem.free)
+    res = free_norm(r, problem.free)
     if not np.isfinite(res):
         return False, 0, "non-finite residual at the start of the step", res
     tol = s.rtol * ref
@@ -141,7 +137,7 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
             trial.data = u - alpha * du
             if problem.admissible(trial):
                 problem.residual(trial, r, load)
-                new = _norm_free(r, problem.free)
+                new = free_norm(r, problem.free)
                 if np.isfinite(new):
                     if s.line_search == "guard" or new <= (1.0 - 1e-4 * alpha) * res:
                         break

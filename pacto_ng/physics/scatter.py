@@ -28,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..parallel import distributed
+
 
 #: above this many colours the element matrices come element by element (module docstring)
 MAX_COLOURS = 16
@@ -103,12 +105,15 @@ class ElementMatrices:
     @classmethod
     def build(cls, form, fes, set_coefficients, nterms, *, volume=None,
               max_entries=20_000_000, tol=1e-12, seed=8642):
-        """The element matrices of ``form`` (None above ``max_entries``).  ``volume``: the
+        """The element matrices of ``form`` (None above ``max_entries``, and on a distributed
+        mesh, :mod:`pacto_ng.parallel`).  ``volume``: the
         form's integrators over the volume elements, those whose element matrices carry the
         coefficients (None: all of them); used when the colouring has more than
         :data:`MAX_COLOURS` colours."""
         mesh = fes.mesh
         ne = mesh.ne
+        if distributed(mesh):  # each rank would colour and assemble its part differently
+            return None
         dofs, owners, nmax = element_dofs(fes)
         if nterms * ne * nmax * nmax > max_entries:
             return None

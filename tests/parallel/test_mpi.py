@@ -1,0 +1,100 @@
+"""The chain on an MPI-distributed mesh equals the serial chain (pacto_ng.parallel).
+
+Runs ``mpirun`` on tests/parallel/mpi_chain.py; skipped where mpi4py or mpirun is missing
+(README: the ``mpi`` extra and the system's MPI)."""
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pacto_ng.case import build_problem, get_case
+
+pytest.importorskip("mpi4py")
+MPIRUN = shutil.which("mpirun")
+pytestmark = pytest.mark.skipif(MPIRUN is None, reason="no mpirun on this machine")
+SCRIPT = Path(__file__).with_name("mpi_chain.py")
+
+
+def mpirun(ranks, *args):
+    """``python3 -m mpi4py ARGS`` on ``ranks`` ranks (an uncaught error stops them all)."""
+    cmd = [MPIRUN, "-n", str(ranks), "--oversubscribe"]
+    if os.geteuid() == 0:
+        cmd.append("--allow-run-as-root")
+    env = dict(os.environ, OMPI_MCA_mpi_yield_when_idle="1", PACTO_THREADS="1")
+    done = subprocess.run(cmd + [sys.executable, "-m", "mpi4py", *map(str, args)],
+                          capture_output=True, text=True, timeout=600, env=env)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-4000:]
+
+
+@pytest.mark.parametrize("name, values", [
+    ("cantilever-3d", {"maxh": 0.06}),
+    ("cantilever-3d", {"maxh": 0.06, "model": "neohookean"}),
+    ("pneunet-3d", {"maxh": 0.006}),
+    ("pneunet-3d", {"maxh": 0.006, "model": "neohookean"}),
+    ("pneunet-3d", {"maxh": 0.006, "model": "neohookean", "load_type": "follower",
+                    "solver": "iterative"}),
+])
+def test_distributed_chain_equals_serial(tmp_path, name, values):
+    """Objective, volume constraint and their gradients at a random design: three ranks (two
+    holding elements) against the serial chain, to 1e-10 relative."""
+    case = get_case(name)
+    params = case.parameters(values)
+    serial = build_problem(case, params)
+    x = np.random.default_rng(3).uniform(0.2, 1.0, serial.n_design * serial.n_design_fields)
+    f0, f, df0, df = serial.evaluate(x)
+    (tmp_path / "params.json").write_text(json.dumps(values))
+    np.save(tmp_path / "x.npy", x)
+    mpirun(3, SCRIPT, name, tmp_path / "params.json", tmp_path / "x.npy", tmp_path / "out.npz")
+    got = np.load(tmp_path / "out.npz")
+    assert got["f0"] == pytest.approx(f0, rel=1e-10)
+    assert np.allclose(got["f"], f, rtol=1e-10, atol=1e-12)
+    assert np.abs(got["df0"] - df0).max() <= 1e-10 * np.abs(df0).max()
+    for g, ref in zip(got["df"], df):
+        assert np.abs(g - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+def pacto(ranks, *args):
+    """``pacto ARGS`` serially (ranks 0) or under mpirun."""
+    if ranks == 0:
+        done = subprocess.run([sys.executable, "-m", "pacto_ng.cli", *map(str, args)],
+                              capture_output=True, text=True, timeout=600,
+                              env=dict(os.environ, PACTO_THREADS="1"))
+        assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-4000:]
+        return
+    mpirun(ranks, "-m", "pacto_ng.cli", *args)
+
+
+def objectives(folder):
+    with open(folder / "history.csv") as fh:
+        return np.array([float(r["objective"]) for r in csv.DictReader(fh)])
+
+
+RUN = ("cantilever-3d", "--maxh", "0.06", "--quiet")
+
+
+def test_mpi_run_and_resume_across_rank_counts(tmp_path):
+    """``mpirun -n 3 pacto run`` (two ranks holding elements) gives the serial run's objective
+    history to 1e-8; a run of 3 iterations on 3 ranks resumed serially, and one of 3 serial
+    iterations resumed on 3 ranks, end with the uninterrupted run's design."""
+    serial, dist = tmp_path / "serial", tmp_path / "dist"
+    pacto(0, "run", *RUN, "--iterations", "6", "--out", serial)
+    pacto(3, "run", *RUN, "--iterations", "6", "--out", dist)
+    ref = objectives(serial)
+    assert len(ref) == 6
+    assert np.allclose(objectives(dist), ref, rtol=1e-8, atol=0)
+    summary = json.loads((dist / "summary.json").read_text())
+    assert summary["mpi"]["ranks"] == 3 and sum(summary["mpi"]["elements_per_rank"]) == \
+        summary["mesh"]["elements"]
+    x_ref = np.load(serial / "checkpoint.npz")["x"]
+    for first, then, name in ((3, 0, "d2s"), (0, 3, "s2d")):
+        out = tmp_path / name
+        pacto(first, "run", *RUN, "--iterations", "3", "--out", out)
+        pacto(then, "resume", out, "--iterations", "6")
+        assert np.allclose(objectives(out), ref, rtol=1e-8, atol=0)
+        assert np.allclose(np.load(out / "checkpoint.npz")["x"], x_ref, rtol=0, atol=1e-8)
