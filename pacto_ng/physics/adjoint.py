@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..parallel import distributed
+from ..parallel import total
 from .sensitivities import FieldSensitivities
 
 
@@ -69,20 +69,21 @@ class Adjoint:
         Self-adjoint shortcut: for a linear problem with design-independent loads, when
         ``dJ/du = c f`` (compliance) the adjoint is ``λ = (c / s) u`` with no solve at all
         (``K u = s f``).  ``adjoint_solves_skipped`` counts the shortcuts, ``adjoint_solves``
-        the solves.  On a distributed mesh the adjoint is always solved (a distributed vector's
-        local part does not tell whether the whole is a multiple of ``f``).
+        the solves.  On a distributed mesh the test is made on every rank's part (both vectors
+        are assembled from the same element contributions, so ``dJ/du = c f`` holds part by part
+        or not at all) with ``c`` from the sums over the ranks.
         """
         lam = self.gfx.vec.CreateVector()
         f = self._f_unit
         if (self.self_adjoint_shortcut and self.linear and self._fixed_loads and self.symmetric
-                and f is not None and self.target != 0 and not distributed(self.mesh)):
+                and f is not None and self.target != 0):
             g = dJdu.FV().NumPy()
-            ff = float(f @ f)
-            c = float(g[self.free] @ f[self.free]) / ff if ff > 0 else 0.0
-            resid = g.copy()
-            resid[self.free] -= c * f[self.free]
-            resid[~self.free] = 0.0
-            if ff > 0 and float(resid @ resid) <= 1e-24 * max(float(g[self.free] @ g[self.free]), 1e-300):
+            gf, ff = g[self.free], f[self.free]
+            f2 = total(self.mesh, ff @ ff)
+            c = total(self.mesh, gf @ ff) / f2 if f2 > 0 else 0.0
+            resid = gf - c * ff
+            if f2 > 0 and total(self.mesh, resid @ resid) <= 1e-24 * max(
+                    total(self.mesh, gf @ gf), 1e-300):
                 lam.data = (c / self.target) * self.gfx.vec
                 self.adjoint_solves_skipped += 1
                 return lam
