@@ -2,9 +2,9 @@
 
 Every rank computes the summary's figures together (reductions over the ranks); rank 0 writes
 history.csv, summary.json and design.vtu: the design variables ``x`` and the densities ρ̄
-gathered per element onto the serial mesh it meshed, in the serial order.  Not yet written on a
-distributed mesh: the displacement and pressure fields, the strain and stress fields and the
-pictures of :func:`pacto_ng.outputs.write_outputs` (``pacto evaluate RUN`` of the run's
+gathered per element, and the displacement ``u`` and the pressure ``p`` at the vertices, onto
+the serial mesh it meshed.  Not yet written on a distributed mesh: the strain and stress fields
+and the pictures of :func:`pacto_ng.outputs.write_outputs` (``pacto evaluate RUN`` of the run's
 checkpoint, serially, writes them).
 """
 from __future__ import annotations
@@ -48,22 +48,50 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
     xs = None
     if problem.n_design_fields == 1:
         xs = numbering.gather(problem.field.full(problem.design_numbering.local(x)))
+    mech, points = problem.mech, {}
+    points["u"] = _vertex_field(numbering, problem.mesh, mech.gfu, problem.mesh.dim)
+    if problem.pressure_block is not None:
+        points["p"] = _vertex_field(numbering, problem.mesh, problem.pressure_block.gfp, 1)
     if not write:
         return summ
     write_history(path / "history.csv", history, problem)
-    _write_vtu(path / "design.vtu", numbering, {"rho_bar": rho, "x": xs})
+    _write_vtu(path / "design.vtu", numbering, {"rho_bar": rho, "x": xs}, points)
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ
 
 
-def _write_vtu(target: Path, numbering, fields: dict) -> None:
-    """The serial mesh with element fields (meshio; written atomically)."""
+def _vertex_field(numbering, mesh, gf, comps: int) -> np.ndarray | None:
+    """The values of the H1 field ``gf`` (``comps`` components) at the serial mesh's vertices,
+    on rank 0 (None on the others): every rank sends its vertices' coordinates and values (a
+    cumulated field: a shared vertex has one value), rank 0 places them by coordinates."""
+    from ngsolve import VERTEX, NodeId
+    from scipy.spatial import cKDTree
+
+    vec, space = gf.vec.FV().NumPy(), gf.space
+    pts = np.array([v.point for v in mesh.vertices], dtype=float).reshape(-1, mesh.dim)
+    vals = np.array([vec[list(space.GetDofNrs(NodeId(VERTEX, i)))[:comps]]
+                     for i in range(mesh.nv)], dtype=float).reshape(-1, comps)
+    parts = numbering.comm.gather((pts, vals), root=0)
+    if numbering.comm.rank != 0:
+        return None
+    serial = numbering.serial_points
+    out = np.full((len(serial), comps), np.nan)
+    tree = cKDTree(serial)
+    for p, v in parts:
+        if len(p):
+            out[tree.query(p)[1]] = v
+    return out
+
+
+def _write_vtu(target: Path, numbering, fields: dict, points: dict) -> None:
+    """The serial mesh with element and vertex fields (meshio; written atomically)."""
     import meshio
 
     cells = numbering.serial_cells
     kind = {(3, 4): "tetra", (3, 8): "hexahedron", (2, 3): "triangle",
             (2, 4): "quad"}[(numbering.serial_points.shape[1], cells.shape[1])]
     data = {name: [arr] for name, arr in fields.items() if arr is not None}
-    mesh = meshio.Mesh(numbering.serial_points, [(kind, cells)], cell_data=data)
+    mesh = meshio.Mesh(numbering.serial_points, [(kind, cells)], cell_data=data,
+                       point_data={name: arr for name, arr in points.items()})
     with atomic_path(target) as tmp:
         meshio.write(str(tmp), mesh, file_format="vtu")

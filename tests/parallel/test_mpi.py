@@ -10,8 +10,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import meshio
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from pacto_ng.case import build_problem, get_case
 
@@ -80,7 +82,7 @@ RUN = ("cantilever-3d", "--maxh", "0.06", "--quiet")
 
 def test_mpi_run_and_resume_across_rank_counts(tmp_path):
     """``mpirun -n 3 pacto run`` (two ranks holding elements) gives the serial run's objective
-    history to 1e-8; a run of 3 iterations on 3 ranks resumed serially, and one of 3 serial
+    history to 1e-8, and its design.vtu the serial run's displacement; a run of 3 iterations on 3 ranks resumed serially, and one of 3 serial
     iterations resumed on 3 ranks, end with the uninterrupted run's design."""
     serial, dist = tmp_path / "serial", tmp_path / "dist"
     pacto(0, "run", *RUN, "--iterations", "6", "--out", serial)
@@ -91,6 +93,13 @@ def test_mpi_run_and_resume_across_rank_counts(tmp_path):
     summary = json.loads((dist / "summary.json").read_text())
     assert summary["mpi"]["ranks"] == 3 and sum(summary["mpi"]["elements_per_rank"]) == \
         summary["mesh"]["elements"]
+    # design.vtu: ρ̄ per element and u at the vertices of the serial mesh, the serial run's
+    got, ref_vtu = meshio.read(dist / "design.vtu"), meshio.read(serial / "design.vtu")
+    dist_pts, at = cKDTree(ref_vtu.points).query(got.points)
+    assert dist_pts.max() < 1e-12
+    u_ref = ref_vtu.point_data["u"]
+    assert np.abs(got.point_data["u"] - u_ref[at]).max() <= 1e-8 * np.abs(u_ref).max()
+    assert len(got.cell_data["rho_bar"][0]) == summary["mesh"]["elements"]
     x_ref = np.load(serial / "checkpoint.npz")["x"]
     for first, then, name in ((3, 0, "d2s"), (0, 3, "s2d")):
         out = tmp_path / name
