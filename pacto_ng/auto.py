@@ -37,26 +37,30 @@ def strain_field(mech):
 def material_strain(mech, q: float = 0.99) -> tuple[float, float]:
     """``(s, largest)``: the strain ``s`` that a fraction ``q`` of the material stays below (the
     measure ``ρ̄ dx`` of the first design field, at the mechanics' quadrature points), and the
-    largest strain at a point with ρ̄ >= 0.5 (0 if there is none)."""
+    largest strain at a point with ρ̄ >= 0.5 (0 if there is none).  On a distributed mesh
+    over every rank's part (:mod:`pacto_ng.parallel`)."""
     from ngsolve import VOL, IfPos, Integrate, Parameter
 
+    from .parallel import largest as rank_max
+    from .parallel import total, union
+
+    mesh = mech.mesh
     eps, rho = strain_field(mech), mech.fields[0].gf
-    pts = mech.mesh.MapToAllElements(mech.rules, VOL)
+    pts = mesh.MapToAllElements(mech.rules, VOL)
     e_pts = np.asarray(eps(pts)).ravel()
     r_pts = np.asarray(rho(pts)).ravel()
-    solid = e_pts[r_pts >= 0.5]
-    largest = float(solid.max()) if solid.size else 0.0
-    total = Integrate(rho * mech.DX, mech.mesh)
-    if not total > 0:
+    largest = max(rank_max(mesh, e_pts[r_pts >= 0.5]), 0.0)
+    material = total(mesh, Integrate(rho * mech.DX, mesh))
+    if not material > 0:
         return 0.0, largest
     t = Parameter(0.0)
     above = rho * IfPos(eps - t, 1.0, 0.0) * mech.DX
 
     def share_above(value):
         t.Set(value)
-        return Integrate(above, mech.mesh) / total
+        return total(mesh, Integrate(above, mesh)) / material
 
-    cand = np.unique(e_pts[r_pts > 0])  # the answer is one of the points' strains
+    cand = union(mesh, e_pts[r_pts > 0])  # the answer is one of the points' strains
     lo, hi = 0, len(cand) - 1
     while lo < hi:  # the smallest candidate with at most 1 - q of the material above it
         mid = (lo + hi) // 2
@@ -97,25 +101,27 @@ def choose_ramp(strain: float, schedule, iterations: int) -> tuple[int, str]:
     return n, why
 
 
-def first_linear_strain(case, params) -> tuple[float, float]:
-    """:func:`material_strain` of one linear analysis of the initial design at the full load."""
+def first_linear_strain(case, params, comm=None) -> tuple[float, float]:
+    """:func:`material_strain` of one linear analysis of the initial design at the full load
+    (on the ranks of ``comm``, an mpi4py communicator, as the run itself)."""
     from .case import build_problem
     from .runner import initial_design
 
     lin = params.replace(model="linear", load_ramp=0, formulation="displacement")
-    problem = build_problem(case, lin)
+    problem = build_problem(case, lin, comm=comm)
     problem.apply_schedule(*lin.schedule.schedule().values(0))
     problem.evaluate(initial_design(problem), gradients=False)
     return material_strain(problem.mech)
 
 
-def choose(case, params):
+def choose(case, params, comm=None):
     """Resolve ``model=auto`` and ``load_ramp=-1`` from one linear analysis of the initial
-    design at the full load (none where only a linear run's ramp is to be chosen).  Returns
-    ``(params, model_choice, ramp_choice)``; a record is None where nothing was chosen."""
+    design at the full load (none where only a linear run's ramp is to be chosen), on the
+    ranks of ``comm`` (an mpi4py communicator; None: serial).  Returns ``(params,
+    model_choice, ramp_choice)``; a record is None where nothing was chosen."""
     model_choice = ramp_choice = None
     if params.model == "auto" or (params.load_ramp < 0 and params.model != "linear"):
-        strain, largest = first_linear_strain(case, params)
+        strain, largest = first_linear_strain(case, params, comm)
     if params.model == "auto":
         chosen = "linear" if strain < STRAIN_THRESHOLD else "wang"
         reason = (f"Green-Lagrange strain of the first linear analysis (99th percentile of the "

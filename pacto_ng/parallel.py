@@ -216,3 +216,11 @@ class DesignNumbering:
                                               np.asarray(g, dtype=float).reshape(fields, -1))):
             out[:, pos] = part
         return out.ravel()
+
+
+def union(mesh, values: np.ndarray) -> np.ndarray:
+    """The sorted distinct values of every rank's local ``values``, on every rank."""
+    values = np.unique(np.asarray(values, dtype=float))
+    if not distributed(mesh):
+        return values
+    return np.unique(np.concatenate(mesh.comm.mpi4py.allgather(values)))

@@ -259,7 +259,9 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     if params.model == "auto" or params.load_ramp < 0:
         from .auto import choose
 
-        params, model_choice, ramp_choice = choose(case, params)
+        from .parallel import world
+
+        params, model_choice, ramp_choice = choose(case, params, comm=world())
         if not quiet and model_choice is not None:
             print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
         if not quiet and ramp_choice is not None and ramp_choice["chosen"] > 0:
