@@ -34,11 +34,14 @@ def mpirun(ranks, *args):
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-4000:]
 
 
+SLOW = pytest.mark.slow  # covered by default by the follower case's Darcy and Neo-Hookean
+
+
 @pytest.mark.parametrize("name, values", [
     ("cantilever-3d", {"maxh": 0.06}),
-    ("cantilever-3d", {"maxh": 0.06, "model": "neohookean"}),
-    ("pneunet-3d", {"maxh": 0.006}),
-    ("pneunet-3d", {"maxh": 0.006, "model": "neohookean"}),
+    pytest.param("cantilever-3d", {"maxh": 0.06, "model": "neohookean"}, marks=SLOW),
+    pytest.param("pneunet-3d", {"maxh": 0.006}, marks=SLOW),
+    pytest.param("pneunet-3d", {"maxh": 0.006, "model": "neohookean"}, marks=SLOW),
     ("pneunet-3d", {"maxh": 0.006, "model": "neohookean", "load_type": "follower",
                     "solver": "iterative"}),
 ])
