@@ -30,7 +30,7 @@ def read_density(path: str, problem: Problem, *, filtered: bool = False) -> tupl
       ``--filtered`` (passive elements' values are ignored then);
     * ``checkpoint.npz`` of a run: its design variables ``x`` (one per *design* element, two
       fields stacked for two materials), always filtered and projected, as the run did (with
-      the penalty and β of the run's last iteration: :func:`checkpoint_iteration`);
+      the penalty and β of the run's last iteration: :func:`checkpoint_schedule`);
     * ``design.vtu`` of a run: its element field ``rho_bar`` (``x`` with ``--filtered``).
     """
     p = problem.params
@@ -104,11 +104,14 @@ def _checkpoint_design(fp: Path, problem: Problem) -> np.ndarray:
     return x
 
 
-def checkpoint_iteration(fp: str | os.PathLike) -> int:
-    """The iteration count ``k`` a checkpoint was written at (its schedule is that of k - 1)."""
+def checkpoint_schedule(fp: str | os.PathLike, schedule) -> tuple[float, float]:
+    """The penalty and β of the last iteration of the run a checkpoint was written by (the
+    iteration ``k - 1`` of its count ``k``, whose β its history may decide)."""
     try:
         with np.load(fp, allow_pickle=False) as data:
-            return int(data["k"])
+            k = int(data["k"])
+            history = json.loads(str(data["history"]))
+        return schedule.values(max(k - 1, 0), history)[:2]
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"--density: '{fp}' is not a readable checkpoint ({type(err).__name__}: "
                          f"{err})") from None
@@ -159,10 +162,9 @@ def _evaluate(case: Case, params: Parameters, density: str, path: Path, *, filte
                          "checkpoint.npz")
     sched = params.schedule.schedule()
     if Path(density).suffix.lower() == ".npz":  # the run's own last penalty and β
-        penal, beta, _ = sched.values(max(checkpoint_iteration(density) - 1, 0))
-        problem.apply_schedule(penal, beta, 1.0)
+        problem.apply_schedule(*checkpoint_schedule(density, sched), 1.0)
     else:
-        problem.apply_schedule(params.penal, sched.beta(10 ** 6), 1.0)
+        problem.apply_schedule(*sched.final_values())
     x = None
     failure = None
     try:

@@ -12,7 +12,7 @@ part              settings                                    defined in
                   eta, seed_density, init_design
 ``schedule``      penal, penal_start, penal_step,             :mod:`pacto_ng.optimize.schedules`
                   penal_every, beta, beta_max, beta_every,
-                  load_ramp
+                  beta_settle, load_ramp
 ``loads``         load, k_out                                 :mod:`pacto_ng.physics.loads`
 ``darcy``         Kv, Ks, eta_k, beta_k, eta_h, beta_h, r,    :mod:`pacto_ng.physics.darcy`
                   delta_s, p_out, load_type, follower_wang,

@@ -324,7 +324,7 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
         final_x = state.x
     # final analysis of the design that is reported (the schedule's last values)
     k_last = max(state.k - 1, 0)
-    problem.apply_schedule(*params.schedule.schedule().values(k_last))
+    problem.apply_schedule(*params.schedule.schedule().values(k_last, state.history))
     # the last iteration's equilibrium (a warm start)
     warm_last, res_last = problem.mech.state, problem.mech.result
     try:

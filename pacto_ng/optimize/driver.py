@@ -82,7 +82,7 @@ def best_iterate(history: list, schedule: Schedule, final_objective: float) -> d
     """The iteration with the lowest objective among those of the final problem (the final
     penalty and β, the full load) that met every constraint (<= 1e-3), if it is lower than
     the reported design's ``final_objective`` by more than 1e-6 relative; else None."""
-    final = schedule.values(10 ** 9)
+    final = schedule.final_values()
     rows = [r for r in history
             if (r["penal"], r["beta"]) == final[:2] and r["load"] >= 1.0
             and r["constraint"] <= 1e-3]
@@ -153,7 +153,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         k = state.k
         t0 = time.perf_counter()
         # ---- continuation schedules ------------------------------------------------------
-        penal, beta, scheduled = schedule.values(k)
+        penal, beta, scheduled = schedule.values(k, state.history)
         load = min(scheduled, state.load_cap)
         problem.apply_schedule(penal, beta, load)
         if start_iteration is not None:
@@ -196,10 +196,12 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         if state.scale is None:  # fix the objective normalisation once (kept on resume)
             state.scale = 10.0 / max(abs(f0), 1e-300)
         # ---- design update (MMA / GCMMA with move limit) ------------------------------------
-        if (method == "mma-gcmma" and opt.method != "gcmma" and schedule.settled(k)
-                and load >= 1.0):  # the switch once (a resumed run scans its history again)
+        if (method == "mma-gcmma" and opt.method != "gcmma"
+                and schedule.settled(k, history=state.history) and load >= 1.0):
+            # the switch once (a resumed run scans its history again)
             final = [r["objective"] for r in state.history
-                     if schedule.settled(r["iteration"]) and r["load"] >= 1.0] + [f0]
+                     if schedule.settled(r["iteration"], history=state.history)
+                     and r["load"] >= 1.0] + [f0]
             if zigzag_at(final) is not None:
                 opt.method = "gcmma"
         xnew = opt.update(k + 1, x, np.asarray(F0) * state.scale, dF0 * state.scale, f, df,
@@ -218,7 +220,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         state.x, state.opt_state, state.k = x.copy(), opt.state, k + 1
         # ---- convergence: only once every schedule has settled ------------------------------
         small = change < tol or _stalled(state.history, obj_tol)
-        settled = schedule.settled(k, window=5) and load >= 1.0
+        settled = schedule.settled(k, window=5, history=state.history) and load >= 1.0
         state.stable = state.stable + 1 if (small and settled) else 0
         if on_iteration is not None:
             on_iteration(state, row)

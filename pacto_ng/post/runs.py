@@ -27,6 +27,7 @@ class Run:
     x: np.ndarray
     design: str  # "x" or "last_good"
     k: int  # optimisation iterations done
+    history: list  # one row per iteration (the values the schedule gave it among them)
 
     @property
     def load(self) -> float:
@@ -58,10 +59,11 @@ def load_run(folder, command: str, case=None) -> Run:
             design = "last_good" if use_last_good else "x"
             x = np.asarray(data[design], dtype=float).copy()
             k = int(data["k"])
+            history = json.loads(str(data["history"]))
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
         raise InputError(f"{command}: '{folder}' has no readable checkpoint.npz (the final "
                          f"design)") from None
-    return Run(path, case, params, summary, x, design, k)
+    return Run(path, case, params, summary, x, design, k, history)
 
 
 def export_destination(run: Run, out, fmt: str) -> Path:
@@ -87,7 +89,8 @@ def rebuild(run: Run):
     if run.x.size != problem.field.n * problem.n_design_fields:
         raise InputError(f"the design in '{run.path}' has {run.x.size} values, the rebuilt "
                          f"problem {problem.field.n * problem.n_design_fields} (mesh changed?)")
-    problem.apply_schedule(*run.params.schedule.schedule().values(max(run.k - 1, 0)))
+    problem.apply_schedule(*run.params.schedule.schedule().values(max(run.k - 1, 0),
+                                                                  run.history))
     problem.failure = None
     try:
         problem.chain.forward(x=run.x)
