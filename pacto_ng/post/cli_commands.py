@@ -457,7 +457,7 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
     run = load_run(folder, "export")
     if is_3d(run):
         return export_run_3d(run, fmt, out=out, threshold_value=threshold_value, quiet=quiet,
-                             units=units, mirror=mirror)
+                             units=units, mirror=mirror, threshold2=threshold2)
     prev = run.path / "analysis" / "analysis.json"
     if prev.exists() and (threshold_value is None or maxh is None or threshold2 is None):
         try:

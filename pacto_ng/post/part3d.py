@@ -95,17 +95,27 @@ def _original_ids(grid, n):
     return np.arange(n) if ids is None else np.asarray(ids)
 
 
-def part3d(mesh, rho, threshold: float, *, clamp=(), exclude=()) -> Part3D:
+def part3d(mesh, rho, threshold: float, *, clamp=(), exclude=(), fields=None) -> Part3D:
     """The part {ρ̄ >= threshold} of the element densities ``rho`` of a 3D mesh (see the module
-    docstring).  ValueError when nothing is solid or no piece touches the clamp."""
+    docstring).  ``fields``: further element fields ``{name: values}`` (e.g. a two-material
+    design's ρ̄2), smoothed to the vertices as ρ̄ is and carried into the solid's point data
+    under their names (interpolated by the clip).  ValueError when nothing is solid or no
+    piece touches the clamp."""
     from .grid import area_weighted_nodal, cell_volumes
 
     rho = np.asarray(rho, dtype=float).ravel()
     if rho.size != mesh.ne:
         raise ValueError(f"rho has {rho.size} values but the mesh has {mesh.ne} elements")
     grid, _ = included_grid(mesh, exclude)
-    r = rho[np.asarray(grid.cell_data["cid"])]
+    cid = np.asarray(grid.cell_data["cid"])
+    r = rho[cid]
     nodal = area_weighted_nodal(grid, r, cell_volumes(grid))
+    for name, values in (fields or {}).items():
+        values = np.asarray(values, dtype=float).ravel()
+        if values.size != mesh.ne:
+            raise ValueError(f"{name} has {values.size} values but the mesh has {mesh.ne} "
+                             "elements")
+        grid.point_data[name] = area_weighted_nodal(grid, values[cid], cell_volumes(grid))
     # a vertex exactly at the threshold counts as solid (as in 2D: no zero-size cuts)
     nodal[np.abs(nodal - threshold) < 1e-9] += 1e-9
     grid.point_data["rho"] = nodal

@@ -13,9 +13,17 @@ beside the expected Δ (the density design with the optimisation's own model, as
 writes ``DIR/analysis/``: ``analysis.json``, ``analysis.png``, ``design.stl``, ``part.vtu``
 (the clipped solid) and ``remeshed.vtu`` (the tetrahedra with ``u`` of the follower state).
 
+A two-material design (mm-gripper's chain in 3D): the part is that of the total solid ρ̄1,
+as for one material (the STL is the whole part); its clipped solid is cut at the iso-surface
+of the nodal ρ̄2 (smoothed to the vertices as ρ̄1 is) at ``threshold2`` (default 0.5), the
+rule of the 2D part (:mod:`.materials`): ``stiff`` (E2) where ρ̄2 >= threshold2, ``soft`` (E1)
+elsewhere (:func:`split_materials`), so that ``--format vtk|vtu`` carries each cell's material
+and modulus.
+
 Not in 3D yet, refused in one line (exit code 2): the ``darcy`` analysis (skipped with a note
-when other kinds are asked too), ``--threshold volume``, two materials, ``--format msh``, and
-output ports on named points or edges (the 3D cases read their output on faces).
+when other kinds are asked too), ``--threshold volume``, the analysis of a two-material design,
+``--format msh``, and output ports on named points or edges (the 3D cases read their output on
+faces).
 """
 from __future__ import annotations
 
@@ -46,24 +54,70 @@ def _not_yet(what: str):
     return InputError(f"{what} is not supported for 3D runs yet")
 
 
-def part_of_run_3d(run, threshold_value: float):
+def part_of_run_3d(run, threshold_value: float, threshold2: float = 0.5):
     """``(part, problem, setup, exclude)``: the :class:`~.part3d.Part3D` of a 3D run's final
-    design at ``threshold_value``; InputError when there is none."""
+    design at ``threshold_value``; InputError when there is none.  A two-material design: the
+    part of ρ̄1, its solid cut into the materials at ρ̄2 = ``threshold2``
+    (:func:`split_materials`)."""
     from .part3d import part3d, void_regions
     from .runs import design_density, rebuild
 
     setup = run.case.make_setup(run.params)
-    if setup.materials != 1:
-        raise _not_yet("a two-material design")
     with compute():
         problem = rebuild(run)
     exclude = void_regions(problem.mesh, setup)
+    two = setup.materials == 2
     try:
         part = part3d(problem.mesh, design_density(problem), threshold_value,
-                      clamp=setup.supports.clamp, exclude=exclude)
+                      clamp=setup.supports.clamp, exclude=exclude,
+                      fields={RHO2: problem.values["rho_bar2"]} if two else None)
+        if two:
+            part.solid = split_materials(part.solid, threshold2)
     except ValueError as err:
         raise InputError(str(err)) from None
     return part, problem, setup, exclude
+
+
+#: the point data of a two-material part's solid that holds the nodal ρ̄2
+RHO2 = "rho2"
+
+
+def split_materials(solid, threshold2: float):
+    """A two-material part's clipped solid (point data :data:`RHO2`, the nodal ρ̄2) cut at the
+    iso-surface ρ̄2 = ``threshold2`` (linear along the cells' edges, as the part is cut at ρ̄1):
+    the cells where ρ̄2 >= ``threshold2`` get cell data ``material`` 2 (``stiff``, E2), the
+    others 1 (``soft``, E1), the numbers of the sorted names as in the 2D part's VTU.  The
+    volume is kept (the two pieces fill the solid); the points on the cut are merged."""
+    from .materials import MATERIALS, SOFT, STIFF
+
+    if not 0.0 < float(threshold2) < 1.0:
+        raise ValueError(f"threshold2 must lie in (0, 1), got {threshold2!r}")
+    solid = solid.copy()
+    r2 = np.asarray(solid.point_data[RHO2], dtype=float).copy()
+    # a vertex exactly at the threshold counts as stiff (moved 1e-9 above it), as part3d's ρ̄1
+    r2[np.abs(r2 - threshold2) < 1e-9] += 1e-9
+    solid.point_data[RHO2] = r2
+    number = {name: i + 1 for i, name in enumerate(MATERIALS)}
+    pieces = []
+    for name, invert in ((SOFT, True), (STIFF, False)):  # invert: the cells below the value
+        piece = solid.clip_scalar(scalars=RHO2, value=float(threshold2), invert=invert)
+        if piece.n_cells:
+            piece.cell_data["material"] = np.full(piece.n_cells, number[name], dtype=np.int64)
+            pieces.append(piece)
+    if not pieces:
+        raise ValueError("the part's solid has no cells")
+    return pieces[0] if len(pieces) == 1 else pieces[0].merge(pieces[1], merge_points=True)
+
+
+def material_volumes(solid) -> dict:
+    """``{material: m³}`` of a solid of :func:`split_materials` (every material, 0 when it has
+    no cell)."""
+    from .grid import cell_volumes
+    from .materials import MATERIALS
+
+    vol = cell_volumes(solid)
+    mat = np.asarray(solid.cell_data["material"])
+    return {name: float(vol[mat == i + 1].sum()) for i, name in enumerate(MATERIALS)}
 
 
 def part_solid(part, problem=None):
@@ -71,7 +125,12 @@ def part_solid(part, problem=None):
     point data ``rho`` (the nodal ρ̄ it is clipped at) and, given the run's ``problem``
     (rebuilt and analysed: :func:`part_of_run_3d`), the run's final state on it, in SI units:
 
-    * cell data ``rho_bar``: ρ̄ of the optimisation element the cell was clipped from;
+    * cell data ``rho_bar`` (``rho_bar1``, ``rho_bar2`` for two materials): ρ̄ of the
+      optimisation element the cell was clipped from;
+    * two materials (a solid of :func:`split_materials`): point data ``rho2`` (the nodal ρ̄2),
+      cell data ``material`` (1 ``soft``, 2 ``stiff``), ``material_soft``,
+      ``material_stiff`` (1 in that material's cells, else 0) and, given the ``problem``,
+      ``E`` (Pa: E1 or E2);
     * point data ``p`` (Pa, pressure cases) and ``u`` (m): the run's Darcy pressure and
       displacement at the points;
     * cell data of the run model's strain and stress measures
@@ -88,15 +147,28 @@ def part_solid(part, problem=None):
 
     from ..outputs import strain_stress_measures, tensor_components
 
+    from .materials import MATERIALS
+
     solid = part.solid.copy()
     cid = np.asarray(solid.cell_data["cid"])
-    for name in [n for n in solid.point_data if n != "rho"]:
+    material = solid.cell_data.get("material")
+    material = None if material is None else np.asarray(material)
+    for name in [n for n in solid.point_data if n not in ("rho", RHO2)]:
         del solid.point_data[name]
     solid.clear_cell_data()
+    if material is not None:
+        solid.cell_data["material"] = material
+        for i, name in enumerate(MATERIALS):
+            solid.cell_data[f"material_{name}"] = (material == i + 1).astype(np.int64)
     if problem is None:
         return solid, []
     mesh, vals = problem.mesh, problem.values
-    solid.cell_data["rho_bar"] = np.asarray(vals["rho_bar"], dtype=float)[cid]
+    if material is not None:
+        moduli = np.array([problem.params.E1, problem.params.E2], dtype=float)
+        solid.cell_data["E"] = moduli[material - 1]
+    for key in ("rho_bar", "rho_bar1", "rho_bar2"):
+        if key in vals:
+            solid.cell_data[key] = np.asarray(vals[key], dtype=float)[cid]
     pts = np.asarray(solid.points, dtype=float)
     mips = mesh(pts[:, 0].copy(), pts[:, 1].copy(), pts[:, 2].copy())
     if np.any(mips["nr"] < 0):
@@ -139,12 +211,14 @@ def _plural(n: int, word: str) -> str:
 
 
 def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
-                  units: str = "m", mirror: bool = True) -> int:
+                  units: str = "m", mirror: bool = True, threshold2=None) -> int:
     """``pacto export`` of a 3D run: stl (the closed, smoothed part) or vtk / vtu (the clipped
     solid with the run's final state: :func:`part_solid`), at ``threshold_value``, else the
     analysis's (``DIR/analysis/analysis.json``), else 0.5; coordinates (and u) in ``units`` (m
     or mm).  ``mirror``: the part reflected about the mesh's symmetry planes
-    (:func:`~.mirror3d.symmetry_planes`), whole; else the half or quarter as solved."""
+    (:func:`~.mirror3d.symmetry_planes`), whole; else the half or quarter as solved.  A
+    two-material design: the STL is the whole part, the VTK/VTU has each cell's material and
+    modulus, ρ̄2 thresholded at ``threshold2`` (default 0.5; :func:`split_materials`)."""
     from .export import UNITS
     from .mirror3d import is_symmetry_name, mirror_solid, mirror_surface, symmetry_planes
     from .part3d import closed_checks, write_part_stl
@@ -158,7 +232,9 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
             threshold_value = float(json.loads(prev.read_text())["settings"]["threshold"])
         except (ValueError, KeyError, TypeError):
             threshold_value = None
-    part, problem, _, _ = part_of_run_3d(run, 0.5 if threshold_value is None else threshold_value)
+    threshold2 = 0.5 if threshold2 is None else float(threshold2)
+    part, problem, setup, _ = part_of_run_3d(
+        run, 0.5 if threshold_value is None else threshold_value, threshold2)
     planes = symmetry_planes(problem.mesh) if mirror else []
     surface = mirror_surface(part.surface, planes) if planes else part.surface
     whole = f"mirrored about {_plural(len(planes), 'plane')}"
@@ -180,6 +256,10 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
                         f"{surface.volume:.6g} m³")
     elif not mirror and any(map(is_symmetry_name, problem.mesh.GetBoundaries())):
         notes.insert(0, "the part as solved (--no-mirror)")
+    if setup.materials == 2:
+        vols = material_volumes(part.solid)
+        notes.append("materials " + ", ".join(f"{k} {v:.6g} m³" for k, v in vols.items())
+                     + f" as solved (ρ̄2 at {threshold2:g})")
     chk = closed_checks(surface)
     _say(quiet, f"{dst}: {run.case.name} part (3D), threshold {part.threshold:g}, volume "
                 f"{part.volume:.6g} m³ as solved (thresholded, kept pieces "
@@ -218,6 +298,8 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
     if not kinds3:
         raise _not_yet("the darcy analysis")
     setup = run.case.make_setup(run.params)
+    if setup.materials != 1:
+        raise _not_yet("the analysis of a two-material design")
     if setup.pressure is None:
         raise InputError(f"analyse: case '{run.case.name}' has no pressure load; the re-analysis "
                          f"applies to pressure cases only ('pacto export {run.path}' writes its "
