@@ -283,6 +283,26 @@ def _abort_other_ranks(code: int) -> None:
         comm.Abort(code)
 
 
+#: the commands that run on the ranks of an MPI launch (the others run on one process)
+DISTRIBUTED = ("run", "resume", "cases")
+
+
+def _refused_under_mpi(command: str) -> bool:
+    """Under mpirun, a command that runs on one process is refused: one line from rank 0,
+    exit code 2 on every rank (without it each rank would run it alone, into one folder)."""
+    from .parallel import world
+
+    comm = world()
+    if comm is None:
+        return False
+    if comm.rank == 0:
+        print(f"pacto: error: {command}: runs on one process, not under mpirun (only 'run' "
+              f"and 'resume' are distributed): start it as 'pacto {command} ...' without "
+              "mpirun", file=sys.stderr)
+    comm.Barrier()
+    return True
+
+
 def main(argv=None) -> int:
     import signal
 
@@ -316,6 +336,8 @@ def _main(argv) -> int:
     args = ap.parse_args(argv)
     if args.command is None:
         ap.print_help()
+        return 2
+    if args.command not in DISTRIBUTED and _refused_under_mpi(args.command):
         return 2
     if args.command == "cases":
         for c in available_cases():

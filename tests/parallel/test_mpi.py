@@ -23,15 +23,17 @@ pytestmark = pytest.mark.skipif(MPIRUN is None, reason="no mpirun on this machin
 SCRIPT = Path(__file__).with_name("mpi_chain.py")
 
 
-def mpirun(ranks, *args):
-    """``python3 -m mpi4py ARGS`` on ``ranks`` ranks (an uncaught error stops them all)."""
+def mpirun(ranks, *args, code=0):
+    """``python3 -m mpi4py ARGS`` on ``ranks`` ranks (an uncaught error stops them all); its
+    exit code must be ``code``."""
     cmd = [MPIRUN, "-n", str(ranks), "--oversubscribe"]
     if os.geteuid() == 0:
         cmd.append("--allow-run-as-root")
     env = dict(os.environ, OMPI_MCA_mpi_yield_when_idle="1", PACTO_THREADS="1")
     done = subprocess.run(cmd + [sys.executable, "-m", "mpi4py", *map(str, args)],
                           capture_output=True, text=True, timeout=600, env=env)
-    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-4000:]
+    assert done.returncode == code, done.stdout[-2000:] + done.stderr[-4000:]
+    return done
 
 
 SLOW = pytest.mark.slow  # covered by default by the follower case's Darcy and Neo-Hookean
@@ -126,3 +128,16 @@ def test_mpi_nonlinear_run_chooses_its_load_ramp_as_the_serial_run(tmp_path):
     assert ref["chosen"] > 0 and got["chosen"] == ref["chosen"]
     assert got["strain_p99"] == pytest.approx(ref["strain_p99"], rel=1e-9)
     assert np.allclose(objectives(dist), objectives(serial), rtol=1e-8, atol=0)
+
+
+def test_commands_of_one_process_are_refused_under_mpirun(tmp_path):
+    """evaluate, export, check-gradients ... under mpirun: one line from rank 0, exit code 2,
+    nothing written (each rank would run the command alone, into the same folder)."""
+    out = tmp_path / "ev"
+    done = mpirun(2, "-m", "pacto_ng.cli", "evaluate", *RUN, "--density",
+                  tmp_path / "none.npz", "--out", out, code=2)
+    errors = [ln for ln in done.stderr.splitlines() if ln.startswith("pacto:")]
+    assert errors == ["pacto: error: evaluate: runs on one process, not under mpirun (only "
+                      "'run' and 'resume' are distributed): start it as 'pacto evaluate ...' "
+                      "without mpirun"]
+    assert "Traceback" not in done.stderr and not out.exists()
