@@ -51,7 +51,7 @@ def study(case_name, model, load, density, sets=(), nelx=None, nely=None, filter
     problem = build_problem(case, params)
     arr, filtered = read_density(density, problem, filtered=filtered)
     sched = params.schedule.schedule()
-    problem.apply_schedule(params.penal, sched.beta(10 ** 6), 1.0)
+    problem.apply_schedule(*sched.final_values())
     mech = problem.mech
     mesh = mech.mesh
     et = QUAD if params.nelx > 0 else TRIG
