@@ -202,7 +202,8 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None,
     run = load_run(folder, "analyse")
     if is_3d(run):
         return analyse_run_3d(run, pressures=pressures, threshold_value=threshold_value,
-                              maxh=maxh, order=order, kinds=kinds, quiet=quiet)
+                              maxh=maxh, order=order, kinds=kinds, threshold2=threshold2,
+                              quiet=quiet)
     setup = run.case.make_setup(run.params)
     if setup.pressure is None:
         raise InputError(f"analyse: case '{run.case.name}' has no pressure load; the re-analysis "

@@ -149,7 +149,8 @@ def assign_elementwise(ngm, stiff: StiffRegion, source) -> None:
 
 
 def material_areas(mesh) -> dict:
-    """Area of every material of a 2D NGSolve mesh (``{name: m²}``)."""
+    """Area (2D) or volume (3D) of every material of an NGSolve mesh (``{name: m²}`` or
+    ``m³``)."""
     import ngsolve
 
     return {m: float(ngsolve.Integrate(mesh.MaterialCF({m: 1.0}, default=0.0), mesh))

@@ -18,11 +18,13 @@ as for one material (the STL is the whole part); its clipped solid is cut at the
 of the nodal ρ̄2 (smoothed to the vertices as ρ̄1 is) at ``threshold2`` (default 0.5), the
 rule of the 2D part (:mod:`.materials`): ``stiff`` (E2) where ρ̄2 >= threshold2, ``soft`` (E1)
 elsewhere (:func:`split_materials`), so that ``--format vtk|vtu`` carries each cell's material
-and modulus.
+and modulus.  ``analyse`` gives each remeshed tetrahedron the material of the nodal ρ̄2 at its
+centroid (:func:`stiff_sampler`; the interface a staircase of tetrahedron faces, the 2D
+part's element-wise mode) and analyses each with its modulus; analysis.json's ``materials``
+holds each material's volume in the remesh and in the part cut at the iso-surface.
 
 Not in 3D yet, refused in one line (exit code 2): the ``darcy`` analysis (skipped with a note
-when other kinds are asked too), ``--threshold volume``, the analysis of a two-material design,
-``--format msh``, and output ports on named points or edges (the 3D cases read their output on
+when other kinds are asked too), ``--threshold volume``, ``--format msh``, and output ports on named points or edges (the 3D cases read their output on
 faces).
 """
 from __future__ import annotations
@@ -270,23 +272,61 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
     return 0
 
 
-def _remeshed_vtu(path, mesh, gfu) -> None:
-    """The part's tetrahedra with point data ``u`` (at the vertices)."""
+def _remeshed_vtu(path, mesh, gfu, E=None) -> None:
+    """The part's tetrahedra with point data ``u`` (at the vertices); for a part of several
+    materials (``E`` a dict ``{material: E}``) cell data ``material`` (1 ``soft``, 2 ``stiff``)
+    and ``E``."""
     import meshio
 
     pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
-    tets = np.asarray(mesh.ngmesh.Elements3D().NumPy()["nodes"], dtype=np.int64)[:, :4] - 1
+    els = mesh.ngmesh.Elements3D().NumPy()
+    tets = np.asarray(els["nodes"], dtype=np.int64)[:, :4] - 1
     u = np.asarray(gfu(mesh(pts[:, 0].copy(), pts[:, 1].copy(), pts[:, 2].copy())))
-    m = meshio.Mesh(pts, [("tetra", tets)], point_data={"u": u.reshape(-1, 3)})
+    cells = {}
+    if isinstance(E, dict):
+        from .materials import MATERIALS
+
+        names = np.array(mesh.GetMaterials(), dtype=object)[np.asarray(els["index"]) - 1]
+        cells = {"material": [np.array([MATERIALS.index(n) + 1 for n in names])],
+                 "E": [np.array([E[n] for n in names], dtype=float)]}
+    m = meshio.Mesh(pts, [("tetra", tets)], point_data={"u": u.reshape(-1, 3)},
+                    cell_data=cells)
     with atomic_path(path) as tmp:
         m.write(str(tmp), file_format="vtu")
 
 
-def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
+def stiff_sampler(solid, threshold2: float):
+    """A two-material part's rule for the remesh (:func:`~.reanalysis3d.remesh_part`'s
+    ``stiff_at``): points -> whether the nodal ρ̄2, interpolated linearly in the clipped
+    ``solid`` (point data :data:`RHO2`), reaches ``threshold2``; a point outside the solid
+    (the smoothed surface runs up to a fraction of an element outside the clipped one) takes
+    the value at the solid's nearest vertex."""
+    import pyvista as pv
+    from scipy.spatial import cKDTree
+
+    r2 = np.asarray(solid.point_data[RHO2], dtype=float)
+    tree = cKDTree(np.asarray(solid.points, dtype=float))
+
+    def stiff_at(points):
+        points = np.asarray(points, dtype=float)
+        probe = pv.PolyData(points).sample(solid)
+        val = np.asarray(probe.point_data[RHO2], dtype=float).copy()
+        out = ~np.asarray(probe.point_data["vtkValidPointMask"], dtype=bool)
+        if out.any():
+            val[out] = r2[tree.query(points[out])[1]]
+        return val >= threshold2
+
+    return stiff_at
+
+
+def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds, threshold2=0.5,
                    quiet=False) -> int:
-    """``pacto analyse`` of a 3D run (see the module docstring).  Returns the exit code (0)."""
+    """``pacto analyse`` of a 3D run (see the module docstring).  A two-material design:
+    the remeshed part's tetrahedra are soft (E1) or stiff (E2) by the nodal ρ̄2 at their
+    centroids (:func:`stiff_sampler`, ``threshold2``).  Returns the exit code (0)."""
     from .cli_commands import case_ports, default_pressures, expected_sweep
     from .export import plot_sweeps
+    from .materials import MATERIALS, SOFT, STIFF, material_areas
     from .part3d import closed_checks, write_part_stl
     from .reanalysis3d import PRESSURE, Reanalysis3D, remesh_part
     from .report import _jsonable, _present
@@ -298,14 +338,13 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
     if not kinds3:
         raise _not_yet("the darcy analysis")
     setup = run.case.make_setup(run.params)
-    if setup.materials != 1:
-        raise _not_yet("the analysis of a two-material design")
+    two = setup.materials == 2
     if setup.pressure is None:
         raise InputError(f"analyse: case '{run.case.name}' has no pressure load; the re-analysis "
                          f"applies to pressure cases only ('pacto export {run.path}' writes its "
                          f"part)")
     t0 = time.perf_counter()
-    part, problem, setup, exclude = part_of_run_3d(run, threshold_value)
+    part, problem, setup, exclude = part_of_run_3d(run, threshold_value, threshold2)
     faces = set(problem.mesh.GetBoundaries())
     if any(port.region not in faces for port in setup.ports):
         raise _not_yet("an output port on a named point or edge")
@@ -320,7 +359,8 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
         rm = remesh_part(part.surface, problem.mesh, maxh, h, clamp=setup.supports.clamp,
                          exclude=exclude, wet_boundaries=setup.pressure.inlet,
                          pressure=copy_gridfunction(problem.pressure_block.gfp),
-                         p_in=run.load, timeout=run.params.mesh_time_limit)
+                         p_in=run.load, timeout=run.params.mesh_time_limit,
+                         stiff_at=stiff_sampler(part.solid, threshold2) if two else None)
     except ValueError as err:
         raise InputError(f"analyse: {err}") from None
     if PRESSURE not in rm.areas:
@@ -337,10 +377,20 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
                 f"thresholded), remeshed {rm.mesh.ne} tetrahedra (maxh {maxh:g}; {rm.dropped} "
                 f"off the clamp dropped), wetted area {rm.areas[PRESSURE]:.4g} m²; sweeps "
                 f"{', '.join(kinds3)} at {len(pressures)} pressures")
+    E = run.params.E1
+    materials = None
+    if two:
+        E = {SOFT: run.params.E1, STIFF: run.params.E2}
+        materials = dict(mode=rm.materials, threshold2=threshold2, E=E,
+                         remeshed=material_areas(rm.mesh), part=material_volumes(part.solid))
+        _say(quiet, "  materials (remeshed, " + rm.materials + " by ρ̄2 at the centroids; the "
+                    "part cut at the iso-surface): " + ", ".join(
+                        f"{k} {materials['remeshed'].get(k, 0.0):.4g} m³ "
+                        f"({materials['part'][k]:.4g})" for k in MATERIALS))
     newton = run.params.newton.settings()
     sweeps = {}
     for kind in kinds3:
-        ana = Reanalysis3D(rm.mesh, kind, E=run.params.E1, nu=run.params.nu, supports=supports,
+        ana = Reanalysis3D(rm.mesh, kind, E=E, nu=run.params.nu, supports=supports,
                            output=ports, order=order, newton=newton)
         sweeps[kind] = ana.sweep(pressures)
     out_dir = run.path / "analysis"
@@ -350,7 +400,7 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
     shown = next((sweeps[k] for k in ("follower", "fixed") if k in sweeps
                   and sweeps[k].converged.any()), None)
     if shown is not None:
-        _remeshed_vtu(out_dir / "remeshed.vtu", rm.mesh, shown.displacement())
+        _remeshed_vtu(out_dir / "remeshed.vtu", rm.mesh, shown.displacement(), E)
     rows = []
     for i, P in enumerate(pressures):
         row = dict(pressure=P, expected=expected[i]["delta"])
@@ -361,7 +411,7 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
         run=dict(case=run.case.name, model=run.params.model, load=run.load, design=run.design,
                  dim=3),
         settings=dict(threshold=part.threshold, maxh=maxh, order=order, kinds=list(kinds3),
-                      E=run.params.E1, nu=run.params.nu, supports={
+                      E=E, nu=run.params.nu, supports={
                           k: list(v) for k, v in supports.__dict__.items()},
                       void=list(exclude)),
         volumes=dict(thresholded=part.volume_thresholded, kept=part.volume_kept,
@@ -371,6 +421,8 @@ def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds,
         remesh=dict(tetrahedra=rm.mesh.ne, dropped_tetrahedra=rm.dropped, areas=rm.areas,
                     wetted_area=rm.areas[PRESSURE]),
         pressures=rows, wall_time_s=time.perf_counter() - t0)
+    if materials is not None:
+        data["materials"] = materials
     if {"fixed", "follower"} <= set(sweeps):
         d = [(r["follower"]["delta"], r["fixed"]["delta"]) for r in rows]
         data["follower_vs_fixed"] = [None if a is None or b is None else (a - b) / abs(b)

@@ -15,6 +15,13 @@ remeshed, then the volume) and names the new mesh's boundary faces by position:
   along its outward normal, is at least ``wet_fraction`` P_in, is named ``pressure``;
 * the other faces are ``free``.
 
+A two-material part (``stiff_at``, :mod:`.materials`): every tetrahedron of the remesh takes the
+material of the nodal ρ̄2 interpolated at its centroid, ``stiff`` (E2) where it reaches the
+threshold, else ``soft`` (E1), as the 2D part's element-wise assignment: the interface is a
+staircase of tetrahedron faces, at most one remeshed element from the iso-surface
+ρ̄2 = threshold2 (``materials`` ``"element-wise"``; a body-fitted interface, as the 2D part's,
+would need Netgen to mesh a two-region surface: not done).
+
 :class:`Reanalysis3D` is :class:`~.reanalysis.Reanalysis` on tetrahedra: the full 3D
 Neo-Hookean energy (thickness 1), the pressure ``P`` on ``pressure``
 
@@ -39,6 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from ..physics.newton import NewtonSettings
+from .materials import MATERIALS, modulus_cf
 from .reanalysis import Reanalysis, output_ports
 
 PRESSURE, FREE = "pressure", "free"
@@ -48,10 +56,11 @@ PRESSURE, FREE = "pressure", "free"
 class Remeshed3D:
     """The result of :func:`remesh_part`."""
 
-    mesh: object  # ngsolve.Mesh, material "solid", boundaries named
+    mesh: object  # ngsolve.Mesh, material "solid" (or "soft" and "stiff"), boundaries named
     volume: float
     areas: dict  # boundary name -> area
     dropped: int = 0  # tetrahedra of the pieces not joined to the clamp through faces
+    materials: str | None = None  # two materials: how they were assigned ("element-wise")
 
 
 def _bounding_faces(source, exclude):
@@ -161,13 +170,15 @@ def _clamped_components(tets, clamp_tris, n: int) -> np.ndarray:
 def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), exclude=(),
                 wet_boundaries=(), pressure=None, p_in: float | None = None,
                 wet_fraction: float = 0.5, probe: float | None = None,
-                timeout: float = 300.0) -> Remeshed3D:
+                timeout: float = 300.0, stiff_at=None) -> Remeshed3D:
     """Mesh the closed ``surface`` (pyvista PolyData) with Netgen tetrahedra of ``maxh`` and
     name its boundary faces (see the module docstring; ``h_source`` is the source mesh's
     element size: the wetting rule's probe distance by default, and 1e-4 of it the distance
     within which a face lies on a source face).  Only the pieces joined through faces to a
-    face on ``clamp`` are kept.  ValueError when Netgen fails (or takes longer than
-    ``timeout`` s) or no face lies on the clamp."""
+    face on ``clamp`` are kept.  ``stiff_at``: a two-material part's rule, points (n, 3) ->
+    whether the stiff material is there (the tetrahedra's centroids are asked; see the
+    module docstring).  ValueError when Netgen fails (or takes longer than ``timeout`` s) or
+    no face lies on the clamp."""
     import ngsolve
     from netgen.meshing import FaceDescriptor, Mesh as NGMesh
 
@@ -211,27 +222,42 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
     ids, inverse = np.unique(tets, return_inverse=True)
     pts, tets = pts[ids], inverse.reshape(tets.shape)
     tris = np.searchsorted(ids, tris)
-    # the new mesh: the kept points and tetrahedra, one face descriptor per name
+    # the materials: one, or each tetrahedron's by stiff_at at its centroid
+    region = np.zeros(len(tets), dtype=int)
+    mats = ("solid",)
+    if stiff_at is not None:
+        mats = MATERIALS
+        region = np.asarray(stiff_at(pts[tets].mean(axis=1)), dtype=bool).astype(int)
+    # the new mesh: the kept points and tetrahedra, a face descriptor per name and material
     new = NGMesh(dim=3)
     new.AddPoints(pts)
-    new.SetMaterial(1, "solid")
-    new.AddElements(dim=3, index=1, data=tets, base=0)
-    areas = {}
-    for k, name in enumerate(sorted(set(label))):
-        new.Add(FaceDescriptor(bc=k + 1, domin=1, domout=0, surfnr=k + 1))
-        new.SetBCName(k, name)
+    for k, mat in enumerate(mats):
+        new.SetMaterial(k + 1, mat)
+        if np.any(region == k):
+            new.AddElements(dim=3, index=k + 1, data=tets[region == k], base=0)
+    inner = dict(zip(_face_keys(tets, len(pts)).tolist(), np.repeat(region, 4).tolist()))
+    side = np.array([inner[key] for key in _face_keys(tris, len(pts)).tolist()], dtype=int)
+    areas, fd = {}, 0
+    for name in sorted(set(label)):
         sel = label == name
-        new.AddElements(dim=2, index=k + 1, data=tris[sel], base=0)
         areas[name] = float(area[sel].sum())
+        for k in np.unique(side[sel]):
+            fd += 1
+            new.Add(FaceDescriptor(bc=fd, domin=int(k) + 1, domout=0, surfnr=fd))
+            new.SetBCName(fd - 1, name)
+            new.AddElements(dim=2, index=fd, data=tris[sel & (side == k)], base=0)
     mesh = ngsolve.Mesh(new)
-    return Remeshed3D(mesh, float(ngsolve.Integrate(1.0, mesh)), areas, dropped)
+    return Remeshed3D(mesh, float(ngsolve.Integrate(1.0, mesh)), areas, dropped,
+                      None if stiff_at is None else "element-wise")
 
 
 class Reanalysis3D(Reanalysis):
     """One Neo-Hookean analysis of a remeshed 3D part (see the module docstring): ``kind``
-    ``fixed`` or ``follower``; ``output`` the ports on named faces of ``mesh``."""
+    ``fixed`` or ``follower``; ``output`` the ports on named faces of ``mesh``; ``E`` Young's
+    modulus, or ``{material: E}`` for a part of several materials (``{"soft": E1, "stiff":
+    E2}``)."""
 
-    def __init__(self, mesh, kind: str, *, E: float, nu: float, supports, output,
+    def __init__(self, mesh, kind: str, *, E: float | dict, nu: float, supports, output,
                  order: int = 2, boundary: str = PRESSURE,
                  newton: NewtonSettings = NewtonSettings()):
         from ngsolve import TET, VOL, Grad, IntegrationRule, Parameter
@@ -245,7 +271,9 @@ class Reanalysis3D(Reanalysis):
         if boundary not in mesh.GetBoundaries():
             raise ValueError(f"the mesh has no '{boundary}' boundary to apply the pressure on")
         self.mesh, self.kind, self.ports = mesh, kind, output_ports(output)
-        self.E, self.nu, self.thickness = float(E), float(nu), 1.0
+        self.E = {k: float(v) for k, v in E.items()} if isinstance(E, dict) else float(E)
+        self.nu, self.thickness = float(nu), 1.0
+        modulus = modulus_cf(mesh, self.E)
         self.P = Parameter(0.0)
         faces = set(mesh.GetBoundaries())
         for port in self.ports:
@@ -259,7 +287,7 @@ class Reanalysis3D(Reanalysis):
             loads = (FixedPressure3D(boundary, self.P),)
         else:
             terms = follower_pressure_terms_3d(boundary, self.P)
-        energy = declare(lambda G, coeffs: neohookean_energy(G, self.E, self.nu),
+        energy = declare(lambda G, coeffs: neohookean_energy(G, modulus, self.nu),
                          reads=(), stress_free=True)
         self.mech = Mechanics(mesh, order=order, energy=energy, fields=(), supports=supports,
                               loads=loads, springs=springs, thickness=1.0,
