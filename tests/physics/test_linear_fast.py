@@ -190,6 +190,28 @@ def test_energy_with_a_constant_is_not_quadratic():
     assert "constant in G" in str(err)
 
 
+def test_a_declaration_verified_at_drawn_points_still_refuses_each_wrong_one(monkeypatch):
+    """On a mesh with more quadrature points than ``VERIFY_POINTS`` the declaration is
+    verified at that many drawn points (here 7 of the small mesh's): each wrong declaration
+    above is still refused for its own reason, and the right one is accepted."""
+    from ngsolve import CF, InnerProduct, x
+
+    from pacto_ng.physics import linear_system
+
+    monkeypatch.setattr(linear_system, "VERIFY_POINTS", 7)
+    simp = lambda c: simp_cf(c["rho_bar"], 3e3, 3e9, 3.0)
+    s0 = CF((1e3, 2e3, 2e3, -1e3), dims=(2, 2))
+    wrong = {"constant on each element": lambda G, c: linear_energy(G, simp(c) * (1 + 50 * x),
+                                                                    0.4),
+             "linear term": lambda G, c: linear_energy(G, simp(c), 0.4) + InnerProduct(s0, G),
+             "constant in G": lambda G, c: linear_energy(G, simp(c), 0.4) + 7.0}
+    for why, energy in wrong.items():
+        assert why in str(_undeclared_and_declared(energy)[1])
+    mech, _ = _block("quads", 1, energy=declare(lambda G, c: linear_energy(G, simp(c), 0.4),
+                                                reads=("rho_bar",), quadratic=True))
+    assert mech.linear_system is not None
+
+
 def test_undeclared_energy_takes_the_general_route():
     """The same SIMP energy without its declaration (with a Darcy load): no linear system and
     no body coupling (the energy may read p), and the Variation route gives the same solution
