@@ -24,8 +24,8 @@ part's element-wise mode) and analyses each with its modulus; analysis.json's ``
 holds each material's volume in the remesh and in the part cut at the iso-surface.
 
 Not in 3D yet, refused in one line (exit code 2): the ``darcy`` analysis (skipped with a note
-when other kinds are asked too), ``--threshold volume``, ``--format msh``, and output ports on named points or edges (the 3D cases read their output on
-faces).
+when other kinds are asked too), ``--threshold volume``, ``--format msh``, and output ports
+on named points or edges (the 3D cases read their output on faces).
 """
 from __future__ import annotations
 
