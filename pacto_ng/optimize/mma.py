@@ -22,7 +22,8 @@ import numpy as np
 class Optimizer:
     """One MMA or GCMMA outer update per call of :meth:`update`.
 
-    ``evaluate(x) -> (f0, fvals)`` (values only) is needed by GCMMA's inner loop.
+    ``evaluate(x) -> (f0, fvals)`` (values only) is needed by GCMMA's inner loop; it returns
+    None for a trial design that could not be analysed, and GCMMA then keeps its step.
     """
 
     def __init__(self, n: int, m: int, method: str = "mma", move: float = 0.1, terms: int = 1):
@@ -64,7 +65,10 @@ class Optimizer:
                 inner = evaluate
 
                 def evaluate(xt):
-                    F0t, ft = inner(xt)
+                    trial = inner(xt)
+                    if trial is None:  # not analysed: GCMMA keeps its step (_gcmma)
+                        return None
+                    F0t, ft = trial
                     return 0.0, np.concatenate([np.asarray(F0t, dtype=float).ravel() + shift,
                                                 np.asarray(ft, dtype=float).ravel()])
         else:
@@ -74,7 +78,10 @@ class Optimizer:
                 inner = evaluate
 
                 def evaluate(xt):
-                    f0t, ft = inner(xt)
+                    trial = inner(xt)
+                    if trial is None:  # not analysed: GCMMA keeps its step (_gcmma)
+                        return None
+                    f0t, ft = trial
                     return float(np.asarray(f0t, dtype=float).ravel()[0]), ft
 
         xval = x[:, None].astype(float)

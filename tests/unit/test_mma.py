@@ -34,3 +34,21 @@ def test_move_limit_respected():
     f0, f, df0, df = _problem(x)
     xn = opt.update(1, x, f0, df0, f, df)
     assert np.max(np.abs(xn - x)) <= 0.05 + 1e-12
+
+
+@pytest.mark.parametrize("terms", [1, 2])
+def test_gcmma_keeps_its_step_when_the_trial_design_cannot_be_analysed(terms):
+    """``evaluate`` returns None (a Newton failure on GCMMA's trial design): the update returns
+    the first subproblem's step, within the move limit, for one objective and for the worst
+    case of two (the bound form's wrapper of ``evaluate`` passes None on, where it raised
+    TypeError before)."""
+    opt = Optimizer(3, 1, method="gcmma", move=0.2, terms=terms)
+    x = np.array([0.5, 0.5, 0.5])
+    f0, f, df0, df = _problem(x)
+    if terms == 2:
+        f0, df0 = np.array([f0, 0.5 * f0]), np.vstack([df0, 0.5 * df0])
+    calls = []
+    xn = opt.update(1, x, f0, df0, f, df, evaluate=lambda z: calls.append(z.copy()))
+    assert len(calls) == 1 and opt.inner_evaluations == 0
+    assert np.array_equal(xn, np.clip(calls[0], 0.0, 1.0))
+    assert np.max(np.abs(xn - x)) <= 0.2 + 1e-12 and not np.array_equal(xn, x)
