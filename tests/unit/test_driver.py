@@ -107,3 +107,49 @@ def test_mma_gcmma_switches_to_gcmma_at_the_first_zigzag_and_settles():
     # (epsimin = 1e-7: an accepted step is conservative up to it)
     tail = both[start + 1:]
     assert all(b <= a + 1e-7 for a, b in zip(tail, tail[1:]))
+
+
+class Reported(Rugged):
+    """Rugged with a reported value (``delta``: the objective of the design analysed last) and
+    the volume of the design analysed last, as a problem's ``values`` are: GCMMA's trial
+    designs overwrite them.  ``fail_trials``: a value-only analysis fails as Newton does (the
+    values then lack ``delta``)."""
+
+    reports = ("delta",)
+
+    def __init__(self, fail_trials=False):
+        super().__init__()
+        self.fail_trials, self.last, self.trials = fail_trials, None, 0
+
+    def volume_fraction(self):
+        return float(self.last.mean())
+
+    def evaluate(self, x, gradients=True):
+        from pacto_ng.physics.equilibrium import NewtonFailure
+        from pacto_ng.physics.newton import NewtonResult
+
+        self.last, self.values = x.copy(), {}
+        self.trials += not gradients
+        if not gradients and self.fail_trials:
+            raise NewtonFailure(NewtonResult(False, iterations=3, load_reached=0.5))
+        out = super().evaluate(x, gradients)
+        self.values = {"delta": out[0]}
+        return out
+
+
+@pytest.mark.parametrize("fail_trials", [False, True])
+def test_gcmma_rows_record_the_iterate_not_its_trial_designs(fail_trials):
+    """Each history row's reports and volume are those of the iterate x_k, read before GCMMA
+    analyses its trial designs (before: the last trial's; with a trial that fails, a
+    KeyError)."""
+    prob = Reported(fail_trials)
+    x0 = np.linspace(0.05, 0.95, 8)
+    state = LoopState(k=0, x=x0.copy(), opt_state=None, scale=1.0)
+    optimize(prob, Schedule(), iterations=6, tol=0.0, method="gcmma", move=0.5, state=state,
+             obj_tol=0.0)
+    assert prob.trials >= 6  # the trials ran (and, failing, ended each loop)
+    rows = state.history
+    assert len(rows) == 6
+    for r in rows:
+        assert r["delta"] == r["objective"]
+    assert rows[0]["volume"] == pytest.approx(x0.mean(), rel=1e-15)
