@@ -204,20 +204,17 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                      and r["load"] >= 1.0] + [f0]
             if zigzag_at(final) is not None:
                 opt.method = "gcmma"
-        # what the row records of x, read before GCMMA's inner loop analyses trial designs
+        # ---- record: read of x before GCMMA's inner loop analyses trial designs ------------
         res = problem.mech.result
-        analysed = dict(volume=problem.volume_fraction(),
-                        newton=(res.iterations if res else 0) + failed_newton,
-                        load_steps=res.steps if res else 0)
-        reports = {name: float(problem.values[name]) for name in problem.reports}
+        row = dict(iteration=k, objective=f0, volume=problem.volume_fraction(),
+                   constraint=float(np.max(f)), change=None, penal=penal, beta=beta, load=load,
+                   newton=(res.iterations if res else 0) + failed_newton,
+                   load_steps=res.steps if res else 0, time=None,
+                   **{name: float(problem.values[name]) for name in problem.reports})
         xnew = opt.update(k + 1, x, np.asarray(F0) * state.scale, dF0 * state.scale, f, df,
                           evaluate=values_only if opt.method == "gcmma" else None)
-        change = float(np.max(np.abs(xnew - x)))
-        # ---- record ----------------------------------------------------------------------
-        row = dict(iteration=k, objective=f0, volume=analysed["volume"],
-                   constraint=float(np.max(f)), change=change, penal=penal, beta=beta, load=load,
-                   newton=analysed["newton"], load_steps=analysed["load_steps"],
-                   time=time.perf_counter() - t0, **reports)
+        change = row["change"] = float(np.max(np.abs(xnew - x)))
+        row["time"] = time.perf_counter() - t0
         state.history.append(row)
         x = xnew
         state.x, state.opt_state, state.k = x.copy(), opt.state, k + 1

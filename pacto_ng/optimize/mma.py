@@ -61,28 +61,22 @@ class Optimizer:
             df = np.vstack([np.asarray(df0, dtype=float).reshape(self.terms, self.n),
                             np.asarray(df, dtype=float).reshape(-1, self.n)])
             f0, df0 = 0.0, np.zeros(self.n)
-            if evaluate is not None:
-                inner = evaluate
 
-                def evaluate(xt):
-                    trial = inner(xt)
-                    if trial is None:  # not analysed: GCMMA keeps its step (_gcmma)
-                        return None
-                    F0t, ft = trial
-                    return 0.0, np.concatenate([np.asarray(F0t, dtype=float).ravel() + shift,
-                                                np.asarray(ft, dtype=float).ravel()])
+            def shaped(F0t, ft):
+                return 0.0, np.concatenate([np.asarray(F0t, dtype=float).ravel() + shift,
+                                            np.asarray(ft, dtype=float).ravel()])
         else:
             f0 = float(np.asarray(f0, dtype=float).ravel()[0])
             df0 = np.asarray(df0, dtype=float).reshape(self.n)
-            if evaluate is not None:
-                inner = evaluate
 
-                def evaluate(xt):
-                    trial = inner(xt)
-                    if trial is None:  # not analysed: GCMMA keeps its step (_gcmma)
-                        return None
-                    f0t, ft = trial
-                    return float(np.asarray(f0t, dtype=float).ravel()[0]), ft
+            def shaped(f0t, ft):
+                return float(np.asarray(f0t, dtype=float).ravel()[0]), ft
+        if evaluate is not None:
+            inner = evaluate
+
+            def evaluate(xt):
+                trial = inner(xt)  # None: not analysed, GCMMA keeps its step (_gcmma)
+                return None if trial is None else shaped(*trial)
 
         xval = x[:, None].astype(float)
         xmin, xmax = self._bounds(x)

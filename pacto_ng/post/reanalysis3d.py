@@ -235,8 +235,13 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
         new.SetMaterial(k + 1, mat)
         if np.any(region == k):
             new.AddElements(dim=3, index=k + 1, data=tets[region == k], base=0)
-    inner = dict(zip(_face_keys(tets, len(pts)).tolist(), np.repeat(region, 4).tolist()))
-    side = np.array([inner[key] for key in _face_keys(tris, len(pts)).tolist()], dtype=int)
+    # each boundary triangle's material: its tetrahedron's (the one face with its key)
+    side = np.zeros(len(tris), dtype=int)
+    if stiff_at is not None:
+        keys = _face_keys(tets, len(pts))
+        order = np.argsort(keys, kind="stable")
+        at = np.searchsorted(keys[order], _face_keys(tris, len(pts)))
+        side = np.repeat(region, 4)[order][at]
     areas, fd = {}, 0
     for name in sorted(set(label)):
         sel = label == name
