@@ -53,10 +53,11 @@ class Equilibrium:
     with no ``Apply`` of the energy at ``u = 0``; otherwise the residual at ``u = 0``.
     """
 
-    def _start_equilibrium(self, guard, *, fixed_loads: bool, load_vectors: bool):
-        """The state of this part, once the block's forms are built: ``fixed_loads`` (only
-        design-independent loads) and ``load_vectors`` (the load norm from the load vectors)
-        choose the load norm's route."""
+    def _start_equilibrium(self, guard, *, coarse, fixed_loads: bool, load_vectors: bool):
+        """The state of this part, once the block's forms are built: ``coarse`` (the regions
+        of the tangent's boundary terms, :class:`~pacto_ng.physics.solvers.LinearSolver`),
+        ``fixed_loads`` (only design-independent loads) and ``load_vectors`` (the load norm
+        from the load vectors) choose the load norm's route."""
         from ngsolve import VOL, GridFunction, Grad, LinearForm
 
         # the tangent's solver (solvers.py): its preconditioner, if any, is registered on the
@@ -66,7 +67,7 @@ class Equilibrium:
         self._solver = LinearSolver(form, self.space.FreeDofs(form.condense),
                                     setting=self.settings.solver,
                                     symmetric=self.symmetric, order=self.order,
-                                    inverse=self.inverse_type)
+                                    inverse=self.inverse_type, coarse=coarse)
         if self._lin is not None and not self._solver.direct:
             self._lin.element_matrices = False
         self._tangent_at = None  # id of the state the factorisation belongs to
@@ -152,20 +153,23 @@ class Equilibrium:
         self._tangent_at = (load, vec.FV().NumPy().copy()) if not self.linear else ("linear",)
 
     def solve_tangent(self, rhs, out):
-        """``out = K⁻¹ rhs``.  A Krylov solve stops at the relative tolerance
-        ``max(0.1 rtol |f| / |rhs|, min(0.01, |rhs| / |f|))`` (``rtol`` Newton's, ``|f|`` the
-        load norm, ``|rhs|`` the residual's): never tighter than a tenth of what Newton's
-        convergence test asks, and, for a nonlinear problem, loose far from equilibrium (an
-        inexact Newton step whose forcing term shrinks with the residual); a linear problem
-        solves to the first bound in its one step."""
-        rtol = None
+        """``out = K⁻¹ rhs``.  A linear problem's Krylov solve stops once the residual's norm
+        on the free dofs is half what Newton's convergence test asks (``rtol |f|``, ``|f|``
+        the load norm): one solve per design.  A nonlinear problem's stops at the relative
+        tolerance ``max(0.1 rtol |f| / |rhs|, min(0.01, |rhs| / |f|))`` of the preconditioned
+        norm (``|rhs|`` the residual's): never tighter than a tenth of what Newton's
+        convergence test asks, and loose far from equilibrium (an inexact Newton step whose
+        forcing term shrinks with the residual)."""
+        rtol = residual = None
         if not self._solver.direct:
-            res = free_norm(rhs, self.free)
             ref = self.load_norm(self.target)
-            if res > 0 and ref > 0:
-                floor = 0.1 * self.settings.rtol * ref / res
-                rtol = floor if self.linear else max(floor, min(1e-2, res / ref))
-        self._solver.solve(rhs, out, rtol=rtol, strict=False)
+            if self.linear:
+                residual = 0.5 * self.settings.rtol * ref
+            else:
+                res = free_norm(rhs, self.free)
+                if res > 0 and ref > 0:
+                    rtol = max(0.1 * self.settings.rtol * ref / res, min(1e-2, res / ref))
+        self._solver.solve(rhs, out, rtol=rtol, residual=residual, strict=False)
 
     @property
     def solver_info(self) -> dict:

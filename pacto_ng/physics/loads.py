@@ -104,6 +104,10 @@ class Spring:
         # distributed spring of the same total stiffness), which is stated in the docs.
         return 0.5 * self.stiffness * w * (d * u) ** 2 * meas
 
+    def where(self, mesh):
+        """The region of the mesh the spring acts on (a point, an edge or a boundary)."""
+        return _region(mesh, self.region)[0]
+
 
 @dataclass(frozen=True)
 class Port:

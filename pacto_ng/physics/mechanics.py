@@ -295,8 +295,13 @@ class Mechanics(Equilibrium, Adjoint):
         self._lin = None
         if linear and conservative and self._traits.quadratic and self.mixed is None:
             self._lin = LinearSystem(self, self._coupling)
+        # the regions of the tangent's boundary terms, whose dofs an iterative solver's BDDC
+        # keeps coarse: the springs', or every boundary with residual terms (a follower
+        # pressure on a face)
+        coarse = None if residual_terms is not None else tuple(sp.where(mesh)
+                                                               for sp in self.springs)
         self._start_equilibrium(
-            guard, fixed_loads=body is None and conservative,
+            guard, coarse=coarse, fixed_loads=body is None and conservative,
             load_vectors=(conservative and body is not None and self._lin is None
                           and self._traits.stress_free))
         self._start_adjoint()

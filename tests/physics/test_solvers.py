@@ -22,7 +22,7 @@ from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.physics.darcy import DarcyPressure
 from pacto_ng.physics.darcy_load import darcy_body, darcy_follower
-from pacto_ng.physics.loads import Port, Spring
+from pacto_ng.physics.loads import PointLoad, Port, Spring
 from pacto_ng.physics.materials import jacobian, linear_energy, neohookean_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.physics.newton import NewtonSettings
@@ -142,7 +142,6 @@ def _chain_3d(model, load, solver):
     from netgen.occ import X, Y, Box, OCCGeometry
     from ngsolve import Mesh
 
-    from pacto_ng.physics.loads import PointLoad
     from pacto_ng.physics.mechanics import Field
     from pacto_ng.responses import compliance
 
@@ -254,3 +253,54 @@ def test_follower_adjoint_by_gmres_with_an_exact_preconditioner():
     assert g0 == pytest.approx(f0, rel=1e-9) and np.allclose(g, f, rtol=1e-9)
     assert np.abs(dg0 - df0).max() <= 1e-9 * np.abs(df0).max()
     assert np.abs(dg - df).max() <= 1e-9 * np.abs(df).max()
+
+
+def test_bddc_coarse_space_is_the_vertices_and_the_boundary_terms_regions():
+    """In 3D at order 2 BDDC's coarse (wirebasket) dofs are the vertices' alone for a form
+    without boundary terms; a spring on a face adds that face's dofs, and residual terms (a
+    follower pressure, possibly on any face) every boundary's.  Counted against the dofs the
+    mesh's regions hold, not against the code's own list."""
+    from netgen.occ import X, Box, OCCGeometry
+    from ngsolve import Mesh, ds, specialcf
+    from ngsolve.comp import COUPLING_TYPE
+
+    box = Box((0, 0, 0), (L3, W3, D3))
+    box.faces.Min(X).name = "clamp"
+    box.faces.Max(X).name = "end"
+    mesh = Mesh(OCCGeometry(box, dim=3).GenerateMesh(maxh=0.15))
+    energy = lambda G, c: linear_energy(G, 1e6, 0.3)
+
+    def coarse(**kw):
+        mech = Mechanics(mesh, order=2, energy=energy, supports=Supports(clamp=("clamp",)),
+                         newton=NewtonSettings(solver="iterative"), **kw)
+        assert mech.solver_info["preconditioner"] == "bddc"
+        types = mech.fes.couplingtype
+        return mech.fes, {d for d in range(mech.fes.ndof)
+                          if types[d] == COUPLING_TYPE.WIREBASKET_DOF}
+
+    fes, plain = coarse(loads=(PointLoad("end", (0.0, 1.0, 0.0)),))
+    assert len(plain) == 3 * mesh.nv
+    on = lambda region: {d for d, b in enumerate(fes.GetDofs(region)) if b}
+    _, spring = coarse(springs=(Spring("end", 1e3, (0.0, 1.0, 0.0)),))
+    assert spring == plain | on(mesh.Boundaries("end"))
+    assert len(spring) > len(plain)
+    pressure = lambda u, v, load: (load * 1e3 * (specialcf.normal(3) * v)) * ds("end")
+    _, terms = coarse(residual_terms=pressure, symmetric=False)
+    assert terms == plain | on(mesh.Boundaries(".*"))
+
+
+def test_a_linear_design_is_one_cg_solve_to_newtons_residual():
+    """A linear problem on the iterative route: CG stops on the Euclidean norm of the residual
+    on the free dofs, half of Newton's tolerance, so that Newton's test (the residual from
+    the element matrices, not CG's recurrence) accepts its one step, whose residual is
+    recomputed here."""
+    from pacto_ng.parallel import free_norm
+
+    chain, mech, names, x0 = _chain_3d("linear", "force", "iterative")
+    chain.forward(x=x0)
+    assert mech.result.converged and mech.result.iterations == 1
+    assert mech.solver_info["iterations"] > 3  # BDDC really iterates
+    r = mech.gfu.vec.CreateVector()
+    mech.residual(mech.gfu.vec, r, mech.target)
+    ref = mech.load_norm(mech.target)
+    assert free_norm(r, mech.free) <= mech.settings.rtol * ref
