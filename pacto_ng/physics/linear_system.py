@@ -71,9 +71,9 @@ class LinearSystem:
     """
 
     def __init__(self, mech, coupling=None):
-        from ngsolve import CF, L2, BilinearForm, GridFunction, Grad, LinearForm, VOL
+        from ngsolve import CF, L2, BilinearForm, GridFunction, Grad, LinearForm, VOL, dx
 
-        from .quadrature import centroid_rules
+        from .quadrature import centroid_rules, stiffness_rules
 
         self.mech = mech
         self._Ku, self._Ku_at = None, None  # K u of the last residual and (version, u) of it
@@ -97,7 +97,8 @@ class LinearSystem:
         integrand = (self.gfC.Reshape((dd, dd)) * Grad(u).Reshape((dd,))) \
             * Grad(v).Reshape((dd,))
         self.a = BilinearForm(fes, symmetric=True)
-        self.a += integrand * DX
+        # C is constant on each element (verified above): exact with a rule of lower degree
+        self.a += integrand * dx(intrules=stiffness_rules(mech.order, mech.rules))
         self._volume = list(self.a.integrators)  # the springs below are not element-wise
         self.springs = None
         if mech.springs:
@@ -273,12 +274,18 @@ class LinearSystem:
         if (self.element_matrices and self._modulus is not None and not self._scatter_built
                 and (self.version >= 1 or self._many_designs)):
             self._build_scatter()  # a second design: from now on worth the element matrices
-        if self.scatter is not None:
+        if self.scatter is not None or (self._modulus is not None
+                                        and not self.element_matrices):
+            # C = g C1 from the declared modulus, in numpy: the element matrices, or (an
+            # iterative solver's route) the form's assembly without evaluating C's CF
             modulus, E1 = self._modulus
             self._g, self._dg = self._relative_modulus(
                 modulus, self._field_values(self.field_names), E1, self.field_names)
             self.gfC.vec.FV().NumPy()[:] = (self._g[:, None] * self._C1).ravel()
-            self.scatter.assemble([self._g])
+            if self.scatter is not None:
+                self.scatter.assemble([self._g])
+            else:
+                self.a.Assemble()
         else:
             self.gfC.vec.FV().NumPy()[:] = np.asarray(self.C(self._centroids)).ravel()
             self.a.Assemble()
@@ -346,8 +353,12 @@ class LinearSystem:
         if self.scatter is not None:  # ∂g/∂field came with g (assemble)
             self._dC_version = self.version
             return
-        for cf, gf in self._dC.values():
-            gf.vec.FV().NumPy()[:] = np.asarray(cf(self._centroids)).ravel()
+        if self._modulus is not None and not self.element_matrices:  # ∂C = ∂g C1
+            for j, (_, gf) in enumerate(self._dC.values()):
+                gf.vec.FV().NumPy()[:] = (self._dg[:, j][:, None] * self._C1).ravel()
+        else:
+            for cf, gf in self._dC.values():
+                gf.vec.FV().NumPy()[:] = np.asarray(cf(self._centroids)).ravel()
         self._dC_version = self.version
 
 
