@@ -64,6 +64,16 @@ physics' (:func:`route`: :func:`pacto_ng.physics.solvers.choose`; with ``solver 
 direct at order 1 and up to ``DIRECT_MAX_DOFS_3D`` dofs, iterative above it at order ≥ 2).
 This machine (23 GB, about 18 GB usable) plans runs up to about 5·10⁵ dofs with Cholesky at
 order 1.
+
+**The outputs.**  Writing design.vtu (NGSolve's ``VTKOutput``: x, ρ̄, u and the twelve strain
+and stress components, each element subdivided once above order 1) raises a large run's peak
+above its iterations': on ``pacto run cantilever-3d --maxh 0.0085 --order 2 --iterations 3``
+(308 738 tetrahedra, 1 316 703 dofs, CG + BDDC) the process's high-water mark went from 6.00
+GB after the iterations and the summary to 7.41 GB in design.vtu's 15.6 s (measured around
+each output, 2026-12-04), about 460 bytes per point written (10 per tetrahedron);
+:func:`run_memory` adds that per element.  With it the estimate from the run's counts is
+7.74 GB against the measured peak of 7.41 GB (1.04; without it 6.32 GB, 0.85); on ``--maxh
+0.0092`` (133 774 tetrahedra, 603 528 dofs) 3.41 GB against 3.20 GB (1.07).
 """
 from __future__ import annotations
 
@@ -81,6 +91,10 @@ _TETS_PER_VOLUME = 5.0      # Netgen tetrahedra per h³ of volume (module docstr
 _NETGEN_SECONDS = 2.5e-4  # CPU seconds per Netgen tetrahedron
 _GRID_SECONDS = 2.0e-5    # CPU seconds per structured hexahedron
 _HUGE = 1e300                  # counts are capped here (a maxh of 1e-300 still gives one line)
+# design.vtu's writing (NGSolve's VTKOutput, subdivided once above order 1), per point it
+# writes: 4 (order 1) or 10 (order >= 2) points per tetrahedron, 8 or 27 per hexahedron
+# (module docstring, "The outputs")
+_OUTPUT_BYTES_PER_POINT = 460.0
 
 
 def route(dofs: float, order: int, linear_solver: str = "auto") -> str:
@@ -103,7 +117,9 @@ def run_memory(dofs: float, order: int, elements: float, *, hexes: bool = False,
     a, b, q, o = _FIT[(solver or "umfpack") if direct else "iterative"]
     system = a * min(max(dofs, 1.0), 1e30) ** b * (q if hexes else 1.0) * o ** k
     local = (k + 1) ** 3 if hexes else (k + 1) * (k + 2) * (k + 3) / 6  # scalar dofs per element
-    return run_overheads(system, elements, local, dim=3, displacement_matrices=direct)
+    points = (8 if k == 1 else 27) if hexes else (4 if k == 1 else 10)  # design.vtu's
+    return (run_overheads(system, elements, local, dim=3, displacement_matrices=direct)
+            + _OUTPUT_BYTES_PER_POINT * points * min(elements, _HUGE))
 
 
 def vector_h1_dofs(order: int, *, vertices: float, edges: float, trig_faces: float = 0.0,
