@@ -248,6 +248,14 @@ class LinearSystem:
         """Whether ``E`` comes from the energy's declared numpy modulus."""
         return self._modulus is not None
 
+    @property
+    def _numpy_modulus(self) -> bool:
+        """Whether ``C = g C1`` (and ``∂C``) come from the declared modulus in numpy: with the
+        element matrices, and on an iterative solver's route (its form's assembly then needs
+        no evaluation of C's CF at the centroids)."""
+        return self._modulus is not None and (self.scatter is not None
+                                              or not self.element_matrices)
+
     def expect_many_designs(self):
         """Say that many designs follow (an optimisation): the element matrices are built at
         the next assembly, not at the second design.  Every design of a run then takes one
@@ -274,20 +282,16 @@ class LinearSystem:
         if (self.element_matrices and self._modulus is not None and not self._scatter_built
                 and (self.version >= 1 or self._many_designs)):
             self._build_scatter()  # a second design: from now on worth the element matrices
-        if self.scatter is not None or (self._modulus is not None
-                                        and not self.element_matrices):
-            # C = g C1 from the declared modulus, in numpy: the element matrices, or (an
-            # iterative solver's route) the form's assembly without evaluating C's CF
+        if self._numpy_modulus:
             modulus, E1 = self._modulus
             self._g, self._dg = self._relative_modulus(
                 modulus, self._field_values(self.field_names), E1, self.field_names)
             self.gfC.vec.FV().NumPy()[:] = (self._g[:, None] * self._C1).ravel()
-            if self.scatter is not None:
-                self.scatter.assemble([self._g])
-            else:
-                self.a.Assemble()
         else:
             self.gfC.vec.FV().NumPy()[:] = np.asarray(self.C(self._centroids)).ravel()
+        if self.scatter is not None:
+            self.scatter.assemble([self._g])
+        else:
             self.a.Assemble()
         if self._coupling is not None:
             self.f.vec.data = self._fpoints + self._coupling.load()
@@ -353,7 +357,7 @@ class LinearSystem:
         if self.scatter is not None:  # ∂g/∂field came with g (assemble)
             self._dC_version = self.version
             return
-        if self._modulus is not None and not self.element_matrices:  # ∂C = ∂g C1
+        if self._numpy_modulus:  # ∂C = ∂g C1, ∂g from assemble
             for j, (_, gf) in enumerate(self._dC.values()):
                 gf.vec.FV().NumPy()[:] = (self._dg[:, j][:, None] * self._C1).ravel()
         else:

@@ -229,15 +229,11 @@ class LinearSolver:
             inv = self._inv.T if transpose and not self.symmetric else self._inv
             out.data = inv * rhs
             return
-        from ngsolve import Projector
         from ngsolve.krylovspace import CGSolver, GMResSolver
 
         if self.freedofs is not None:
-            # the fixed dofs' entries of the right-hand side (an adjoint's dJ/du) are no
-            # equation of the free dofs' system: GMRES counted them in its residual, which then
-            # stagnated at 1 (measured: a follower adjoint on pneunet-3d)
             free = rhs.CreateVector()
-            free.data = Projector(self.freedofs, True) * rhs
+            self._on_free_dofs(rhs, free)
             rhs = free
         tol = self.rtol if rtol is None else float(rtol)
         mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
@@ -271,15 +267,12 @@ class LinearSolver:
         cantilever-3d, so that a solve to Newton's tolerance in the preconditioned norm left
         a residual that Newton's test refused, and cost a second solve (20 CG iterations
         and a residual each design, measured at 603 528 dofs)."""
-        from ngsolve import InnerProduct, Projector
+        from ngsolve import InnerProduct
 
         mat, pre = self.form.mat, self._pre.mat
         free = self._free_mask()
         r, z, p, w = (rhs.CreateVector() for _ in range(4))
-        if self.freedofs is not None:
-            r.data = Projector(self.freedofs, True) * rhs
-        else:
-            r.data = rhs
+        self._on_free_dofs(rhs, r)
         out[:] = 0.0
         norm = free_norm(r, free)
         its = 0
@@ -306,10 +299,21 @@ class LinearSolver:
             raise SolverFailure(f"CG with {self.preconditioner} did not reach the residual "
                                 f"{target:.1e} in {its} iterations (reached {norm:.1e})")
 
+    def _on_free_dofs(self, rhs, into):
+        """``into = rhs`` on the free dofs, 0 on the others: the fixed dofs' entries of a
+        right-hand side (an adjoint's dJ/du) are no equation of the free dofs' system (GMRES
+        counted them in its residual, which then stagnated at 1; measured: a follower adjoint
+        on pneunet-3d)."""
+        from ngsolve import Projector
+
+        if self.freedofs is None:
+            into.data = rhs
+        else:
+            into.data = Projector(self.freedofs, True) * rhs
+
     def _free_mask(self) -> np.ndarray:
         if self._free is None:
-            n = len(self.form.mat.CreateRowVector())
-            self._free = (np.ones(n, dtype=bool) if self.freedofs is None
+            self._free = (np.ones(self.form.space.ndof, dtype=bool) if self.freedofs is None
                           else np.array(list(self.freedofs), dtype=bool))
         return self._free
 
