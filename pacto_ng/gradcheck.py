@@ -16,7 +16,7 @@ from .core import check_gradient
 
 def coarse_params(case, params, explicit_mesh: bool):
     """A coarse mesh for the check unless the user gave one; tight Newton tolerance."""
-    changes = {"newton_rtol": min(params.newton_rtol, 1e-12)}
+    changes = {"newton_rtol": min(params.newton_rtol or 1e-12, 1e-12)}
     if not explicit_mesh:
         from .geometry import extent
 

@@ -16,7 +16,7 @@ import numpy as np
 from ..parallel import everywhere, free_norm
 
 from .newton import NewtonResult, solve_with_continuation
-from .solvers import LinearSolver
+from .solvers import LinearSolver, adjoint_rtol
 from .quadrature import guard_rules
 
 
@@ -70,6 +70,8 @@ class Equilibrium:
                                     inverse=self.inverse_type, coarse=coarse)
         if self._lin is not None and not self._solver.direct:
             self._lin.element_matrices = False
+        self.settings = self.settings.for_route(self._solver.direct)  # Newton's tolerance
+        self._solver.rtol = adjoint_rtol(self.settings.rtol)  # its default: the adjoint's
         self._tangent_at = None  # id of the state the factorisation belongs to
         self.result: NewtonResult | None = None
         self._ramp_first = None  # first increment of the last successful ramp from zero
@@ -175,8 +177,9 @@ class Equilibrium:
     def solver_info(self) -> dict:
         """The tangent's linear solver, for the run summary
         (:attr:`~pacto_ng.physics.solvers.LinearSolver.info`: kind, method, preconditioner,
-        tolerance, Krylov iterations)."""
-        return self._solver.info
+        tolerance (the adjoint's Krylov tolerance), Krylov iterations), with Newton's residual
+        tolerance ``newton_rtol`` (relative to the load; the route's unless set)."""
+        return dict(self._solver.info, newton_rtol=self.settings.rtol)
 
     def admissible(self, vec) -> bool:
         if self._guard is None:

@@ -33,7 +33,7 @@ import numpy as np
 from ..files import atomic_write_text
 from ..physics.loads import Port
 from ..physics.mechanics import Supports
-from ..physics.newton import NewtonSettings
+from ..physics.newton import DIRECT_RTOL, NewtonSettings
 from .export import plot_deformed, plot_materials, plot_sweeps, write_stl, write_vtu
 from .materials import interface_length, material_areas
 from .plots import mirror_line
@@ -303,7 +303,8 @@ def analysis_dict(run, problem, res, expected, pressures, delta_run, kinds, orde
                      "supports": dataclasses.asdict(supports),
                      "supports_used": res.summary.get("supports"),
                      "output_ports": ports_json(ports),
-                     "newton_rtol": p.newton_rtol},
+                     # the 2D re-analysis solves directly: the direct route's tolerance unless set
+                     "newton_rtol": p.newton_rtol or DIRECT_RTOL},
         "definitions": {
             "output": OUTPUT_DEFINITION, "expected": EXPECTED_DEFINITION,
             "darcy": DARCY_DEFINITION,

@@ -245,7 +245,8 @@ def test_follower_adjoint_by_gmres_with_an_exact_preconditioner():
     got = {}
     for solver in ("direct", "iterative"):
         problem = build_problem(case, case.parameters(
-            {"maxh": 0.006, "model": "neohookean", "load_type": "follower", "solver": solver}))
+            {"maxh": 0.006, "model": "neohookean", "load_type": "follower", "solver": solver,
+             "newton_rtol": 1e-10}))  # both routes to the same Newton tolerance
         x = np.random.default_rng(3).uniform(0.2, 1.0, problem.n_design)
         got[solver] = problem.evaluate(x)
         assert problem.mech.solver_info["kind"] == solver
@@ -253,6 +254,40 @@ def test_follower_adjoint_by_gmres_with_an_exact_preconditioner():
     assert g0 == pytest.approx(f0, rel=1e-9) and np.allclose(g, f, rtol=1e-9)
     assert np.abs(dg0 - df0).max() <= 1e-9 * np.abs(df0).max()
     assert np.abs(dg - df).max() <= 1e-9 * np.abs(df).max()
+
+
+@pytest.mark.parametrize("case_name,maxh", [("pneunet-3d", 0.006), ("cantilever-3d", 0.06)])
+def test_the_iterative_routes_tolerance_is_below_what_the_optimiser_resolves(case_name, maxh):
+    """Newton's tolerance is the route's unless set: 1e-10 of the load on the direct route,
+    1e-6 on the iterative one, whose adjoint solves to a tenth of it.  At those defaults the
+    iterative route's objective, constraints and gradients equal the direct route's to a tenth
+    of the optimiser's objective tolerance (obj_tol 1e-4, relative; gradients relative to their
+    largest entry), on a random design of each 3D linear case at order 2."""
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.physics.newton import DIRECT_RTOL, ITERATIVE_RTOL
+
+    case = get_case(case_name)
+    got = {}
+    for solver in ("direct", "iterative"):
+        problem = build_problem(case, case.parameters(
+            {"maxh": maxh, "order": 2, "solver": solver}))
+        x = np.random.default_rng(3).uniform(0.2, 1.0, problem.n_design)
+        got[solver] = problem.evaluate(x)
+        info = problem.mech.solver_info
+        assert info["kind"] == solver
+        if solver == "direct":
+            assert info["newton_rtol"] == DIRECT_RTOL
+        else:
+            assert info["newton_rtol"] == ITERATIVE_RTOL
+            assert info["tolerance"] == pytest.approx(0.1 * ITERATIVE_RTOL)
+            assert info["iterations"] > 3  # BDDC really iterates
+    (f0, f, df0, df), (g0, g, dg0, dg) = got["direct"], got["iterative"]
+    tol = 0.1 * 1e-4
+    assert abs(g0 - f0) <= tol * abs(f0)
+    assert np.all(np.abs(g - f) <= tol * np.abs(f))
+    assert np.abs(dg0 - df0).max() <= tol * np.abs(df0).max()
+    for a, b in zip(dg, df):
+        assert np.abs(a - b).max() <= tol * np.abs(b).max()
 
 
 def test_bddc_coarse_space_is_the_vertices_and_the_boundary_terms_regions():
