@@ -33,8 +33,8 @@ ties it to what it needs (Newton: its own residual test, whose tolerance on this
 1e-6 of the load unless set, :data:`~pacto_ng.physics.newton.ITERATIVE_RTOL`; the adjoint:
 a tenth of Newton's, :func:`adjoint_rtol`; the Darcy and filter solves:
 :data:`ADJOINT_RTOL`.  ``pacto check-gradients`` tightens Newton's to 1e-12, and with it the
-adjoint's, for the finite-difference checks; tests/physics/test_solvers.py).  :attr:`LinearSolver.info` describes the route for
-the run summary.
+adjoint's, for the finite-difference checks; tests/physics/test_solvers.py).
+:attr:`LinearSolver.info` describes the route for the run summary.
 """
 from __future__ import annotations
 
@@ -68,10 +68,10 @@ GMRES_RESTART = 100  # GMRES keeps this many Krylov vectors at most (8 MB each p
 
 def adjoint_rtol(newton_rtol: float) -> float:
     """The Krylov tolerance of an adjoint solve with the tangent Newton solved to
-    ``newton_rtol``: a tenth of it, never below :data:`ADJOINT_RTOL`.  Measured on a pneunet-3d
-    design (90 249 dofs; docs/benchmarks.md, "The iterative route's tolerance"): with Newton at
-    1e-6, the adjoint at 1e-7 instead of 1e-8 changed the gradient's error from 1.90e-6 to
-    1.89e-6 of its largest entry, for 12 % fewer of its CG iterations."""
+    ``newton_rtol``: a tenth of it, never below :data:`ADJOINT_RTOL`, so that the gradient's
+    error is the equilibrium's.  The gradient errors of docs/benchmarks.md ("The iterative
+    route's tolerance", pneunet-3d: 1.9e-6 of the largest entry at Newton's 1e-6) are of both
+    solves together."""
     return max(ADJOINT_RTOL, 0.1 * newton_rtol)
 
 
