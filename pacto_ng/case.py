@@ -412,6 +412,17 @@ class Problem:
         for mech in [self.mech] + list(self.extra_mechanics):
             mech.target = load
 
+    @property
+    def warm(self) -> list:
+        """Where every mechanics block's next forward pass starts (:attr:`mech`, then
+        :attr:`extra_mechanics`): their warm states and Newton results, for :meth:`set_warm`."""
+        return [(m.state, m.result) for m in [self.mech] + list(self.extra_mechanics)]
+
+    def set_warm(self, warm: list) -> None:
+        """Start the next forward passes from ``warm`` (:attr:`warm` of earlier)."""
+        for m, (state, result) in zip([self.mech] + list(self.extra_mechanics), warm):
+            m.set_state(state, result=result)
+
     def start_iteration(self, k: int, history: list) -> None:
         """What changes with the iteration besides the schedules (:attr:`before_iteration`)."""
         if self.before_iteration is not None:

@@ -29,7 +29,7 @@ from .files import atomic_path, atomic_write_text, check_tail
 
 #: the columns of history.csv (one row per iteration), then the case's reported responses
 HISTORY_COLUMNS = ("iteration", "objective", "volume", "constraint", "change", "penal", "beta",
-                   "load", "newton", "load_steps", "time")
+                   "load", "newton", "load_steps", "design_cuts", "time")
 
 
 def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:

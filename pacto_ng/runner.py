@@ -76,6 +76,8 @@ def design_of_run(folder: str | os.PathLike, problem: Problem) -> np.ndarray:
 
 def _progress(row: dict, total: int) -> str:
     extra = "".join(f"  {k} {row[k]: .4e}" for k in ("delta",) if k in row)
+    if row.get("design_cuts"):
+        extra += f"  (design step halved {row['design_cuts']}x: Newton failed on the full one)"
     return (f"it {row['iteration']:4d}/{total}  obj {row['objective']: .5e}  vol {row['volume']:.4f}"
             f"  change {row['change']:.4f}  newton {row['newton']:3d}  load {row['load']:.3f}"
             f"  p {row['penal']:.2f}  beta {row['beta']:g}{extra}  {row['time']:.2f} s")

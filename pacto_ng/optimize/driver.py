@@ -3,8 +3,10 @@
 ``optimize`` runs outer iterations ``k = start, start+1, ...``: schedule values, analysis and
 sensitivities through the chain, one MMA/GCMMA update with the external move limit, history
 and checkpoint callbacks, and the convergence test (which restarts whenever a schedule value
-changes, so a run cannot stop mid-continuation).  A Newton failure stops the loop cleanly: the
-last good design is kept and the reason is returned.
+changes, so a run cannot stop mid-continuation).  With ``load_adapt``, a design that Newton
+cannot analyse at any load is moved back towards the last good design (the design step halved, up to
+:data:`DESIGN_CUTS` times; history.csv ``design_cuts``); if that fails too, the loop stops
+cleanly: the last good design is kept and the reason is returned.
 
 Adaptive load continuation (``load_adapt = g > 1``): when the analysis fails at the scheduled
 load factor ``s(k)`` after Newton's own step cutting, the iteration goes on at the load factor
@@ -115,6 +117,46 @@ def zigzag_at(objectives: list, changes: int = 4) -> int | None:
     return None
 
 
+#: how many times the step from the last good design is halved when Newton cannot analyse the
+#: new design at any load (:func:`optimize`)
+DESIGN_CUTS = 3
+
+
+def _analyse(evaluate, problem, state, x, penal, beta, load, scheduled, load_adapt, k):
+    """Values and gradients at ``x``, with the adaptive load continuation (module docstring).
+    Returns ``(F0, f, dF0, df, load, failed)``, ``failed`` the Newton iterations of the
+    attempts that the continuation cut short; raises NewtonFailure when no load is carried."""
+    failed = 0
+    try:
+        F0, f, dF0, df = evaluate(x)
+    except NewtonFailure as err:
+        reached = err.result.load_reached
+        failed = err.result.iterations
+        if not load_adapt or reached <= 0.0:
+            raise
+        # go on at the load Newton reached.  Near a limit point a fresh solve may fall just
+        # short of it again: then retry at the load that one reached, at least 5 % lower each
+        # time (3 retries)
+        state.load_failed_at = k
+        for retry in range(4):
+            load = state.load_cap = reached
+            problem.apply_schedule(penal, beta, load)
+            try:
+                F0, f, dF0, df = evaluate(x)
+                break
+            except NewtonFailure as again:
+                failed += again.result.iterations
+                reached = min(again.result.load_reached, 0.95 * load)
+                if retry == 3 or reached <= 0.0:
+                    again.result.iterations += failed
+                    raise
+    else:
+        # raise the cap after a success, but not in the iteration after a failure
+        if load_adapt and load < scheduled and k - state.load_failed_at >= 2:
+            state.load_cap = min(1.0, load * load_adapt)
+    return F0, f, dF0, df, load, failed
+
+
 def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method: str,
              move: float, state: LoopState, on_iteration=None, obj_tol: float = 0.0,
              load_adapt: float = 0.0) -> LoopResult:
@@ -159,38 +201,36 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         if start_iteration is not None:
             start_iteration(k, state.history)
         # ---- analysis and sensitivities ---------------------------------------------------
-        failed_newton = 0  # Newton iterations of an attempt that adaptive continuation cut short
-        try:
+        # with load_adapt, a design that Newton cannot analyse at any load (a new mechanism, a
+        # wall that folds at the first increment) is brought back towards the last good one:
+        # the step from it is halved, up to DESIGN_CUTS times, before the run stops; each cut
+        # design starts from the last good design's equilibrium
+        failed_newton = 0  # Newton iterations of attempts cut short (load or design step)
+        cuts = 0
+        # the last good design's equilibria: where a cut design's analysis starts
+        warm = getattr(problem, "warm", None) if load_adapt else None
+        while True:
             try:
-                F0, f, dF0, df = evaluate(x)
+                F0, f, dF0, df, load, failed = _analyse(evaluate, problem, state, x, penal, beta,
+                                                        load, scheduled, load_adapt, k)
+                failed_newton += failed
+                break
             except NewtonFailure as err:
-                reached = err.result.load_reached
-                failed_newton = err.result.iterations
-                if not load_adapt or reached <= 0.0:
-                    raise
-                # adaptive load continuation: go on at the load Newton reached.  Near a limit
-                # point a fresh solve may fall just short of it again: then retry at the
-                # load that one reached, at least 5 % lower each time (3 retries)
-                state.load_failed_at = k
-                for retry in range(4):
-                    load = state.load_cap = reached
-                    problem.apply_schedule(penal, beta, load)
-                    try:
-                        F0, f, dF0, df = evaluate(x)
-                        break
-                    except NewtonFailure as again:
-                        failed_newton += again.result.iterations
-                        reached = min(again.result.load_reached, 0.95 * load)
-                        if retry == 3 or reached <= 0.0:
-                            raise
-            else:
-                # raise the cap after a success, but not in the iteration after a failure
-                if load_adapt and load < scheduled and k - state.load_failed_at >= 2:
-                    state.load_cap = min(1.0, load * load_adapt)
-        except NewtonFailure as err:
-            kept = (f"the last good design (iteration {k - 1}) is saved" if k > 0 else
-                    "no design could be analysed at this load; the initial design is saved")
-            return LoopResult(state, False, "newton", f"iteration {k}: {err}; {kept}")
+                failed_newton += err.result.iterations
+                if (not load_adapt or err.result.load_reached > 0.0
+                        or state.last_good is None or cuts == DESIGN_CUTS):
+                    kept = (f"the last good design (iteration {k - 1}) is saved" if k > 0 else
+                            "no design could be analysed at this load; the initial design is "
+                            "saved")
+                    tried = f" (also with the design step halved {cuts} times)" if cuts else ""
+                    return LoopResult(state, False, "newton",
+                                      f"iteration {k}: {err}{tried}; {kept}")
+                cuts += 1
+                x = state.last_good + 0.5 * (x - state.last_good)
+                if warm is not None:
+                    problem.set_warm(warm)
+                load = min(scheduled, state.load_cap)
+                problem.apply_schedule(penal, beta, load)
         state.last_good = x.copy()
         f0 = float(np.max(F0))  # the objective (the worst of its terms)
         if state.scale is None:  # fix the objective normalisation once (kept on resume)
@@ -209,7 +249,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         row = dict(iteration=k, objective=f0, volume=problem.volume_fraction(),
                    constraint=float(np.max(f)), change=None, penal=penal, beta=beta, load=load,
                    newton=(res.iterations if res else 0) + failed_newton,
-                   load_steps=res.steps if res else 0, time=None,
+                   load_steps=res.steps if res else 0, design_cuts=cuts, time=None,
                    **{name: float(problem.values[name]) for name in problem.reports})
         xnew = opt.update(k + 1, x, np.asarray(F0) * state.scale, dF0 * state.scale, f, df,
                           evaluate=values_only if opt.method == "gcmma" else None)

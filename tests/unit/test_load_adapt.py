@@ -132,3 +132,85 @@ def test_retries_give_up_after_three():
     assert result.stopped == "newton" and result.state.k == 3
     asked = [ld for k, ld in prob.asked if k == 3]
     assert len(asked) == 5 and all(b <= 0.999 * a for a, b in zip(asked, asked[1:]))
+
+
+class StepLimited:
+    """min Σ (x - 0.9)²  s.t. mean(x) <= 0.8; "Newton" fails at every load (load reached 0) on
+    a design further than ``reach`` (max norm) from the last design it analysed, as a design
+    step that opens a mechanism does."""
+
+    constraints = ("volume",)
+    reports = ()
+
+    def __init__(self, reach):
+        self.reach = reach
+        self.mech = _Mech()
+        self.analysed = []  # the designs analysed, in order
+        self.failed = 0
+        self.restored = []  # (the warm start restored, the last analysed design) per cut
+        self.values = {}
+
+    def apply_schedule(self, penal, beta, load):
+        self.mech.target = load
+
+    def evaluate(self, x, gradients=True):
+        if self.analysed and np.max(np.abs(x - self.analysed[-1])) > self.reach:
+            self.failed += 1
+            res = self.mech.result = NewtonResult(False, iterations=5, load_reached=0.0,
+                                                  reason="every step length inverted an element")
+            raise NewtonFailure(res)
+        self.analysed.append(x.copy())
+        self.mech.result = NewtonResult(True, iterations=2, load_reached=self.mech.target, steps=1)
+        f0, f = float(np.sum((x - 0.9) ** 2)), np.array([x.mean() - 0.8])
+        if not gradients:
+            return f0, f
+        return f0, f, 2 * (x - 0.9), np.full((1, x.size), 1.0 / x.size)
+
+    def volume_fraction(self):
+        return float(self.analysed[-1].mean())
+
+    @property
+    def warm(self):
+        """Stands for the equilibria: which analysed design they belong to."""
+        return len(self.analysed) - 1
+
+    def set_warm(self, warm):
+        self.restored.append((warm, len(self.analysed) - 1))
+
+
+def _run_steps(problem, iterations=40):
+    state = LoopState(k=0, x=np.full(6, 0.1), opt_state=None, scale=1.0)
+    return optimize(problem, Schedule(), iterations=iterations, tol=1e-3, method="mma", move=0.2,
+                    state=state, obj_tol=1e-6, load_adapt=1.2)
+
+
+def test_a_design_newton_cannot_analyse_is_moved_back_towards_the_last_good_one():
+    """Steps of the move limit (0.2) fail; the driver halves them (0.1 <= reach 0.12) and the
+    run goes on to the optimum, each cut recorded in its row (history.csv ``design_cuts``)."""
+    prob = StepLimited(reach=0.12)
+    result = _run_steps(prob)
+    assert result.stopped == "converged", result.message
+    assert prob.failed > 0
+    rows = result.state.history
+    cuts = [r["design_cuts"] for r in rows]
+    assert sum(cuts) == prob.failed and max(cuts) == 1
+    # every analysed design is within reach of the one before (the cut design is analysed)
+    steps = [np.max(np.abs(b - a)) for a, b in zip(prob.analysed, prob.analysed[1:])]
+    assert max(steps) <= 0.12
+    # the mean is at its bound 0.8 (the unconstrained optimum 0.9 is not feasible)
+    assert result.state.x.mean() == pytest.approx(0.8, abs=2e-3)
+    # each cut design starts from the last good design's equilibria
+    assert len(prob.restored) == prob.failed and all(a == b for a, b in prob.restored)
+    # the row's Newton count includes the failed attempts' (5 each)
+    assert sum(r["newton"] for r in rows) == 2 * len(rows) + 5 * prob.failed
+
+
+def test_after_three_cuts_the_run_stops_with_the_last_good_design():
+    """A step that still fails when halved three times (0.2 / 8 = 0.025 > reach 0.01) stops
+    the run cleanly: the message says so, the last analysed design is kept."""
+    prob = StepLimited(reach=0.01)
+    result = _run_steps(prob)
+    assert result.stopped == "newton"
+    assert "design step halved 3 times" in result.message
+    assert prob.failed == 4  # the step, then three halvings
+    np.testing.assert_array_equal(result.state.last_good, prob.analysed[-1])

@@ -136,3 +136,31 @@ def test_a_short_robust_run_reports_the_worst_case_and_updates_the_target(tmp_pa
     # the dilated design's volume target at the last iteration (4): V* V_d/V_i of iteration 3
     vol_d = next(b for b in run.problem.chain.blocks if b.output == "volume_d")
     assert vol_d.volfrac == pytest.approx(0.2 * rows[3]["vol_d"] / rows[3]["vol_i"], rel=1e-12)
+
+
+def test_warm_states_of_every_realisation_are_saved_and_restored():
+    """``Problem.warm`` holds each mechanics block's equilibrium (the driver restores it before
+    analysing a cut design step): after another design's analysis, ``set_warm`` puts back the
+    first design's displacements and Newton records in the blueprint and the eroded
+    realisation, and re-analysing the first design from there takes no Newton step."""
+    pa = get_case("pa-inverter")
+    problem = build_problem(pa, pa.defaults.replace(robust=2, model="wang", nelx=12, nely=6,
+                                                    load=3e5))
+    mechs = [problem.mech] + list(problem.extra_mechanics)
+    assert len(mechs) == 2
+    rng = np.random.default_rng(3)
+    x1 = np.clip(0.5 + 0.2 * rng.standard_normal(problem.n_design), 0, 1)
+    x2 = np.clip(x1 + 0.2 * rng.standard_normal(problem.n_design), 0, 1)
+    problem.evaluate(x1, gradients=False)
+    saved = problem.warm
+    u1 = [m.state.u for m in mechs]
+    assert all(m.result.converged and m.result.iterations > 1 for m in mechs)
+    problem.evaluate(x2, gradients=False)
+    assert all(np.max(np.abs(m.state.u - u)) > 1e-3 * np.max(np.abs(u))
+               for m, u in zip(mechs, u1))
+    problem.set_warm(saved)
+    for m, u, (_, res) in zip(mechs, u1, saved):
+        np.testing.assert_array_equal(m.state.u, u)
+        assert m.result is res
+    problem.evaluate(x1, gradients=False)
+    assert all(m.result.converged and m.result.iterations == 0 for m in mechs)
