@@ -97,6 +97,12 @@ def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
                   # Newton's first increment of its last ramp: a Neo-Hookean pa-inverter
                   # resumed without it ended 5e-4 away from the uninterrupted run
                   ramp_first=_nan_if_none(warm.ramp_first))
+    # the further mechanics blocks' warm states (the robust realisations): u_1, warm_1, ...
+    for i, mech in enumerate(problem.extra_mechanics, start=1):
+        extra = mech.state
+        arrays.update({f"u_{i}": np.zeros(0) if local else extra.u,
+                       f"warm_{i}": extra.converged and not local,
+                       f"ramp_first_{i}": _nan_if_none(extra.ramp_first)})
     if state.last_good is not None:
         arrays["last_good"] = state.last_good
     if state.opt_state is not None:
@@ -119,6 +125,20 @@ def _checkpoint_k(path: Path) -> int | None:
         return None
 
 
+def _restore_warm(data, suffix: str, mech, numbering) -> None:
+    """Start ``mech`` from the warm state saved under ``u<suffix>``, ``warm<suffix>`` and
+    ``ramp_first<suffix>``; from zero if there is none (a checkpoint written before the robust
+    realisations' states were kept, or on a distributed mesh)."""
+    ndof = mech.space.ndof
+    u = data[f"u{suffix}"] if f"u{suffix}" in data.files else np.zeros(0)
+    warm = numbering is None and u.size == ndof and bool(data[f"warm{suffix}"])
+    # (a checkpoint written before the ramp's first increment was kept: None)
+    key = f"ramp_first{suffix}"
+    ramp = float(data[key]) if key in data.files else np.nan
+    mech.set_state(WarmState(u if warm else np.zeros(ndof), converged=warm,
+                             ramp_first=None if np.isnan(ramp) else ramp))
+
+
 def load_checkpoint(path: Path, problem: Problem) -> LoopState:
     try:
         with np.load(path, allow_pickle=False) as data:
@@ -134,12 +154,8 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
                               load_cap=float(data["load_cap"]) if "load_cap" in files else 1.0,
                               load_failed_at=(int(data["load_failed_at"])
                                               if "load_failed_at" in files else -1))
-            u, ndof = data["u"], problem.mech.space.ndof
-            warm = problem.numbering is None and u.size == ndof and bool(data["warm"])
-            # (a checkpoint written before the ramp's first increment was kept: None)
-            ramp = float(data["ramp_first"]) if "ramp_first" in files else np.nan
-            problem.mech.set_state(WarmState(u if warm else np.zeros(ndof), converged=warm,
-                                             ramp_first=None if np.isnan(ramp) else ramp))
+            for i, mech in enumerate([problem.mech] + list(problem.extra_mechanics)):
+                _restore_warm(data, "" if i == 0 else f"_{i}", mech, problem.numbering)
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"resume: cannot read '{path}' ({type(err).__name__}: {err})") from None
     n = problem.n_design * problem.n_design_fields
