@@ -94,6 +94,8 @@ def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
                   stable=state.stable, history=json.dumps(state.history),
                   u=np.zeros(0) if local else warm.u, warm=warm.converged and not local,
                   load_cap=state.load_cap, load_failed_at=state.load_failed_at,
+                  beta_cap=state.beta_cap, beta_capped_at=state.beta_capped_at,
+                  beta_step=state.beta_step,
                   # Newton's first increment of its last ramp: a Neo-Hookean pa-inverter
                   # resumed without it ended 5e-4 away from the uninterrupted run
                   ramp_first=_nan_if_none(warm.ramp_first))
@@ -154,6 +156,10 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
                               load_cap=float(data["load_cap"]) if "load_cap" in files else 1.0,
                               load_failed_at=(int(data["load_failed_at"])
                                               if "load_failed_at" in files else -1))
+            if "beta_cap" in files:
+                state.beta_cap = float(data["beta_cap"])
+                state.beta_capped_at = int(data["beta_capped_at"])
+                state.beta_step = float(data["beta_step"])
             for i, mech in enumerate([problem.mech] + list(problem.extra_mechanics)):
                 _restore_warm(data, "" if i == 0 else f"_{i}", mech, problem.numbering)
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:

@@ -4,9 +4,14 @@
 sensitivities through the chain, one MMA/GCMMA update with the external move limit, history
 and checkpoint callbacks, and the convergence test (which restarts whenever a schedule value
 changes, so a run cannot stop mid-continuation).  With ``load_adapt``, a design that Newton
-cannot analyse at any load is moved back towards the last good design (the design step halved, up to
-:data:`DESIGN_CUTS` times; history.csv ``design_cuts``); if that fails too, the loop stops
-cleanly: the last good design is kept and the reason is returned.
+cannot analyse at any load is helped in two ways.  If β rose at this iteration, the β step is
+cut (the geometric mean, down to steps of :data:`MIN_BETA_STEP`) and the cut β held
+:data:`BETA_HOLD` iterations before the next step: the optimiser mends what the sharper
+projection opened first.  Otherwise the design is moved back towards the last good design (the
+design step halved, up to :data:`DESIGN_CUTS` times; history.csv ``design_cuts``), each cut
+design analysed from the last good design's equilibria.  If that fails too, the loop stops
+cleanly: the last good design is kept and the reason is returned.  The convergence test waits
+for the schedule's β.
 
 Adaptive load continuation (``load_adapt = g > 1``): when the analysis fails at the scheduled
 load factor ``s(k)`` after Newton's own step cutting, the iteration goes on at the load factor
@@ -19,6 +24,7 @@ at the full load as soon as it can carry it.  The convergence test waits for the
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -68,6 +74,9 @@ class LoopState:
     last_good: np.ndarray | None = None  # the last design whose analysis succeeded
     load_cap: float = 1.0  # adaptive load continuation: the largest load factor to ask for
     load_failed_at: int = -1  # ... and the last iteration whose analysis failed at the cap
+    beta_cap: float = float("inf")  # a β step Newton could not take: the largest β to use
+    beta_capped_at: int = -1  # ... the iteration at which the cap last changed
+    beta_step: float = 2.0  # ... and the ratio of the cut step that Newton took
 
 
 @dataclass
@@ -120,6 +129,12 @@ def zigzag_at(objectives: list, changes: int = 4) -> int | None:
 #: how many times the step from the last good design is halved when Newton cannot analyse the
 #: new design at any load (:func:`optimize`)
 DESIGN_CUTS = 3
+#: a β step (from the last iteration's β) that Newton cannot take at any load is cut to the
+#: geometric mean of the two β, down to steps of this ratio (a doubling: √2, 2^(1/4),
+#: 2^(1/8)); the cut β is held BETA_HOLD iterations, then raised by the step that worked,
+#: until it is the schedule's β again
+MIN_BETA_STEP = 2.0 ** 0.125
+BETA_HOLD = 5
 
 
 def _analyse(evaluate, problem, state, x, penal, beta, load, scheduled, load_adapt, k):
@@ -195,7 +210,15 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         k = state.k
         t0 = time.perf_counter()
         # ---- continuation schedules ------------------------------------------------------
-        penal, beta, scheduled = schedule.values(k, state.history)
+        penal, beta_s, scheduled = schedule.values(k, state.history)
+        if k - state.beta_capped_at >= BETA_HOLD and state.beta_cap < np.inf:
+            # the capped β has run BETA_HOLD iterations: the next step (of the ratio that
+            # worked) towards the schedule's
+            state.beta_cap *= state.beta_step
+            state.beta_capped_at = k
+            if state.beta_cap >= beta_s * (1 - 1e-12):
+                state.beta_cap = float("inf")
+        beta = min(beta_s, state.beta_cap)
         load = min(scheduled, state.load_cap)
         problem.apply_schedule(penal, beta, load)
         if start_iteration is not None:
@@ -207,6 +230,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         # design starts from the last good design's equilibrium
         failed_newton = 0  # Newton iterations of attempts cut short (load or design step)
         cuts = 0
+        before = state.history[-1]["beta"] if state.history else beta
         # the last good design's equilibria: where a cut design's analysis starts
         warm = getattr(problem, "warm", None) if load_adapt else None
         while True:
@@ -217,6 +241,18 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                 break
             except NewtonFailure as err:
                 failed_newton += err.result.iterations
+                if (load_adapt and err.result.load_reached <= 0.0 and beta > before
+                        and math.sqrt(beta / before) >= MIN_BETA_STEP * (1 - 1e-12)):
+                    # the β step is what Newton cannot take: a smaller one (the geometric
+                    # mean), held BETA_HOLD iterations, so that the optimiser can mend what the
+                    # sharper projection opens (an eroded realisation's leak) before the next
+                    state.beta_step = math.sqrt(beta / before)
+                    beta = state.beta_cap = before * state.beta_step
+                    state.beta_capped_at = k
+                    problem.apply_schedule(penal, beta, load)
+                    if warm is not None:
+                        problem.set_warm(warm)
+                    continue
                 if (not load_adapt or err.result.load_reached > 0.0
                         or state.last_good is None or cuts == DESIGN_CUTS):
                     kept = (f"the last good design (iteration {k - 1}) is saved" if k > 0 else
@@ -236,7 +272,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         if state.scale is None:  # fix the objective normalisation once (kept on resume)
             state.scale = 10.0 / max(abs(f0), 1e-300)
         # ---- design update (MMA / GCMMA with move limit) ------------------------------------
-        if (method == "mma-gcmma" and opt.method != "gcmma"
+        if (method == "mma-gcmma" and opt.method != "gcmma" and state.beta_cap == np.inf
                 and schedule.settled(k, history=state.history) and load >= 1.0):
             # the switch once (a resumed run scans its history again)
             final = [r["objective"] for r in state.history
@@ -260,7 +296,8 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         state.x, state.opt_state, state.k = x.copy(), opt.state, k + 1
         # ---- convergence: only once every schedule has settled ------------------------------
         small = change < tol or _stalled(state.history, obj_tol)
-        settled = schedule.settled(k, window=5, history=state.history) and load >= 1.0
+        settled = (schedule.settled(k, window=5, history=state.history) and load >= 1.0
+                   and state.beta_cap == np.inf and k - state.beta_capped_at > 5)
         state.stable = state.stable + 1 if (small and settled) else 0
         if on_iteration is not None:
             on_iteration(state, row)
