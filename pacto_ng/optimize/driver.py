@@ -281,11 +281,13 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
             if zigzag_at(final) is not None:
                 opt.method = "gcmma"
         # ---- record: read of x before GCMMA's inner loop analyses trial designs ------------
-        res = problem.mech.result
+        # Newton's work on every realisation of the design (the robust formulation's too)
+        results = [m.result for m in [problem.mech] + list(getattr(problem, "extra_mechanics", ()))
+                   if m.result is not None]
         row = dict(iteration=k, objective=f0, volume=problem.volume_fraction(),
                    constraint=float(np.max(f)), change=None, penal=penal, beta=beta, load=load,
-                   newton=(res.iterations if res else 0) + failed_newton,
-                   load_steps=res.steps if res else 0, design_cuts=cuts, time=None,
+                   newton=sum(r.iterations for r in results) + failed_newton,
+                   load_steps=sum(r.steps for r in results), design_cuts=cuts, time=None,
                    **{name: float(problem.values[name]) for name in problem.reports})
         xnew = opt.update(k + 1, x, np.asarray(F0) * state.scale, dF0 * state.scale, f, df,
                           evaluate=values_only if opt.method == "gcmma" else None)

@@ -133,6 +133,8 @@ def test_a_short_robust_run_reports_the_worst_case_and_updates_the_target(tmp_pa
     for r in rows:
         assert r["objective"] == max(r["objective_e"], r["objective_i"], r["objective_d"])
         assert r["vol_d"] > r["volume"] and r["vol_i"] == pytest.approx(r["volume"], rel=1e-12)
+    # newton counts the three realisations' analyses (linear: one Newton step each)
+    assert all(r["newton"] == 3 and r["load_steps"] == 3 for r in rows)
     # the dilated design's volume target at the last iteration (4): V* V_d/V_i of iteration 3
     vol_d = next(b for b in run.problem.chain.blocks if b.output == "volume_d")
     assert vol_d.volfrac == pytest.approx(0.2 * rows[3]["vol_d"] / rows[3]["vol_i"], rel=1e-12)
