@@ -198,7 +198,9 @@ def load_result(folder: str | os.PathLike, *, case: Case | None = None,
     with compute():
         problem = rebuild(run_)
     with open(folder / "history.csv", newline="") as fh:
-        history = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+        # (a column added after a resumed run's first rows is empty there: NaN)
+        history = [{k: float(v) if v != "" else float("nan") for k, v in row.items()}
+                   for row in csv.DictReader(fh)]
     code = exit_code if exit_code is not None else (1 if run_.summary.get("stopped") == "newton"
                                                      else 0)
     return Result(folder, code, run_.summary, history, run_.x, problem)

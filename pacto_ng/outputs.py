@@ -229,9 +229,13 @@ def _finite(name, arr):
 def write_history(target: Path, history: list, problem: Problem) -> None:
     """history.csv (atomically): a row per iteration; written even when no iteration finished
     (a Newton failure in the first one): a header only."""
-    keys = list(history[0].keys()) if history else list(HISTORY_COLUMNS) + list(problem.reports)
+    keys = list(HISTORY_COLUMNS) + list(problem.reports)
+    # every row's columns, in order of appearance: a run resumed from a checkpoint written
+    # before a column was added has rows without it (left empty there)
+    for row in history:
+        keys += [key for key in row if key not in keys]
     buf = io.StringIO(newline="")
-    w = csv.DictWriter(buf, fieldnames=keys)
+    w = csv.DictWriter(buf, fieldnames=keys, restval="")
     w.writeheader()
     w.writerows(history)
     atomic_write_text(target, buf.getvalue())

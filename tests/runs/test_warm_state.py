@@ -78,3 +78,32 @@ def test_a_robust_run_resumes_from_every_realisations_equilibrium(tmp_path):
     with np.load(full / "checkpoint.npz") as a, np.load(part / "checkpoint.npz") as b:
         assert int(a["k"]) == int(b["k"]) == 4
         np.testing.assert_allclose(b["x"], a["x"], rtol=0, atol=1e-12)
+
+
+def test_a_checkpoint_from_before_a_history_column_resumes_and_writes_history(nh_run, tmp_path):
+    """A run resumed from a checkpoint whose rows lack a column added since (``design_cuts``)
+    writes history.csv with every row, that column empty in the old rows (before: a traceback
+    at the end of the run, nothing written), and ``load_result`` reads it (NaN there)."""
+    import json
+
+    from pacto_ng.api import load_result
+
+    old = tmp_path / "old"
+    old.mkdir()
+    for name in ("params.json", "checkpoint.npz"):
+        (old / name).write_bytes((nh_run / name).read_bytes())
+    with np.load(old / "checkpoint.npz") as ck:
+        arrays = {k: ck[k] for k in ck.files}
+    rows = json.loads(str(arrays["history"]))
+    for row in rows:
+        del row["design_cuts"]
+    arrays["history"] = json.dumps(rows)
+    np.savez(old / "checkpoint.npz", **arrays)
+    assert main(["resume", str(old), "--iterations", "3", "--quiet"]) == 0
+    lines = (old / "history.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    cuts = header.index("design_cuts")
+    assert len(lines) == 4
+    assert [line.split(",")[cuts] for line in lines[1:]] == ["", "", "0"]
+    result = load_result(old)
+    assert np.isnan(result.history[0]["design_cuts"]) and result.history[2]["design_cuts"] == 0
