@@ -4,10 +4,11 @@
 sensitivities through the chain, one MMA/GCMMA update with the external move limit, history
 and checkpoint callbacks, and the convergence test (which restarts whenever a schedule value
 changes, so a run cannot stop mid-continuation).  With ``load_adapt``, a design that Newton
-cannot analyse at any load is helped in two ways.  If β rose at this iteration, the β step is
-cut (the geometric mean, down to steps of :data:`MIN_BETA_STEP`) and the cut β held
-:data:`BETA_HOLD` iterations before the next step: the optimiser mends what the sharper
-projection opened first.  Otherwise the design is moved back towards the last good design (the
+cannot analyse is helped in two ways.  If β rose at this iteration and Newton cannot carry the
+load, the β step is cut (the geometric mean, down to steps of :data:`MIN_BETA_STEP`) before
+the load is lowered, and the cut β held :data:`BETA_HOLD` iterations before the next step:
+the optimiser mends what the sharper projection opened first.  Otherwise, if Newton carried no
+load at all, the design is moved back towards the last good design (the
 design step halved, up to :data:`DESIGN_CUTS` times; history.csv ``design_cuts``), each cut
 design analysed from the last good design's equilibria.  If that fails too, the loop stops
 cleanly: the last good design is kept and the reason is returned.  The convergence test waits
@@ -129,8 +130,8 @@ def zigzag_at(objectives: list, changes: int = 4) -> int | None:
 #: how many times the step from the last good design is halved when Newton cannot analyse the
 #: new design at any load (:func:`optimize`)
 DESIGN_CUTS = 3
-#: a β step (from the last iteration's β) that Newton cannot take at any load is cut to the
-#: geometric mean of the two β, down to steps of this ratio (a doubling: √2, 2^(1/4),
+#: a β step (from the last iteration's β) that Newton cannot take at the iteration's load is
+#: cut to the geometric mean of the two β, down to steps of this ratio (a doubling: √2, 2^(1/4),
 #: 2^(1/8)); the cut β is held BETA_HOLD iterations, then raised by the step that worked,
 #: until it is the schedule's β again
 MIN_BETA_STEP = 2.0 ** 0.125
@@ -234,15 +235,18 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         # the last good design's equilibria: where a cut design's analysis starts
         warm = getattr(problem, "warm", None) if load_adapt else None
         while True:
+            # a β step that Newton cannot carry at this load is cut before the load is lowered
+            beta_cut = (load_adapt and beta > before
+                        and math.sqrt(beta / before) >= MIN_BETA_STEP * (1 - 1e-12))
             try:
                 F0, f, dF0, df, load, failed = _analyse(evaluate, problem, state, x, penal, beta,
-                                                        load, scheduled, load_adapt, k)
+                                                        load, scheduled,
+                                                        0.0 if beta_cut else load_adapt, k)
                 failed_newton += failed
                 break
             except NewtonFailure as err:
                 failed_newton += err.result.iterations
-                if (load_adapt and err.result.load_reached <= 0.0 and beta > before
-                        and math.sqrt(beta / before) >= MIN_BETA_STEP * (1 - 1e-12)):
+                if beta_cut:
                     # the β step is what Newton cannot take: a smaller one (the geometric
                     # mean), held BETA_HOLD iterations, so that the optimiser can mend what the
                     # sharper projection opens (an eroded realisation's leak) before the next

@@ -217,13 +217,15 @@ def test_after_three_cuts_the_run_stops_with_the_last_good_design():
 
 
 class BetaLimited(StepLimited):
-    """The same problem, but "Newton" fails at every load when β exceeds 1.5 times the β of
-    the last design it analysed (a sharper projection that opens a leak at once)."""
+    """The same problem, but "Newton" fails when β exceeds 1.5 times the β of the last design
+    it analysed (a sharper projection that opens a leak at once), having carried the load
+    factor ``reached`` (0: none)."""
 
-    def __init__(self):
+    def __init__(self, reached=0.0):
         super().__init__(reach=np.inf)
         self.beta = self.last_beta = None
         self.beta_failures = 0
+        self.reached = reached
 
     def apply_schedule(self, penal, beta, load):
         self.beta = beta
@@ -232,20 +234,23 @@ class BetaLimited(StepLimited):
     def evaluate(self, x, gradients=True):
         if self.last_beta is not None and self.beta > 1.5 * self.last_beta:
             self.beta_failures += 1
-            res = self.mech.result = NewtonResult(False, iterations=4, load_reached=0.0,
+            res = self.mech.result = NewtonResult(False, iterations=4,
+                                                  load_reached=self.reached * self.mech.target,
                                                   reason="every step length inverted an element")
             raise NewtonFailure(res)
         self.last_beta = self.beta
         return super().evaluate(x, gradients)
 
 
-def test_a_beta_step_newton_cannot_take_is_cut_and_held():
-    """β doubles every 3 iterations from 1 to 4; doublings fail.  The driver cuts each failed
-    step to √2, holds the cut β for BETA_HOLD (5) iterations, raises it by √2 at a time to the
-    schedule's 4, and the convergence test waits for that."""
+@pytest.mark.parametrize("reached", [0.0, 0.001])
+def test_a_beta_step_newton_cannot_take_is_cut_and_held(reached):
+    """β doubles every 3 iterations from 1 to 4; doublings fail, carrying no load or a
+    thousandth of it.  The driver cuts each failed step to √2 (it does not lower the load),
+    holds the cut β for BETA_HOLD (5) iterations, raises it by √2 at a time to the schedule's
+    4, and the convergence test waits for that."""
     from pacto_ng.optimize.driver import BETA_HOLD
 
-    prob = BetaLimited()
+    prob = BetaLimited(reached)
     state = LoopState(k=0, x=np.full(6, 0.1), opt_state=None, scale=1.0)
     result = optimize(prob, Schedule(beta_start=1.0, beta_max=4.0, beta_every=3), iterations=60,
                       tol=1e-3, method="mma", move=0.2, state=state, obj_tol=1e-6, load_adapt=1.2)
@@ -257,4 +262,4 @@ def test_a_beta_step_newton_cannot_take_is_cut_and_held():
     runs = [sum(1 for b in betas if b == pytest.approx(v, rel=1e-12)) for v in levels]
     assert runs[0] == 3 and runs[1:4] == [BETA_HOLD] * 3 and runs[4] >= 6
     assert sum(runs) == len(betas)
-    assert all(r["design_cuts"] == 0 for r in state.history)
+    assert all(r["design_cuts"] == 0 and r["load"] == 1.0 for r in state.history)
