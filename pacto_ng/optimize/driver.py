@@ -8,10 +8,10 @@ cannot analyse is helped in two ways.  If β rose at this iteration and Newton c
 load, the β step is cut (the geometric mean, down to steps of :data:`MIN_BETA_STEP`) before
 the load is lowered, and the cut β held :data:`BETA_HOLD` iterations before the next step:
 the optimiser mends what the sharper projection opened first.  Otherwise, if Newton carried no
-load at all, the design is moved back towards the last good design (the
+more than :data:`COLLAPSE` of the load, the design is moved back towards the last good design (the
 design step halved, up to :data:`DESIGN_CUTS` times; history.csv ``design_cuts``), each cut
-design analysed from the last good design's equilibria.  If that fails too, the loop stops
-cleanly: the last good design is kept and the reason is returned.  The convergence test waits
+design analysed from the last good design's equilibria; after the last cut the adaptive load
+continuation takes what Newton carries.  If no load is carried, the loop stops cleanly: the last good design is kept and the reason is returned.  The convergence test waits
 for the schedule's β.
 
 Adaptive load continuation (``load_adapt = g > 1``): when the analysis fails at the scheduled
@@ -130,6 +130,9 @@ def zigzag_at(objectives: list, changes: int = 4) -> int | None:
 #: how many times the step from the last good design is halved when Newton cannot analyse the
 #: new design at any load (:func:`optimize`)
 DESIGN_CUTS = 3
+#: ... also when Newton carries no more than this fraction of the iteration's load (a collapse
+#: the adaptive load continuation would otherwise follow); after the cuts it does
+COLLAPSE = 0.1
 #: a β step (from the last iteration's β) that Newton cannot take at the iteration's load is
 #: cut to the geometric mean of the two β, down to steps of this ratio (a doubling: √2, 2^(1/4),
 #: 2^(1/8)); the cut β is held BETA_HOLD iterations, then raised by the step that worked,
@@ -138,17 +141,19 @@ MIN_BETA_STEP = 2.0 ** 0.125
 BETA_HOLD = 5
 
 
-def _analyse(evaluate, problem, state, x, penal, beta, load, scheduled, load_adapt, k):
+def _analyse(evaluate, problem, state, x, penal, beta, load, scheduled, load_adapt, k,
+             floor=0.0):
     """Values and gradients at ``x``, with the adaptive load continuation (module docstring).
     Returns ``(F0, f, dF0, df, load, failed)``, ``failed`` the Newton iterations of the
-    attempts that the continuation cut short; raises NewtonFailure when no load is carried."""
+    attempts that the continuation cut short; raises NewtonFailure when no load is carried,
+    or no more than ``floor`` times the load asked for."""
     failed = 0
     try:
         F0, f, dF0, df = evaluate(x)
     except NewtonFailure as err:
         reached = err.result.load_reached
         failed = err.result.iterations
-        if not load_adapt or reached <= 0.0:
+        if not load_adapt or reached <= floor * load:
             raise
         # go on at the load Newton reached.  Near a limit point a fresh solve may fall just
         # short of it again: then retry at the load that one reached, at least 5 % lower each
@@ -238,10 +243,14 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
             # a β step that Newton cannot carry at this load is cut before the load is lowered
             beta_cut = (load_adapt and beta > before
                         and math.sqrt(beta / before) >= MIN_BETA_STEP * (1 - 1e-12))
+            # a design step after which Newton carries at most COLLAPSE of the load is cut
+            # before the load is lowered
+            can_cut = state.last_good is not None and cuts < DESIGN_CUTS
             try:
                 F0, f, dF0, df, load, failed = _analyse(evaluate, problem, state, x, penal, beta,
                                                         load, scheduled,
-                                                        0.0 if beta_cut else load_adapt, k)
+                                                        0.0 if beta_cut else load_adapt, k,
+                                                        floor=COLLAPSE if can_cut else 0.0)
                 failed_newton += failed
                 break
             except NewtonFailure as err:
@@ -257,8 +266,8 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                     if warm is not None:
                         problem.set_warm(warm)
                     continue
-                if (not load_adapt or err.result.load_reached > 0.0
-                        or state.last_good is None or cuts == DESIGN_CUTS):
+                if (not load_adapt or not can_cut
+                        or err.result.load_reached > COLLAPSE * load):
                     kept = (f"the last good design (iteration {k - 1}) is saved" if k > 0 else
                             "no design could be analysed at this load; the initial design is "
                             "saved")

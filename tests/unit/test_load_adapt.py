@@ -135,15 +135,16 @@ def test_retries_give_up_after_three():
 
 
 class StepLimited:
-    """min Σ (x - 0.9)²  s.t. mean(x) <= 0.8; "Newton" fails at every load (load reached 0) on
-    a design further than ``reach`` (max norm) from the last design it analysed, as a design
-    step that opens a mechanism does."""
+    """min Σ (x - 0.9)²  s.t. mean(x) <= 0.8; on a design further than ``reach`` (max norm)
+    from the last design it analysed, as a design step that opens a mechanism, "Newton" carries
+    the load factor ``reached`` at most (0: none) and fails above it."""
 
     constraints = ("volume",)
     reports = ()
 
-    def __init__(self, reach):
+    def __init__(self, reach, reached=0.0):
         self.reach = reach
+        self.reached = reached  # the load factor a failure reports carried (0: none)
         self.mech = _Mech()
         self.analysed = []  # the designs analysed, in order
         self.failed = 0
@@ -154,9 +155,11 @@ class StepLimited:
         self.mech.target = load
 
     def evaluate(self, x, gradients=True):
-        if self.analysed and np.max(np.abs(x - self.analysed[-1])) > self.reach:
+        far = self.analysed and np.max(np.abs(x - self.analysed[-1])) > self.reach
+        if far and self.mech.target > self.reached * (1 + 1e-12):
             self.failed += 1
-            res = self.mech.result = NewtonResult(False, iterations=5, load_reached=0.0,
+            res = self.mech.result = NewtonResult(False, iterations=5,
+                                                  load_reached=self.reached * self.mech.target,
                                                   reason="every step length inverted an element")
             raise NewtonFailure(res)
         self.analysed.append(x.copy())
@@ -184,10 +187,12 @@ def _run_steps(problem, iterations=40):
                     state=state, obj_tol=1e-6, load_adapt=1.2)
 
 
-def test_a_design_newton_cannot_analyse_is_moved_back_towards_the_last_good_one():
-    """Steps of the move limit (0.2) fail; the driver halves them (0.1 <= reach 0.12) and the
-    run goes on to the optimum, each cut recorded in its row (history.csv ``design_cuts``)."""
-    prob = StepLimited(reach=0.12)
+@pytest.mark.parametrize("reached", [0.0, 0.05])
+def test_a_design_newton_cannot_analyse_is_moved_back_towards_the_last_good_one(reached):
+    """Steps of the move limit (0.2) fail, carrying no load or 5 % of it; the driver halves
+    them (0.1 <= reach 0.12) and the run goes on to the optimum at the full load, each cut
+    recorded in its row (history.csv ``design_cuts``)."""
+    prob = StepLimited(reach=0.12, reached=reached)
     result = _run_steps(prob)
     assert result.stopped == "converged", result.message
     assert prob.failed > 0
@@ -199,6 +204,7 @@ def test_a_design_newton_cannot_analyse_is_moved_back_towards_the_last_good_one(
     assert max(steps) <= 0.12
     # the mean is at its bound 0.8 (the unconstrained optimum 0.9 is not feasible)
     assert result.state.x.mean() == pytest.approx(0.8, abs=2e-3)
+    assert all(r["load"] == 1.0 for r in rows)
     # each cut design starts from the last good design's equilibria
     assert len(prob.restored) == prob.failed and all(a == b for a, b in prob.restored)
     # the row's Newton count includes the failed attempts' (5 each)
@@ -263,3 +269,13 @@ def test_a_beta_step_newton_cannot_take_is_cut_and_held(reached):
     assert runs[0] == 3 and runs[1:4] == [BETA_HOLD] * 3 and runs[4] >= 6
     assert sum(runs) == len(betas)
     assert all(r["design_cuts"] == 0 and r["load"] == 1.0 for r in state.history)
+
+
+def test_a_failure_that_carries_more_than_a_tenth_of_the_load_lowers_the_load_instead():
+    """A failed design step that still carries half the load is not cut: the adaptive load
+    continuation goes on at the load reached."""
+    prob = StepLimited(reach=0.12, reached=0.5)
+    result = _run_steps(prob, iterations=3)
+    rows = result.state.history
+    assert all(r["design_cuts"] == 0 for r in rows)
+    assert rows[1]["load"] == pytest.approx(0.5)
