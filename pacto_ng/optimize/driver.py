@@ -8,11 +8,12 @@ cannot analyse is helped in two ways.  If β rose at this iteration and Newton c
 load, the β step is cut (the geometric mean, down to steps of :data:`MIN_BETA_STEP`) before
 the load is lowered, and the cut β held :data:`BETA_HOLD` iterations before the next step:
 the optimiser mends what the sharper projection opened first.  Otherwise, if Newton carried no
-more than :data:`COLLAPSE` of the load, the design is moved back towards the last good design (the
-design step halved, up to :data:`DESIGN_CUTS` times; history.csv ``design_cuts``), each cut
-design analysed from the last good design's equilibria; after the last cut the adaptive load
-continuation takes what Newton carries.  If no load is carried, the loop stops cleanly: the last good design is kept and the reason is returned.  The convergence test waits
-for the schedule's β.
+more than :data:`COLLAPSE` of the load, the design is moved back towards the last good design
+(the design step halved, up to :data:`DESIGN_CUTS` times; history.csv ``design_cuts``), each
+cut design analysed from the last good design's equilibria; after the last cut the adaptive
+load continuation takes what Newton carries.  If no load is carried, the loop stops cleanly:
+the last good design is kept and the reason is returned.  The convergence test waits for the
+schedule's β.
 
 Adaptive load continuation (``load_adapt = g > 1``): when the analysis fails at the scheduled
 load factor ``s(k)`` after Newton's own step cutting, the iteration goes on at the load factor
@@ -127,8 +128,8 @@ def zigzag_at(objectives: list, changes: int = 4) -> int | None:
     return None
 
 
-#: how many times the step from the last good design is halved when Newton cannot analyse the
-#: new design at any load (:func:`optimize`)
+#: how many times the step from the last good design is halved when Newton carries no load on
+#: the new design (:func:`optimize`)
 DESIGN_CUTS = 3
 #: ... also when Newton carries no more than this fraction of the iteration's load (a collapse
 #: the adaptive load continuation would otherwise follow); after the cuts it does
@@ -230,10 +231,9 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         if start_iteration is not None:
             start_iteration(k, state.history)
         # ---- analysis and sensitivities ---------------------------------------------------
-        # with load_adapt, a design that Newton cannot analyse at any load (a new mechanism, a
-        # wall that folds at the first increment) is brought back towards the last good one:
-        # the step from it is halved, up to DESIGN_CUTS times, before the run stops; each cut
-        # design starts from the last good design's equilibrium
+        # with load_adapt, a failed β step is cut, and a design that Newton cannot analyse (a
+        # new mechanism, a wall that folds at the first increment) is brought back towards the
+        # last good one, each from the last good design's equilibria (module docstring)
         failed_newton = 0  # Newton iterations of attempts cut short (load or design step)
         cuts = 0
         before = state.history[-1]["beta"] if state.history else beta
