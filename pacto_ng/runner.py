@@ -86,25 +86,22 @@ def _progress(row: dict, total: int) -> str:
 # ------------------------------------------------------------------------------------------
 def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
     """Everything :func:`load_checkpoint` needs to continue exactly (written atomically)."""
-    warm = problem.mech.state
     # on a distributed mesh the displacement is rank 0's part (none): no warm start, so that a
     # resume may use another number of ranks
     local = problem.numbering is not None
     arrays = dict(k=state.k, x=state.x, scale=np.nan if state.scale is None else state.scale,
                   stable=state.stable, history=json.dumps(state.history),
-                  u=np.zeros(0) if local else warm.u, warm=warm.converged and not local,
                   load_cap=state.load_cap, load_failed_at=state.load_failed_at,
                   beta_cap=state.beta_cap, beta_capped_at=state.beta_capped_at,
-                  beta_step=state.beta_step,
-                  # Newton's first increment of its last ramp: a Neo-Hookean pa-inverter
-                  # resumed without it ended 5e-4 away from the uninterrupted run
-                  ramp_first=_nan_if_none(warm.ramp_first))
-    # the further mechanics blocks' warm states (the robust realisations): u_1, warm_1, ...
-    for i, mech in enumerate(problem.extra_mechanics, start=1):
-        extra = mech.state
-        arrays.update({f"u_{i}": np.zeros(0) if local else extra.u,
-                       f"warm_{i}": extra.converged and not local,
-                       f"ramp_first_{i}": _nan_if_none(extra.ramp_first)})
+                  beta_step=state.beta_step)
+    # every mechanics block's warm state: u, warm, ramp_first, then u_1, ... for the robust
+    # realisations.  Newton's first increment of its last ramp is part of it: a Neo-Hookean
+    # pa-inverter resumed without it ended 5e-4 away from the uninterrupted run
+    for i, mech in enumerate([problem.mech] + list(problem.extra_mechanics)):
+        warm, suffix = mech.state, "" if i == 0 else f"_{i}"
+        arrays.update({f"u{suffix}": np.zeros(0) if local else warm.u,
+                       f"warm{suffix}": warm.converged and not local,
+                       f"ramp_first{suffix}": _nan_if_none(warm.ramp_first)})
     if state.last_good is not None:
         arrays["last_good"] = state.last_good
     if state.opt_state is not None:

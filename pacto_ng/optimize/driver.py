@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -170,8 +170,8 @@ def _analyse(evaluate, problem, state, x, penal, beta, load, scheduled, load_ada
                 failed += again.result.iterations
                 reached = min(again.result.load_reached, 0.95 * load)
                 if retry == 3 or reached <= 0.0:
-                    again.result.iterations += failed
-                    raise
+                    # the failure, with the Newton work of every attempt it ends
+                    raise NewtonFailure(replace(again.result, iterations=failed)) from None
     else:
         # raise the cap after a success, but not in the iteration after a failure
         if load_adapt and load < scheduled and k - state.load_failed_at >= 2:
