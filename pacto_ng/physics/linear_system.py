@@ -341,12 +341,17 @@ class LinearSystem:
         m, dd = self.mech, self.d * self.d
         dC = self._dC[name][1].Reshape((dd, dd))
         cf = factor * ((dC * Grad(gu).Reshape((dd,))) * Grad(gw).Reshape((dd,)))
+        q = m.l2.TestFunction()
         lf = LinearForm(m.l2)
-        lf += cf * m.l2.TestFunction() * m.DX
+        lf += cf * q * m.DX
+        if self._modulus is not None:
+            body = None
+            if extra is not None:
+                body = LinearForm(m.l2)
+                body += extra.Compile() * q * m.DX
+            return _FieldForm(self, name, gu, gw, factor, lf, body)
         if extra is not None:
-            lf += extra.Compile() * m.l2.TestFunction() * m.DX
-        if self._modulus is not None and extra is None:
-            return _FieldForm(self, name, gu, gw, factor, lf)
+            lf += extra.Compile() * q * m.DX
         return lf
 
     def prepare_fields(self):
@@ -369,22 +374,25 @@ class LinearSystem:
 class _FieldForm:
     """``factor ∫ (∂C/∂field ∇gu) : ∇gw q dΩ`` per element: with the element matrices of
     :class:`~pacto_ng.physics.scatter.ElementMatrices` (once built) as
-    ``factor ∂g/∂field · gw_eᵀ K1_e gu_e``, before that the LinearForm ``lf``.  Used like a
+    ``factor ∂g/∂field · gw_eᵀ K1_e gu_e``, before that the LinearForm ``lf``; plus the
+    LinearForm ``extra`` (a body load's ``∂(b·λ)/∂field``) when given.  Used like a
     LinearForm: ``Assemble()``, then ``vec``."""
 
-    def __init__(self, lin, name, gu, gw, factor, lf):
+    def __init__(self, lin, name, gu, gw, factor, lf, extra=None):
         self.lin, self.j = lin, lin.field_names.index(name)
         self.gu, self.gw, self.factor = gu, gw, factor
-        self.lf = lf
+        self.lf, self.extra = lf, extra
         self._vec = lin.mech.one.vec.CreateVector()
-        self.vec = lf.vec
+        self.vec = self._vec
 
     def Assemble(self):
         lin = self.lin
         if lin.scatter is None:
             self.lf.Assemble()
-            self.vec = self.lf.vec
-            return
-        q = lin.scatter.quadratic(self.gw.vec.FV().NumPy(), self.gu.vec.FV().NumPy())[0]
-        self._vec.FV().NumPy()[:] = self.factor * lin._dg[:, self.j] * q
-        self.vec = self._vec
+            self._vec.data = self.lf.vec
+        else:
+            q = lin.scatter.quadratic(self.gw.vec.FV().NumPy(), self.gu.vec.FV().NumPy())[0]
+            self._vec.FV().NumPy()[:] = self.factor * lin._dg[:, self.j] * q
+        if self.extra is not None:  # a design-dependent body load's term
+            self.extra.Assemble()
+            self._vec.data += self.extra.vec

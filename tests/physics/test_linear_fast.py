@@ -356,6 +356,27 @@ def test_numpy_modulus_gives_the_variation_tangent_and_sensitivities(kind, order
     assert _rel(fast, gen.vec.FV().NumPy()) <= 1e-12
 
 
+def test_design_dependent_body_load_term_on_the_element_matrix_route():
+    """A body load that reads the density (a self-weight ``ρ̄ b``): its ``-s t ∂(b·λ)/∂ρ``
+    joins λᵀ∂R/∂ρ also once the element matrices carry ∂C/∂ρ (from the second design on).
+    It used to be assembled with ∂C/∂ρ from a field that route no longer fills."""
+    mesh = small_pa_mesh("quads")
+    body = lambda u, c: -1e6 * c["rho_bar"] * u[1]  # noqa: E731
+    mech = Mechanics(mesh, order=1, energy=_case_energy(), fields=["rho_bar"], supports=SUP,
+                     springs=(Spring("output", 1e4, (1.0, 0.0)),), body=body, thickness=1e-3,
+                     linear=True)
+    rng = np.random.default_rng(5)
+    for _ in range(2):  # the second design takes the element-matrix route
+        mech.set_fields(rng.uniform(0.05, 1.0, mesh.ne))
+        mech.forward()
+    assert mech.assembly["linear_system"] == "element_matrices"
+    mech.lam.vec.FV().NumPy()[:] = np.where(mech.free, rng.standard_normal(len(mech.free)), 0.0)
+    fast = mech.field_sensitivity("rho_bar")
+    gen = _diff_form(mech.volume_density(mech.gfu).Diff(mech.gfu, mech.lam), mech.fields[0],
+                     mech.DX)
+    assert _rel(fast, gen.vec.FV().NumPy()) <= 1e-12
+
+
 def test_numpy_modulus_follows_the_penalty_parameter():
     """The penalty is an NGSolve Parameter changed by the continuation: the numpy modulus reads
     it at every design, so K after a change of p equals the Variation tangent at the new p."""
