@@ -272,6 +272,8 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                             "no design could be analysed at this load; the initial design is "
                             "saved")
                     tried = f" (also with the design step halved {cuts} times)" if cuts else ""
+                    if warm is not None:  # the final analysis of the kept design starts there
+                        problem.set_warm(warm)
                     return LoopResult(state, False, "newton",
                                       f"iteration {k}: {err}{tried}; {kept}")
                 cuts += 1

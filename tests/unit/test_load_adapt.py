@@ -220,6 +220,9 @@ def test_after_three_cuts_the_run_stops_with_the_last_good_design():
     assert "design step halved 3 times" in result.message
     assert prob.failed == 4  # the step, then three halvings
     np.testing.assert_array_equal(result.state.last_good, prob.analysed[-1])
+    # the stopped run leaves the last good design's equilibria in place, for the final
+    # analysis of that design (pacto_ng.runner); three cuts, then the stop
+    assert len(prob.restored) == 4 and all(a == b for a, b in prob.restored)
 
 
 class BetaLimited(StepLimited):
