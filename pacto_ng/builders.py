@@ -60,12 +60,15 @@ class DesignSettings(Settings):
 
 @dataclass(frozen=True)
 class ObjectiveSettings(Settings):
-    """Which objective the case's set-up is optimised for."""
+    """Which objective the case's set-up is optimised for, and its limits."""
 
     objective: str = setting("", "", "case objective variant (empty: the case's default)",
                              choices=("",) + OBJECTIVES)
     se_max: float = setting(0.0, "J", "strain-energy limit of objective output_se (0: the "
                             "case's default)", range="[0, inf)")
+    leak_max: float = setting(0.0, "", "limit on the Darcy outflow through the zero-pressure "
+                              "boundaries, Q/(Kv P_in) (0: none; a closed chamber ~1e-5, a "
+                              "leak 1e-2 and up)", range="[0, inf)")
 
 
 @dataclass
@@ -262,7 +265,26 @@ class Builder:
     def responses(self, mech, pressure: PressureLoad, suffix: str = "") -> Responses:
         """The blocks of the set-up's objective (or ``--set objective``): compliance, strain
         energy, or an output displacement (alone, over the strain energy, or under a
-        strain-energy limit).  ``suffix`` is appended to the name of every value they make."""
+        strain-energy limit); and, with ``leak_max`` > 0, the limit on the Darcy outflow
+        (:class:`~pacto_ng.physics.darcy_leakage.Outflow`).  ``suffix`` is appended to the
+        name of every value they make."""
+        resp = self._objective(mech, pressure, suffix)
+        if self.params.leak_max > 0:
+            if pressure.block is None:
+                raise InputError(f"leak_max: case '{self.case.name}' has no pressure load")
+            from .physics.darcy_leakage import Outflow
+
+            try:
+                outflow = Outflow(pressure.block, output="leak" + suffix)
+            except ValueError as err:
+                raise InputError(str(err)) from None
+            resp.blocks += [outflow, Bound(self.params.leak_max, (outflow.output,),
+                                           "leak_limit" + suffix)]
+            resp.reports.append(outflow.output)
+            resp.constraints.append("leak_limit" + suffix)
+        return resp
+
+    def _objective(self, mech, pressure: PressureLoad, suffix: str) -> Responses:
         from . import responses as R
 
         params, setup = self.params, self.setup

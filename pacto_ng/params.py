@@ -17,7 +17,7 @@ part              settings                                    defined in
 ``darcy``         Kv, Ks, eta_k, beta_k, eta_h, beta_h, r,    :mod:`pacto_ng.physics.darcy`
                   delta_s, p_out, load_type, follower_wang,
                   load_sensitivity, inlet
-``responses``     objective, se_max                           :mod:`pacto_ng.builders`
+``responses``     objective, se_max, leak_max                 :mod:`pacto_ng.builders`
 ``newton``        newton_rtol, newton_max_iter,               :mod:`pacto_ng.physics.newton`
                   newton_increment, newton_min_increment,
                   realcompile, solver

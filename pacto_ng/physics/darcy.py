@@ -254,8 +254,7 @@ class DarcyPressure:
             raise ValueError(f"{self.inputs[0]}: expected {self.l2.ndof} element values "
                              f"(got shape {rho.shape})")
         self.rho.vec.FV().NumPy()[:] = rho
-        Kvals = self.Kv - (self.Kv - self.Ks) * heaviside_np(rho, self.eta_k, self.beta_k)
-        Dvals = self._drain * heaviside_np(rho, self.eta_h, self.beta_h)
+        Kvals, Dvals, _, _ = self.coefficients(rho)
         if (self._scatter_pending and self._solver.direct
                 and (self._designs >= 1 or self._many_designs)):
             self._build_scatter()
@@ -298,9 +297,7 @@ class DarcyPressure:
         if not self.sensitivity:
             return (np.zeros(self.l2.ndof),)
         self.lam.vec.data = self.adjoint(grad_output)
-        rho = self.rho.vec.FV().NumPy()
-        dK = -(self.Kv - self.Ks) * heaviside_deriv_np(rho, self.eta_k, self.beta_k)
-        dD = self._drain * heaviside_deriv_np(rho, self.eta_h, self.beta_h)
+        _, _, dK, dD = self.coefficients(self.rho.vec.FV().NumPy())
         if self._scatter is not None:
             lam = self.lam.vec.FV().NumPy()
             p = self.gfp.vec.FV().NumPy()
@@ -312,6 +309,15 @@ class DarcyPressure:
         self._dD.vec.FV().NumPy()[:] = dD
         self._sens.Assemble()
         return (-self._sens.vec.FV().NumPy().copy(),)
+
+    def coefficients(self, rho):
+        """``(K, D, dK/dρ̄, dD/dρ̄)`` per element: the flow coefficient
+        ``K = Kv - (Kv - Ks) H(ρ̄; ηk, βk)`` and the drainage ``D = Ds H(ρ̄; ηh, βh)``."""
+        hk, hd = (heaviside_np(rho, self.eta_k, self.beta_k),
+                  heaviside_np(rho, self.eta_h, self.beta_h))
+        return (self.Kv - (self.Kv - self.Ks) * hk, self._drain * hd,
+                -(self.Kv - self.Ks) * heaviside_deriv_np(rho, self.eta_k, self.beta_k),
+                self._drain * heaviside_deriv_np(rho, self.eta_h, self.beta_h))
 
     @property
     def solver_info(self) -> dict:

@@ -1,10 +1,13 @@
-r"""The leakage figure of a solved Darcy pressure field: how much of the inlet pressure reaches
-solid material away from the pressurised cavity (``leakage`` in a pressure case's summary).
+r"""How much a design leaks: the leakage figure of a solved Darcy pressure field (how much of
+the inlet pressure reaches solid material away from the pressurised cavity; ``leakage`` in a
+pressure case's summary), and :class:`Outflow`, the flow out through the zero-pressure
+boundaries (the ``leak_max`` constraint).
 """
 from __future__ import annotations
 
 import numpy as np
 
+from ..parallel import total
 from .darcy import DarcyPressure
 
 
@@ -75,3 +78,79 @@ def leakage(block: DarcyPressure, rho, h: float, *, solid: float = 0.9, void: fl
             out["leakage" + key] = float(max(pe[k], 0.0) / block.p_in)
             out["where" + key] = [float(c) for c in centroids[k][:2]]
     return out
+
+
+class Outflow:
+    r"""Block ``(ρ̄, p) -> Q / (Kv P_in)``: the Darcy flow out through the zero-pressure
+    boundaries, a constraint ``Q / (Kv P_in) <= leak_max`` with :class:`~pacto_ng.builders.Bound`.
+
+    The inlet pressure is prescribed, so a design whose chamber leaks keeps its pressure: in the
+    Darcy model a leak costs nothing, and the optimiser may use one (a gap in a wall that turns
+    the wall into a flap, or a grey plug that seals the model's chamber but not the
+    thresholded part's).  A closed chamber drains its inflow in its walls (the drainage term)
+    and almost nothing reaches the outer boundary; a gap lets the flow through the void.  Q is
+    the reaction of the zero-pressure condition: with ``z`` the interpolant of 1 on those
+    boundaries (0 at every other dof),
+
+        ``Q = -zᵀ(A p - f) = -Σ_e [K_e ∫_e ∇z·∇p dΩ + D_e ∫_e z (p - p_out) dΩ]``,
+
+    the outward flux ``∫ -K ∇p·n`` in the weak form (per unit thickness in 2D; in 3D Q/(Kv P_in)
+    is in metres).  Measured (PneuNet, docs/benchmarks.md): 1.9e-5 for the closed shell of the
+    linear design, 0.0086 to 0.40 for Wang designs with a gap in the chamber's floor.
+
+    Backward: ``∂Q/∂ρ̄_e = -(K'_e ∫_e ∇z·∇p + D'_e ∫_e z (p - p_out))`` and ``∂Q/∂p = -A z``
+    on the free dofs (the prescribed pressures do not vary); the ``p`` part flows back through
+    the pressure block's adjoint.
+    """
+
+    def __init__(self, pressure: DarcyPressure, inputs=None, output: str = "leak"):
+        from ngsolve import BND, GridFunction, LinearForm, grad
+
+        self.pressure = pr = pressure
+        self.inputs = tuple(inputs) if inputs is not None else (pr.inputs[0], pr.output)
+        self.output = output
+        if not pr.zero:
+            raise ValueError("leak_max: the pressure has no zero-pressure boundary to leak to")
+        mesh = pr.mesh
+        z = GridFunction(pr.fes)
+        z.Set(1.0, BND, definedon=mesh.Boundaries("|".join(pr.zero)))
+        self.gfp = GridFunction(pr.fes)
+        self.K, self.D = GridFunction(pr.l2), GridFunction(pr.l2)
+        q0, q = pr.l2.TestFunction(), pr.fes.TestFunction()
+        # per element: ∫ ∇z·∇p and ∫ z (p - p_out)
+        self._a = LinearForm(pr.l2)
+        self._a += grad(z) * grad(self.gfp) * q0 * pr.DX
+        self._b = LinearForm(pr.l2)
+        self._b += z * (self.gfp - pr.p_out) * q0 * pr.DX
+        # A z (the design's K and D)
+        self._az = LinearForm(pr.fes)
+        self._az += (self.K * grad(z) * grad(q) + self.D * z * q) * pr.DX
+        self._free = np.array(list(pr.fes.FreeDofs()), dtype=bool)
+        self._scale = 1.0 / (pr.Kv * pr.p_in) if pr.p_in != 0 else 1.0
+        self._rho = None
+
+    def forward(self, rho, p):
+        pr = self.pressure
+        if isinstance(p, np.ndarray):
+            self.gfp.vec.FV().NumPy()[:] = p
+        else:
+            self.gfp.vec.data = p
+        self._rho = np.asarray(rho, dtype=float)
+        K, D, _, _ = pr.coefficients(self._rho)
+        self._a.Assemble()
+        self._b.Assemble()
+        a, b = self._a.vec.FV().NumPy(), self._b.vec.FV().NumPy()
+        return -self._scale * total(pr.mesh, float(K @ a + D @ b))
+
+    def backward(self, g):
+        pr = self.pressure
+        K, D, dK, dD = pr.coefficients(self._rho)
+        a, b = self._a.vec.FV().NumPy(), self._b.vec.FV().NumPy()
+        drho = -float(g) * self._scale * (dK * a + dD * b)
+        self.K.vec.FV().NumPy()[:] = K
+        self.D.vec.FV().NumPy()[:] = D
+        self._az.Assemble()
+        dp = self._az.vec.CreateVector()
+        dp.data = (-float(g) * self._scale) * self._az.vec
+        dp.FV().NumPy()[~self._free] = 0.0
+        return (drho, dp)
