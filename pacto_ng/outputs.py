@@ -200,7 +200,8 @@ def output_displacement_at(problem: Problem) -> dict | None:
 
 def pressure_and_material_summary(problem: Problem) -> dict:
     """Pressure cases: ``leakage`` (fraction of P_in, see :func:`pacto_ng.physics.darcy_leakage.leakage`)
-    and its details.  Two materials: the volume fractions of the total solid, of material 1
+    and its details, and ``leak`` (Q/(Kv P_in), :class:`~pacto_ng.physics.darcy_leakage.Outflow`)
+    with ``leak_max``.  Two materials: the volume fractions of the total solid, of material 1
     (soft, ``Σ a ρ̄1 (1-ρ̄2)``) and of material 2 (stiff, ``Σ a ρ̄1 ρ̄2``) over the design
     elements."""
     out = {}
@@ -212,6 +213,8 @@ def pressure_and_material_summary(problem: Problem) -> dict:
         info = leakage(blk, vals[blk.inputs[0]], problem.h)
         out["leakage"] = info.pop("leakage")
         out["leakage_detail"] = info
+        if "leak" in vals:  # the outflow of the leak_max constraint (its blueprint's)
+            out["leak"] = float(vals["leak"])
     if problem.n_design_fields == 2:
         w = np.where(problem.field.design, problem.field.areas, 0.0)
         r1, r2 = np.asarray(vals["rho_bar1"]), np.asarray(vals["rho_bar2"])

@@ -97,3 +97,20 @@ def test_leak_max_needs_a_pressure_load():
     case = get_case("cantilever")
     with pytest.raises(InputError, match="leak_max: case 'cantilever' has no pressure load"):
         build_problem(case, case.parameters({"leak_max": 0.01, "maxh": 0.02}))
+
+
+def test_a_run_reports_its_leak(tmp_path):
+    """``pacto run ... --set leak_max``: history.csv has the ``leak`` column and summary.json the
+    final design's ``leak``."""
+    import csv
+    import json
+
+    from pacto_ng.cli import main
+
+    out = tmp_path / "run"
+    assert main(["run", "pneunet", "--maxh", "0.006", "--iterations", "3", "--set",
+                 "leak_max=0.01", "--out", str(out), "--quiet"]) == 0
+    rows = list(csv.DictReader(open(out / "history.csv")))
+    assert len(rows) == 3 and all(float(r["leak"]) > 0 for r in rows)
+    summ = json.loads((out / "summary.json").read_text())
+    assert summ["leak"] > 0 and summ["parameters"]["leak_max"] == 0.01
