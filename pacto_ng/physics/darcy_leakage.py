@@ -96,7 +96,7 @@ class Outflow:
 
     the outward flux ``∫ -K ∇p·n`` in the weak form (per unit thickness in 2D; in 3D Q/(Kv P_in)
     is in metres).  Measured (PneuNet, docs/benchmarks.md): 1.9e-5 for the closed shell of the
-    linear design, 0.0086 to 0.40 for Wang designs with a gap in the chamber's floor.
+    linear design, 0.0086 to 0.45 for Wang designs with a gap in a chamber wall.
 
     Backward: ``∂Q/∂ρ̄_e = -(K'_e ∫_e ∇z·∇p + D'_e ∫_e z (p - p_out))`` and ``∂Q/∂p = -A z``
     on the free dofs (the prescribed pressures do not vary); the ``p`` part flows back through

@@ -237,3 +237,25 @@ def test_adaptive_load_continuation_is_the_default(tmp_path, capsys):
     assert proc.returncode == 1
     summ = check_run(proc, off, 2)
     assert summ["stopped"] == "newton" and summ["iterations"] == 0
+
+
+@pytest.mark.slow
+def test_pneunet_part_at_1e6_pa(tmp_path, capsys):
+    """The PneuNet part at 1e6 Pa (docs/benchmarks.md, "PneuNet at 1e6 Pa"): Wang with the
+    follower load inside the optimisation and the leak limit converges at the full load with
+    a sealed chamber, and its part's follower analysis converges at every pressure and moves
+    the tip the intended way (Δ > 0).  Slow: ~7 CPU minutes."""
+    out = tmp_path / "pn"
+    proc = run_cli("run", "pneunet", "--model", "wang", "--load", "1e6", "--set",
+                   "load_type=follower", "--set", "leak_max=1e-3", "--out", str(out),
+                   "--quiet", capsys=capsys)
+    assert proc.returncode == 0, proc.stdout[-1000:]
+    summ = json.loads((out / "summary.json").read_text())
+    assert summ["converged"] and summ["load_factor_reached"] == 1.0
+    assert summ["leak"] <= 1e-3
+    an = run_cli("analyse", str(out), "--pressures", "1e5,3e5,1e6", "--quiet", capsys=capsys)
+    assert an.returncode == 0, an.stdout[-1000:]
+    rows = json.loads((out / "analysis" / "analysis.json").read_text())["pressures"]
+    assert [r["pressure"] for r in rows] == [1e5, 3e5, 1e6]
+    for r in rows:
+        assert r["follower"]["converged"] and r["follower"]["delta"] > 0, r
