@@ -404,23 +404,28 @@ class Problem:
     #: (:class:`pacto_ng.parallel.DesignNumbering`); None on a serial mesh
     design_numbering: object = None
 
+    @property
+    def mechanics(self) -> list:
+        """Every mechanics block: :attr:`mech`, then :attr:`extra_mechanics`."""
+        return [self.mech] + list(self.extra_mechanics)
+
     # -- schedules ----------------------------------------------------------------------------
     def apply_schedule(self, penal: float, beta: float, load: float) -> None:
         self.penal.Set(penal)
         for pr in self.projections:
             pr.beta = beta
-        for mech in [self.mech] + list(self.extra_mechanics):
+        for mech in self.mechanics:
             mech.target = load
 
     @property
     def warm(self) -> list:
         """Where every mechanics block's next forward pass starts (:attr:`mech`, then
         :attr:`extra_mechanics`): their warm states and Newton results, for :meth:`set_warm`."""
-        return [(m.state, m.result) for m in [self.mech] + list(self.extra_mechanics)]
+        return [(m.state, m.result) for m in self.mechanics]
 
     def set_warm(self, warm: list) -> None:
         """Start the next forward passes from ``warm`` (:attr:`warm` of earlier)."""
-        for m, (state, result) in zip([self.mech] + list(self.extra_mechanics), warm):
+        for m, (state, result) in zip(self.mechanics, warm):
             m.set_state(state, result=result)
 
     def start_iteration(self, k: int, history: list) -> None:

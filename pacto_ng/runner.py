@@ -97,7 +97,7 @@ def save_checkpoint(path: Path, state: LoopState, problem: Problem) -> None:
     # every mechanics block's warm state: u, warm, ramp_first, then u_1, ... for the robust
     # realisations.  Newton's first increment of its last ramp is part of it: a Neo-Hookean
     # pa-inverter resumed without it ended 5e-4 away from the uninterrupted run
-    for i, mech in enumerate([problem.mech] + list(problem.extra_mechanics)):
+    for i, mech in enumerate(problem.mechanics):
         warm, suffix = mech.state, "" if i == 0 else f"_{i}"
         arrays.update({f"u{suffix}": np.zeros(0) if local else warm.u,
                        f"warm{suffix}": warm.converged and not local,
@@ -157,7 +157,7 @@ def load_checkpoint(path: Path, problem: Problem) -> LoopState:
                 state.beta_cap = float(data["beta_cap"])
                 state.beta_capped_at = int(data["beta_capped_at"])
                 state.beta_step = float(data["beta_step"])
-            for i, mech in enumerate([problem.mech] + list(problem.extra_mechanics)):
+            for i, mech in enumerate(problem.mechanics):
                 _restore_warm(data, "" if i == 0 else f"_{i}", mech, problem.numbering)
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
         raise InputError(f"resume: cannot read '{path}' ({type(err).__name__}: {err})") from None

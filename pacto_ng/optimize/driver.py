@@ -297,7 +297,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                 opt.method = "gcmma"
         # ---- record: read of x before GCMMA's inner loop analyses trial designs ------------
         # Newton's work on every realisation of the design (the robust formulation's too)
-        results = [m.result for m in [problem.mech] + list(getattr(problem, "extra_mechanics", ()))
+        results = [m.result for m in getattr(problem, "mechanics", (problem.mech,))
                    if m.result is not None]
         row = dict(iteration=k, objective=f0, volume=problem.volume_fraction(),
                    constraint=float(np.max(f)), change=None, penal=penal, beta=beta, load=load,

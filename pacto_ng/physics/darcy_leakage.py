@@ -127,7 +127,7 @@ class Outflow:
         self._az += (self.K * grad(z) * grad(q) + self.D * z * q) * pr.DX
         self._free = np.array(list(pr.fes.FreeDofs()), dtype=bool)
         self._scale = 1.0 / (pr.Kv * pr.p_in) if pr.p_in != 0 else 1.0
-        self._rho = None
+        self._coefficients = None  # K, D and their derivatives of the last forward's design
 
     def forward(self, rho, p):
         pr = self.pressure
@@ -135,16 +135,15 @@ class Outflow:
             self.gfp.vec.FV().NumPy()[:] = p
         else:
             self.gfp.vec.data = p
-        self._rho = np.asarray(rho, dtype=float)
-        K, D, _, _ = pr.coefficients(self._rho)
+        self._coefficients = pr.coefficients(np.asarray(rho, dtype=float))
+        K, D = self._coefficients[:2]
         self._a.Assemble()
         self._b.Assemble()
         a, b = self._a.vec.FV().NumPy(), self._b.vec.FV().NumPy()
         return -self._scale * total(pr.mesh, float(K @ a + D @ b))
 
     def backward(self, g):
-        pr = self.pressure
-        K, D, dK, dD = pr.coefficients(self._rho)
+        K, D, dK, dD = self._coefficients
         a, b = self._a.vec.FV().NumPy(), self._b.vec.FV().NumPy()
         drho = -float(g) * self._scale * (dK * a + dD * b)
         self.K.vec.FV().NumPy()[:] = K
