@@ -307,11 +307,17 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
             if w:
                 s.index = idx
     # -- named points --------------------------------------------------------------------
-    ports = {}
+    # (a part on the domain's geometry already has the domain's named vertices it kept: a
+    # second point element of the same name would count a port's spring and reading twice)
+    ports, have = {}, named_points(ngsolve.Mesh(ngm))
     for name, (px, py) in named_points(src).items():
         k = int(np.argmin(np.hypot(coords[:, 0] - px, coords[:, 1] - py)))
-        idx = ngm.AddRegion(name, dim=0)
-        ngm.Add(Element0D(k + 1, index=idx))
+        if name not in have:
+            idx = ngm.AddRegion(name, dim=0)
+            ngm.Add(Element0D(k + 1, index=idx))
+        else:
+            k = int(np.argmin(np.hypot(coords[:, 0] - have[name][0],
+                                       coords[:, 1] - have[name][1])))
         ports[name] = ((px, py), tuple(coords[k]))
     mesh = ngsolve.Mesh(ngm)
     area = ngsolve.Integrate(ngsolve.CF(1.0), mesh)

@@ -234,3 +234,32 @@ def test_material_domain_keeps_split_edge_names():
     assert "inlet" in names
     length = {e.name: e.mass for e in dom.edges if e.name in ("fixed", "zero_pressure")}
     assert length == pytest.approx({"fixed": 0.1, "zero_pressure": 1.9})
+
+
+def test_a_named_vertex_of_the_domain_is_one_point_of_the_part():
+    """A part on the domain's geometry keeps the domain's named vertex; remesh must not add a
+    second point element of the same name (a port read there, and its output spring, would
+    count twice: before this was fixed every built-in 2D pressure case's part analysis ran
+    with twice its output spring)."""
+    import ngsolve as ng
+    from netgen import occ
+
+    from pacto_ng.physics.loads import Port
+
+    rect = occ.Rectangle(1.0, 0.5).Face()
+    rect.faces.name = "design"
+    rect.edges.Min(occ.X).name = "fixed"
+    rect.vertices.Nearest((1.0, 0.0, 0.0)).name = "tip"
+    mesh = _mesh(rect, 0.1)
+    th = threshold(mesh, np.ones(mesh.ne))
+    rm = remesh(th, 0.1, clamp=("fixed",), domain=rect)
+    assert rm.geometry == "domain"
+    tips = [el for el in rm.mesh.Elements(ng.BBND) if el.mat == "tip"]
+    assert len(tips) == 1
+    assert rm.mesh[tips[0].vertices[0]].point == pytest.approx((1.0, 0.0))
+    # the port functional reads u_x at the tip once: for u = (x, 0), 1.0
+    fes = ng.VectorH1(rm.mesh, order=1)
+    gf = ng.GridFunction(fes)
+    gf.Set(ng.CF((ng.x, 0)))
+    lf = ng.LinearForm(Port("tip", (1.0, 0.0)).functional(rm.mesh, fes.TestFunction()))
+    assert lf.Assemble().vec.InnerProduct(gf.vec) == pytest.approx(1.0)
