@@ -28,7 +28,6 @@ recorded beside Δ.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -41,6 +40,7 @@ from ..physics.mechanics import Mechanics, Supports
 from ..physics.newton import NewtonSettings
 from .boundary import named_points
 from .materials import modulus_cf
+from .part_analysis import Sweep, SweepPoint  # noqa: F401  (the results, defined there)
 
 KINDS = ("fixed", "follower", "darcy")
 
@@ -57,69 +57,6 @@ def output_ports(output) -> tuple[Port, ...]:
         raise ValueError(f"two output ports on '{twice[0]}': the re-analysis records every "
                          f"port's value by its point, one port to a point")
     return ports
-
-
-@dataclass(frozen=True)
-class SweepPoint:
-    """The result at one pressure."""
-
-    pressure: float
-    delta: float  # output displacement Δ = Σ_k w_k d_k·u(x_k) (m)
-    max_u: float  # largest |u| over the mesh vertices (m)
-    min_j: float  # smallest det F over the integration points
-    iterations: int  # Newton iterations, summed over the load steps
-    converged: bool
-    load_reached: float = 1.0  # fraction of the pressure at which equilibrium was found
-    ports: tuple = ()  # d_k·u(x_k) of every output port, in the order of the analysis's ports
-
-
-@dataclass
-class Sweep:
-    """A sweep of one analysis kind; ``states[i]`` is the displacement vector at pressure i."""
-
-    kind: str
-    points: list
-    analysis: "Reanalysis"
-    states: list = field(default_factory=list)
-
-    def _arr(self, name):
-        return np.array([getattr(p, name) for p in self.points])
-
-    @property
-    def pressures(self) -> np.ndarray:
-        return self._arr("pressure")
-
-    @property
-    def delta(self) -> np.ndarray:
-        return self._arr("delta")
-
-    @property
-    def converged(self) -> np.ndarray:
-        return self._arr("converged")
-
-    def displacement(self, i: int | None = None):
-        """The displacement GridFunction at sweep point ``i`` (default: the last converged)."""
-        from ngsolve import GridFunction
-
-        if i is None:
-            ok = [k for k, p in enumerate(self.points) if p.converged]
-            if not ok:
-                raise ValueError(f"the {self.kind} sweep has no converged point")
-            i = ok[-1]
-        if self.states[i] is None:
-            raise ValueError(f"the {self.kind} analysis did not converge at point {i}")
-        gf = GridFunction(self.analysis.mech.fes)
-        gf.vec.FV().NumPy()[:] = self.states[i]
-        return gf
-
-    def table(self) -> list[dict]:
-        """One dict per pressure (for CSV/JSON); every port's ``d·u`` as ``port_<region>``."""
-        rows = []
-        for p in self.points:
-            row = {k: v for k, v in p.__dict__.items() if k != "ports"}
-            row.update({f"port_{port.region}": v for port, v in zip(self.analysis.ports, p.ports)})
-            rows.append(dict(kind=self.kind, **row))
-        return rows
 
 
 # ---------------------------------------------------------------------------------------

@@ -1,0 +1,389 @@
+"""One analysis of a part -- a body-fitted mesh of the solid only -- with the run's own material
+law, under a wall pressure that is fixed or follows the deformation, in 2D and 3D alike.
+
+The part (:func:`~pacto_ng.post.remesh.remesh` in 2D, :func:`~pacto_ng.post.reanalysis3d.
+remesh_part` in 3D) is the reference configuration Ω0 with boundary names: ``pressure`` (the
+wetted chamber walls) and the case's own (``fixed``, ``symmetry``, ``inlet``, ``free``, ...);
+in 2D also named points.  The dimension ``d`` is the mesh's; in 2D every integral carries the
+thickness ``t`` (``params.thickness``; ``t = 1`` in 3D), in plane strain or stress
+(``params.plane``).
+
+Material.  The energy is the run's, built by :func:`~pacto_ng.physics.energy.make_energy` from
+the run's :class:`~pacto_ng.params.Parameters` (model, E0, E1, E2, ν, plane, material preset,
+Wang parameters) on element fields that describe solid material everywhere:
+
+* one material: ``ρ̄ = 1`` on every element, so SIMP gives ``E = E0 + 1^p (E1 - E0) = E1``
+  (Bendsøe and Sigmund 2003, *Topology optimization*, eq. 1.3; thesis eq. A.23);
+* two materials (element materials ``soft`` and ``stiff``, :mod:`.materials`): ``ρ̄1 = 1`` and
+  ``ρ̄2 = 1`` on ``stiff``, 0 on ``soft``, so the two-material SIMP (thesis eq. 6.1)
+  ``E = (1-ρ̄1^p) E0 + ρ̄1^p [(1-ρ̄2^p) E1 + ρ̄2^p E2]`` gives exactly E1 and E2.
+
+For the Wang model (Wang, Lazarov, Sigmund and Jensen 2014, *Comput. Methods Appl. Mech.
+Engrg.* 277; thesis eqs 5.1-5.2) ``γ = H(ρ̄^p; η1, β1) = H(1) = 1`` (exactly; in floating point
+to one ulp, e.g. 1 - 1.1e-16 at β1 = 500, η1 = 0.01), so ``φ_W = φ_H(γ∇u) - φ_L(γ∇u) +
+φ_L(∇u) = φ_H(∇u)``: the part obeys the hyperelastic law, which is what the Wang model says of
+solid material (unless the run prescribed a constant γ with ``wang_gamma``, which then applies
+here too).  The displacement or mixed formulation is
+:func:`~pacto_ng.physics.mixed.formulation_for` of the run's setting.
+
+Loads, on the wall ``Γp`` (``boundary``) with ``N0`` the outward unit normal of the solid
+(:func:`outward_normal`), with the pressure ``P`` as the load factor of
+:class:`~pacto_ng.physics.mechanics.Mechanics`:
+
+``fixed``
+    deformation independent, the potential term ``-t ∫_Γp P N0 · u dA0``: the residual gains
+    ``t ∫ P N0 · v dA0``, the traction ``-P N0`` pushes into the solid.  A linear model is one
+    linear solve per pressure (the block's linear route).
+``follower``
+    the pressure on the deformed wall, ``-P n da = -P cof(F) N0 dA0`` (Nanson's formula,
+    ``cof F = J F⁻ᵀ``; Bonet and Wood 2008, *Nonlinear continuum mechanics for finite element
+    analysis*, 2nd ed., the area change and the linearised work of a follower pressure; docs/
+    theory.md §4): the residual gains ``t ∫_Γp P cof(F̃) N0 · v dA0`` with
+    ``F̃ = I + ∇_Γ u`` (``Grad(u).Trace()``, the surface gradient, the only gradient NGSolve
+    gives on a boundary).  It is exact: ``F̃ T = F T`` on every tangent ``T`` and ``F̃ N0 =
+    N0``, and ``cof(A) N0`` depends only on ``A T`` -- in 3D ``cof(F̃) N0 = F T1 × F T2`` for
+    tangents with ``T1 × T2 = N0``, in 2D ``cof(A) = R A Rᵀ`` (``R = ((0, 1), (-1, 0))``)
+    gives ``cof(F̃) N0 = R F T`` for ``N0 = R T``, the identity ``J F⁻ᵀ N0 = Rot(F T)`` of
+    :mod:`.reanalysis`.  In plane stress the change of thickness is not followed.  Not the
+    derivative of a potential: a residual term, with its load stiffness from
+    ``AssembleLinearization`` (an unsymmetric tangent); Newton for every model.
+
+Output.  The ports are read with :meth:`~pacto_ng.physics.loads.Port.functional`, the
+functional of the optimisation's output (a named point's value, or the mean over a named edge
+or face): ``Δ = Σ_k w_k d_k · u`` over the ports, each port's own ``d_k · u`` and its
+displacement vector (the value at the point, or the mean over the edge or face), so that a
+caller can see a port move more in a direction the objective leaves free.  Each port's spring
+(:meth:`~pacto_ng.physics.loads.Port.springs`) and any extra :class:`~pacto_ng.physics.loads.
+Spring` act on the part.  Also recorded: the largest ``|u|`` over the vertices and the smallest
+``det(I + ∇u)`` over the quadrature points of the forms (in 2D of the in-plane deformation; of
+the displacement, not of the mixed formulation's modified gradient).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..params import InputError
+from ..physics.energy import make_energy
+from ..physics.equilibrium import NewtonFailure
+from ..physics.loads import Port, Spring
+from ..physics.materials import jacobian
+from ..physics.mechanics import Mechanics, Supports
+from ..physics.mixed import formulation_for, has_simplices
+from ..threads import compute
+from .materials import MATERIALS, STIFF
+
+KINDS = ("fixed", "follower")
+AXES = "xyz"
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """The result at one pressure."""
+
+    pressure: float
+    delta: float  # output displacement Δ = Σ_k w_k d_k·u at the ports
+    max_u: float  # largest |u| over the mesh vertices
+    min_j: float  # smallest det(I + ∇u) over the quadrature points
+    iterations: int  # Newton iterations, summed over the load steps
+    converged: bool
+    load_reached: float = 1.0  # fraction of the pressure at which equilibrium was found
+    ports: tuple = ()  # d_k·u of every port, in the order of the analysis's ports
+    vectors: tuple = ()  # every port's displacement vector (its mean over an edge or a face)
+
+
+@dataclass
+class Sweep:
+    """A sweep of one analysis kind; ``states[i]`` is the displacement vector at pressure i
+    (None where it did not converge); ``analysis`` has ``mech``, ``ports`` and
+    ``formulation``."""
+
+    kind: str
+    points: list
+    analysis: object
+    states: list = field(default_factory=list)
+
+    def _arr(self, name):
+        return np.array([getattr(p, name) for p in self.points])
+
+    @property
+    def pressures(self) -> np.ndarray:
+        return self._arr("pressure")
+
+    @property
+    def delta(self) -> np.ndarray:
+        return self._arr("delta")
+
+    @property
+    def converged(self) -> np.ndarray:
+        return self._arr("converged")
+
+    def displacement(self, i: int | None = None):
+        """The displacement GridFunction at sweep point ``i`` (default: the last converged)."""
+        from ngsolve import GridFunction
+
+        if i is None:
+            ok = [k for k, p in enumerate(self.points) if p.converged]
+            if not ok:
+                raise ValueError(f"the {self.kind} sweep has no converged point")
+            i = ok[-1]
+        if self.states[i] is None:
+            raise ValueError(f"the {self.kind} analysis did not converge at point {i}")
+        gf = GridFunction(self.analysis.mech.fes)
+        gf.vec.FV().NumPy()[:] = self.states[i]
+        return gf
+
+    def table(self) -> list[dict]:
+        """One dict per pressure (for CSV/JSON): every port's ``d·u`` as ``port_<region>`` and,
+        where recorded, its displacement vector as ``u_<region>_x``, ``_y`` (, ``_z``)."""
+        rows = []
+        for p in self.points:
+            row = {k: v for k, v in p.__dict__.items() if k not in ("ports", "vectors")}
+            row.update({f"port_{port.region}": v for port, v in zip(self.analysis.ports, p.ports)})
+            for port, vec in zip(self.analysis.ports, p.vectors):
+                row.update({f"u_{port.region}_{a}": float(c) for a, c in zip(AXES, vec)})
+            rows.append(dict(kind=self.kind, **row))
+        return rows
+
+
+def outward_normal(mesh, boundary: str):
+    """The outward unit normal ``N0`` of the solid on ``boundary`` (a CF for ``ds``).
+
+    NGSolve orients a boundary element's normal by the element's own orientation: on the edges
+    of a hole in 2D it points into the body.  The sign is decided per facet, all at once: on a
+    facet of the boundary ``∫ n_T dA`` of its one volume element ``T`` (``dx(element_boundary
+    =True)``, the element's outward normal) equals ``±∫ n dA`` of the boundary element; the
+    sign of their dot product, on ``FacetFESpace(order=0)``, multiplies
+    ``specialcf.normal(d)``.  ValueError if a facet of ``boundary`` lies inside the mesh
+    (its two elements' normals cancel): a wall must bound the solid.
+    """
+    from ngsolve import FacetFESpace, GridFunction, LinearForm, ds, dx, specialcf
+
+    d = mesh.dim
+    fes = FacetFESpace(mesh, order=0)
+    q, n = fes.TestFunction(), specialcf.normal(d)
+    elem = [LinearForm(n[i] * q * dx(element_boundary=True)).Assemble().vec.FV().NumPy()
+            for i in range(d)]
+    wall = [LinearForm(n[i] * q * ds(boundary)).Assemble().vec.FV().NumPy() for i in range(d)]
+    dot = sum(a * b for a, b in zip(elem, wall))
+    size = sum(b * b for b in wall)
+    on = size > 0
+    if np.any(np.abs(dot[on]) < 0.5 * size[on]):
+        raise ValueError(f"boundary '{boundary}' runs inside the part: the pressure must act on "
+                         f"walls that bound the solid")
+    sign = GridFunction(fes)
+    sign.vec.FV().NumPy()[:] = np.where(dot < 0.0, -1.0, 1.0)
+    return sign * n
+
+
+@dataclass(frozen=True)
+class WallPressure:
+    """The fixed wall pressure as a load of :class:`Mechanics`: work ``W(u) = -t ∫ p N0 · u
+    dA0`` (``p`` the pressure per unit load factor, ``N0`` from :func:`outward_normal`)."""
+
+    boundary: str
+    pressure: object
+    thickness: float
+    normal: object
+
+    def work(self, mesh, u, scale=1.0):
+        from ngsolve import ds
+
+        return (scale * (-self.thickness) * self.pressure * (self.normal * u)) * ds(self.boundary)
+
+
+def follower_terms(boundary: str, pressure, thickness: float, normal, dim: int) -> Callable:
+    """Residual terms ``(u, v, s) -> s t ∫ p cof(I + ∇_Γ u) N0 · v dA0`` on a mesh of
+    dimension ``dim`` (see the module)."""
+    from ngsolve import Cof, Grad, Id, ds
+
+    def terms(u, v, load):
+        Ft = Id(dim) + Grad(u).Trace()
+        return (load * thickness * pressure * ((Cof(Ft) * normal) * v)) * ds(boundary)
+
+    return terms
+
+
+def solid_fields(mesh) -> dict:
+    """The element fields of a solid part: ``{"rho_bar": 1}``, or for a part of materials
+    ``soft`` and ``stiff`` ``{"rho_bar1": 1, "rho_bar2": 1 on stiff, 0 on soft}`` (numpy, one
+    value per element in NGSolve's order)."""
+    from ngsolve import VOL
+
+    mats = [el.mat for el in mesh.Elements(VOL)]
+    ones = np.ones(len(mats))
+    known = set(mesh.GetMaterials())
+    if not known & set(MATERIALS):
+        return {"rho_bar": ones}
+    if not known <= set(MATERIALS):
+        raise ValueError(f"a two-material part has materials {', '.join(MATERIALS)} only (got "
+                         f"{', '.join(sorted(known))})")
+    return {"rho_bar1": ones, "rho_bar2": np.array([m == STIFF for m in mats], dtype=float)}
+
+
+class PartAnalysis:
+    """One analysis of a part with the run's material law (see the module).
+
+    Parameters
+    ----------
+    mesh : ngsolve.Mesh
+        The part: 2D (plane strain or stress, thickness ``params.thickness``) or 3D.
+    kind : {"fixed", "follower"}
+        The wall pressure's kind.
+    params : pacto_ng.params.Parameters
+        The run's parameters: model, E0, E1, E2, ν, plane, thickness, material, Wang's β1, η1
+        (and γ), penal, formulation, order, Newton's settings, realcompile.
+    supports : Supports
+        Dirichlet conditions by name (a name the part lacks: ValueError from Mechanics).
+    ports : Port or tuple of Port
+        The output ports (named points, edges or faces).
+    springs : tuple of Spring
+        Springs beyond the ports' own.
+    order : int, optional
+        Displacement order (default ``params.order``, else 1).
+    boundary : str
+        The wetted wall.
+
+    Attributes: ``formulation`` (``displacement`` or ``mixed``), ``model``, ``mech`` (the
+    :class:`Mechanics` block), ``ports``, ``kind``, ``order``, ``thickness``.
+    """
+
+    def __init__(self, mesh, kind: str, *, params, supports: Supports, ports,
+                 springs: tuple = (), order: int | None = None, boundary: str = "pressure"):
+        from ngsolve import VOL, Grad, Parameter
+
+        if kind not in KINDS:
+            raise ValueError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
+        if boundary not in mesh.GetBoundaries():
+            raise ValueError(f"the part has no '{boundary}' boundary to apply the pressure on")
+        if params.model == "auto":
+            raise InputError("model: auto is chosen by a run; give the model the run used")
+        self.mesh, self.kind, self.params, self.boundary = mesh, kind, params, boundary
+        self.ports = (ports,) if isinstance(ports, Port) else tuple(ports)
+        if not self.ports or not all(isinstance(p, Port) for p in self.ports):
+            raise ValueError("ports: give a Port or a non-empty tuple of Ports")
+        if not all(isinstance(s, Spring) for s in springs):
+            raise ValueError("springs: give a tuple of Springs")
+        self.model = params.model
+        self.order = int(order or params.order or 1)
+        self.thickness = float(params.thickness) if mesh.dim == 2 else 1.0
+        self._values = solid_fields(mesh)
+        self.penal = Parameter(params.penal)
+        energy, guard, linear = make_energy(params, self.penal, tuple(self._values))
+        self.formulation = formulation_for(params.formulation, model=params.model, nu=params.nu,
+                                           plane=params.plane, dim=mesh.dim, order=self.order,
+                                           simplices=has_simplices(mesh))
+        # the pressure is the block's load factor; the unit pressure carries its sign
+        self._unit = Parameter(1.0)
+        normal = outward_normal(mesh, boundary)
+        loads, terms = (), None
+        if kind == "fixed":
+            loads = (WallPressure(boundary, self._unit, self.thickness, normal),)
+        else:
+            terms = follower_terms(boundary, self._unit, self.thickness, normal, mesh.dim)
+        self.mech = Mechanics(
+            mesh, order=self.order, energy=energy, fields=tuple(self._values),
+            supports=supports, loads=loads,
+            springs=tuple(sp for p in self.ports for sp in p.springs()) + tuple(springs),
+            thickness=self.thickness, guard=guard, linear=linear and kind == "fixed",
+            newton=params.newton.settings(), residual_terms=terms,
+            realcompile=params.realcompile, formulation=self.formulation)
+        self._forms = self._port_forms()
+        self._J = jacobian(Grad(self.mech.gfu)).Compile()
+        self._qpoints = mesh.MapToAllElements(self.mech.rules, VOL)
+        xyz = np.array([v.point for v in mesh.vertices], dtype=float)
+        self._vertices = mesh(*(xyz[:, i].copy() for i in range(mesh.dim)))
+
+    def _port_forms(self):
+        """``(Δ, [[e_i-component of port k] for k])`` as vectors on the block's space, from
+        :meth:`Port.functional`: Δ the sum of the ports' functionals, and per port and axis
+        the functional of the unit direction (the value at a point, the mean over an edge or
+        a face)."""
+        from ngsolve import LinearForm
+
+        mech, mesh = self.mech, self.mesh
+        v = mech.displacement(mech.space.TestFunction())
+
+        def assembled(ports):
+            lf = LinearForm(mech.space)
+            for p in ports:
+                lf += p.functional(mesh, v)
+            return lf.Assemble().vec
+
+        axes = np.eye(mesh.dim)
+        return assembled(self.ports), [[assembled([Port(p.region, tuple(e))]) for e in axes]
+                                       for p in self.ports]
+
+    def _read(self, pressure: float, iterations: int) -> SweepPoint:
+        """The converged state's record at ``pressure``."""
+        x = self.mech.gfx.vec
+        delta_form, axes = self._forms
+        vectors = tuple(tuple(float(f.InnerProduct(x)) for f in forms) for forms in axes)
+        along = tuple(float(np.dot(p.direction, vec)) for p, vec in zip(self.ports, vectors))
+        u_v = np.asarray(self.mech.gfu(self._vertices)).reshape(-1, self.mesh.dim)
+        return SweepPoint(pressure, float(delta_form.InnerProduct(x)),
+                          float(np.max(np.linalg.norm(u_v, axis=1))),
+                          float(np.min(self._J(self._qpoints))), int(iterations), True, 1.0,
+                          along, vectors)
+
+    def _failed(self, pressure: float, iterations: int, load_reached: float) -> SweepPoint:
+        n = len(self.ports)
+        return SweepPoint(float(pressure), np.nan, np.nan, np.nan, int(iterations), False,
+                          float(load_reached), (np.nan,) * n,
+                          ((np.nan,) * self.mesh.dim,) * n)
+
+    def solve(self, pressure: float) -> SweepPoint:
+        """Equilibrium at ``pressure`` (the wall pressure, in the run's units; negative:
+        suction), warm-started from the last equilibrium (Newton ramps from zero where that
+        fails)."""
+        P = float(pressure)
+        if not np.isfinite(P):
+            raise ValueError(f"pressure must be finite (got {pressure!r})")
+        sign = -1.0 if P < 0 else 1.0
+        if sign != self._unit.Get():
+            self._unit.Set(sign)
+            self.mech.load_changed()  # the unit load vector changed sign
+        self.mech.target = abs(P)
+        try:
+            self.mech.forward(*self._values.values())
+        except NewtonFailure as failure:
+            res = failure.result
+            return self._failed(P, res.iterations, res.load_reached / abs(P) if P else 0.0)
+        return self._read(P, self.mech.result.iterations)
+
+    def sweep(self, pressures, *, say: Callable[[str], None] | None = None) -> Sweep:
+        """Solve at every pressure in turn, each from the last equilibrium; ``pressures`` in
+        increasing order of size.  After a failure the remaining pressures are recorded as not
+        converged without being attempted (a larger pressure starts from further away).
+        ``say(line)``, if given, gets one progress line per pressure: the pressure, Δ, Newton
+        iterations and seconds."""
+        pressures = [float(P) for P in pressures]
+        if np.any(np.diff(np.abs(pressures)) < 0):
+            raise ValueError("pressures: give them in increasing order of size (each pressure "
+                             "starts from the last one's equilibrium)")
+        out = Sweep(self.kind, [], self)
+        failed = False
+        with compute():
+            for P in pressures:
+                t0 = time.perf_counter()
+                skipped = failed
+                pt = self._failed(P, 0, 0.0) if skipped else self.solve(P)
+                failed = not pt.converged
+                out.points.append(pt)
+                out.states.append(self.mech.gfu.vec.FV().NumPy().copy() if not failed else None)
+                if say is not None:
+                    say(self._line(pt, time.perf_counter() - t0, skipped))
+        return out
+
+    def _line(self, pt: SweepPoint, seconds: float, skipped: bool) -> str:
+        head = f"  {self.kind} {self.model} P = {pt.pressure:.4g}: "
+        if pt.converged:
+            what = f"Δ = {pt.delta:.5g}"
+        elif skipped:
+            what = "not attempted (a lower pressure failed)"
+        else:
+            what = f"not converged (equilibrium up to {100 * pt.load_reached:.3g} % of it)"
+        return f"{head}{what}, {pt.iterations} Newton iterations, {seconds:.2f} s"

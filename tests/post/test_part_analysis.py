@@ -1,0 +1,351 @@
+"""One analysis of a part with the run's material law (pacto_ng/post/part_analysis.py).
+
+Independent references:
+
+* Lamé's thick-walled cylinder in plane strain (inner radius a, outer b, internal pressure P,
+  Timoshenko and Goodier 1970, *Theory of Elasticity*, §28), ``u_r(a) = (1+ν) a² P /
+  (E (b² - a²)) ((1-2ν) a + b²/a)``; the thick-walled sphere (ibid. §141),
+  ``u_r(a) = P a³ / (E (b³ - a³)) ((1-2ν) a + (1+ν) b³ / (2 a²))``;
+* the divergence theorem, ``∫_∂Ω N0 · x dA = d |Ω|`` for the outward normal;
+* the classes this one replaces (:class:`~pacto_ng.post.reanalysis.Reanalysis`,
+  :class:`~pacto_ng.post.reanalysis3d.Reanalysis3D`: Neo-Hookean, their own loads);
+* the small-strain limit: every hyperelastic law tends to the linear one as P -> 0;
+* the displacement GridFunction itself, evaluated and integrated here.
+"""
+import numpy as np
+import pytest
+
+from pacto_ng.params import Parameters
+from pacto_ng.physics.loads import Port
+from pacto_ng.physics.mechanics import Supports
+from pacto_ng.post.part_analysis import PartAnalysis, outward_normal
+
+A, B, E, NU = 0.5, 1.0, 1e6, 0.3
+LINEAR = Parameters(model="linear", E1=E, E0=1e-3 * E, E2=E, nu=NU, thickness=1.0,
+                    plane="strain")
+RING_SUPPORTS = Supports(fix_x=("left",), fix_y=("bottom",))
+INNER = Port("inner", (1.0, 0.0))
+
+
+def lame_cylinder(P, nu=NU):
+    return (1 + nu) * A * A * P / (E * (B * B - A * A)) * ((1 - 2 * nu) * A + B * B / A)
+
+
+def lame_sphere(P):
+    return P * A**3 / (E * (B**3 - A**3)) * ((1 - 2 * NU) * A + (1 + NU) * B**3 / (2 * A * A))
+
+
+def ring_quarter(maxh, curve=2):
+    """The quarter ring a <= r <= b: edges left (x = 0), bottom (y = 0), pressure (r = a),
+    outer (r = b); points inner (a, 0) and outer_point (b, 0)."""
+    import ngsolve as ng
+    from netgen import occ
+
+    shape = (occ.Circle((0, 0), B).Face() - occ.Circle((0, 0), A).Face()) \
+        * occ.MoveTo(0, 0).Rectangle(B, B).Face()
+    for e in shape.edges:
+        c = e.center
+        e.name = ("left" if abs(c.x) < 1e-9 else "bottom" if abs(c.y) < 1e-9 else
+                  "pressure" if np.hypot(c.x, c.y) < 0.5 * (A + B) else "outer")
+    shape.vertices.Nearest((A, 0, 0)).name = "inner"
+    shape.vertices.Nearest((B, 0, 0)).name = "outer_point"
+    mesh = ng.Mesh(occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
+    mesh.Curve(curve)
+    return mesh
+
+
+def sphere_octant(maxh):
+    """An eighth of the shell a <= r <= b: faces sx, sy, sz (the symmetry planes), pressure
+    (r = a), outer (r = b); the point inner at (a, 0, 0)."""
+    import ngsolve as ng
+    from netgen import occ
+
+    shape = (occ.Sphere(occ.Pnt(0, 0, 0), B) - occ.Sphere(occ.Pnt(0, 0, 0), A)) \
+        * occ.Box((0, 0, 0), (B, B, B))
+    for f in shape.faces:
+        c = f.center
+        r = np.sqrt(c.x**2 + c.y**2 + c.z**2)
+        f.name = ("sx" if abs(c.x) < 1e-9 else "sy" if abs(c.y) < 1e-9 else
+                  "sz" if abs(c.z) < 1e-9 else "pressure" if r < 0.5 * (A + B) else "outer")
+    shape.vertices.Nearest((A, 0, 0)).name = "inner"
+    mesh = ng.Mesh(occ.OCCGeometry(shape).GenerateMesh(maxh=maxh))
+    mesh.Curve(2)
+    return mesh
+
+
+def hollow_box(maxh=0.3):
+    """The unit cube less a box inside it (walls ``pressure``): outer faces fixed (x = 0),
+    right (x = 1), free (the rest)."""
+    import ngsolve as ng
+    from netgen import occ
+
+    outer = occ.Box((0, 0, 0), (1, 1, 1))
+    for f in outer.faces:
+        c = f.center
+        f.name = "fixed" if abs(c.x) < 1e-9 else "right" if abs(c.x - 1) < 1e-9 else "free"
+    cavity = occ.Box((0.3, 0.3, 0.3), (0.7, 0.6, 0.7))
+    cavity.faces.name = "pressure"
+    return ng.Mesh(occ.OCCGeometry(outer - cavity).GenerateMesh(maxh=maxh))
+
+
+@pytest.fixture(scope="module")
+def ring():
+    return ring_quarter(0.1)
+
+
+@pytest.fixture(scope="module")
+def ring_straight():
+    """Straight-sided triangles: the linear model's route integrates its stiffness with a rule
+    exact on affine elements only (physics/quadrature.py, stiffness_rules), which on the
+    curved ring differs from the nonlinear models' full rule by 5e-5 of Δ."""
+    return ring_quarter(0.1, curve=1)
+
+
+# -- the outward normal --------------------------------------------------------------------
+def test_outward_normal_by_the_divergence_theorem():
+    """∫ N0·x dA = d |Ω| on a 2D ring (whose hole's edges NGSolve orients inwards: its own
+    normal gives 2.5π against 1.5π) and on a 3D hollow box."""
+    import ngsolve as ng
+    from netgen import occ
+
+    ring_face = occ.Circle((0, 0), B).Face() - occ.Circle((0, 0), A).Face()
+    ring_face.edges.name = "wall"
+    m2 = ng.Mesh(occ.OCCGeometry(ring_face, dim=2).GenerateMesh(maxh=0.1))
+    m2.Curve(3)
+    m3 = hollow_box()
+    xyz = {2: ng.CF((ng.x, ng.y)), 3: ng.CF((ng.x, ng.y, ng.z))}
+    for mesh, walls in ((m2, "wall"), (m3, "fixed|right|free|pressure")):
+        d = mesh.dim
+        n0 = outward_normal(mesh, walls)
+        lhs = ng.Integrate(n0 * xyz[d], mesh, ng.BND, order=5)
+        assert lhs == pytest.approx(d * ng.Integrate(1.0, mesh, order=5), rel=1e-10)
+    own = ng.Integrate(ng.specialcf.normal(2) * xyz[2], m2, ng.BND, order=5)
+    assert own == pytest.approx(2.5 * np.pi, rel=1e-6)  # (the check above is not vacuous)
+
+
+def test_a_wall_inside_the_part_is_refused():
+    with pytest.raises(ValueError, match="runs inside the part"):
+        outward_normal(two_material_beam(("soft", "stiff"))[0], "interface")
+
+
+# -- 1. Lamé ---------------------------------------------------------------------------------
+def test_lame_cylinder_2d_linear():
+    """Order 2 on the quarter ring (geometry curved at order 2): u_r(a) against Lamé, error
+    2.9e-4 at maxh 0.2 (36 triangles) and 1.4e-5 at maxh 0.05 (505): the discretisation error
+    (1.1e-5 at maxh 0.1, 6e-5 with the geometry curved at order 3 there: not monotone at this
+    level).  One linear solve per pressure; Δ linear in P; the outer point's value, and an edge
+    port: the mean of u over the inner arc, u_r(a) (2/π, 2/π)."""
+    errs = []
+    for maxh in (0.2, 0.05):
+        ports = (INNER, Port("outer_point", (1.0, 0.0)), Port("pressure", (1.0, 1.0)))
+        pa = PartAnalysis(ring_quarter(maxh), "fixed", params=LINEAR, supports=RING_SUPPORTS,
+                          ports=ports, order=2)
+        sw = pa.sweep([1e3, 1e4])
+        assert sw.converged.all() and [p.iterations for p in sw.points] == [1, 1]
+        assert pa.mech.assembly["linear_system"] is not None
+        errs.append(sw.points[1].ports[0] / lame_cylinder(1e4) - 1.0)
+        assert sw.points[0].ports[0] / lame_cylinder(1e3) - 1.0 == pytest.approx(errs[-1],
+                                                                                abs=1e-12)
+    # Lamé at r = b: u_r(b) = (1+ν) a² P / (E (b² - a²)) 2 (1-ν) b
+    outer = (1 + NU) * A * A * 1e4 / (E * (B * B - A * A)) * 2 * (1 - NU) * B
+    assert sw.points[1].ports[1] == pytest.approx(outer, rel=1e-4)
+    arc = 2.0 / np.pi * lame_cylinder(1e4)
+    assert sw.points[1].vectors[2] == pytest.approx((arc, arc), rel=1e-4)
+    assert sw.points[1].ports[2] == pytest.approx(2.0 * arc, rel=1e-4)
+    assert sw.points[1].delta == pytest.approx(sum(sw.points[1].ports), rel=1e-13)
+    assert abs(errs[1]) < 5e-5 and abs(errs[1]) < abs(errs[0]) / 8
+
+
+def test_lame_sphere_3d_linear():
+    """The sphere octant at order 2: u_r(a) at the named vertex against the closed form,
+    error 1.8e-2 at maxh 0.2 (235 tetrahedra) and 2.1e-3 at maxh 0.1 (1614), falling as
+    h^3: the discretisation error.  A face port on the inner wall: the mean of u_x over the
+    octant is u_r(a) / 2 (the mean of N_x over it), measured within 5.0e-4 at maxh 0.1."""
+    errs = []
+    for maxh in (0.2, 0.1):
+        pa = PartAnalysis(sphere_octant(maxh), "fixed", params=LINEAR,
+                          supports=Supports(fix_x=("sx",), fix_y=("sy",), fix_z=("sz",)),
+                          ports=(Port("inner", (1.0, 0.0, 0.0)),
+                                 Port("pressure", (1.0, 0.0, 0.0), weight=1e-9)), order=2)
+        pt = pa.solve(1e4)
+        assert pt.converged and pt.iterations == 1
+        errs.append(pt.ports[0] / lame_sphere(1e4) - 1.0)
+        assert pt.vectors[0][1:] == pytest.approx((0.0, 0.0), abs=1e-12)  # the symmetry planes
+    assert abs(errs[1]) < 4e-3 and abs(errs[1]) < abs(errs[0]) / 4
+    print("sphere: point", errs, "face", pt.ports[1] / (0.5 * lame_sphere(1e4)) - 1.0)
+    assert pt.ports[1] == pytest.approx(0.5 * lame_sphere(1e4), rel=2e-3)
+    assert pt.vectors[1] == pytest.approx((pt.ports[1],) * 3, rel=1e-3)  # by symmetry
+
+
+# -- 2. against the classes it replaces -------------------------------------------------------
+@pytest.mark.parametrize("kind", ["fixed", "follower"])
+def test_equals_reanalysis_2d(ring, kind):
+    from pacto_ng.post.reanalysis import Reanalysis
+
+    params = LINEAR.replace(model="neohookean")
+    new = PartAnalysis(ring, kind, params=params, supports=RING_SUPPORTS, ports=INNER,
+                       order=2).sweep([1e4, 1e5])
+    old = Reanalysis(ring, kind, E=E, nu=NU, thickness=1.0, supports=RING_SUPPORTS,
+                     output=INNER, order=2).sweep([1e4, 1e5])
+    assert new.converged.all() and old.converged.all()
+    assert new.delta == pytest.approx(old.delta, rel=1e-8)
+    assert [p.min_j for p in new.points] == pytest.approx([p.min_j for p in old.points],
+                                                         rel=1e-8)
+
+
+@pytest.mark.parametrize("kind", ["fixed", "follower"])
+def test_equals_reanalysis_3d(kind):
+    from pacto_ng.post.reanalysis3d import Reanalysis3D
+
+    mesh = hollow_box()
+    port = Port("right", (1.0, 0.0, 0.0))
+    supports = Supports(clamp=("fixed",))
+    params = LINEAR.replace(model="neohookean")
+    new = PartAnalysis(mesh, kind, params=params, supports=supports, ports=port,
+                       order=2).sweep([3e4, 1e5])
+    old = Reanalysis3D(mesh, kind, E=E, nu=NU, supports=supports, output=port,
+                       order=2).sweep([3e4, 1e5])
+    assert new.converged.all() and old.converged.all()
+    assert new.delta == pytest.approx(old.delta, rel=1e-8)
+    assert new.delta[1] > 1e-3  # the cavity pushes the right face out
+
+
+# -- 3. every hyperelastic law in the small-strain limit --------------------------------------
+def test_hyperelastic_models_tend_to_linear(ring_straight):
+    """At P = 1e-6 E every hyperelastic model gives the linear Δ to 1e-3 (measured: 1.1e-6 at
+    most, O(P/E)); at P = 0.1 E they leave it by more than 1 % (measured 6-8 %).  Wang on
+    solid material (γ = 1) is Neo-Hookean to round-off.  The preset (Dragon Skin 30, Yeoh) sets E1 and ν = 0.45 for the
+    linear model too; the displacement formulation for both, to compare like with like."""
+    cases = {m: LINEAR.replace(model=m) for m in ("linear", "gnl", "neohookean", "wang")}
+    preset = Parameters(material="dragonskin-30", model="yeoh", formulation="displacement",
+                        thickness=1.0)
+    preset_linear = preset.replace(model="linear")
+    assert preset.E1 == preset_linear.E1 and preset.nu == 0.45
+    cases.update(yeoh=preset, yeoh_linear=preset_linear)
+    deltas = {}
+    for name, params in cases.items():
+        pa = PartAnalysis(ring_straight, "fixed", params=params, supports=RING_SUPPORTS,
+                          ports=INNER, order=2)
+        sw = pa.sweep([1e-6 * params.E1, 0.1 * params.E1])
+        assert sw.converged.all(), name
+        deltas[name] = sw.delta
+    for name in ("gnl", "neohookean", "wang", "yeoh"):
+        ref = deltas["yeoh_linear" if name == "yeoh" else "linear"]
+        small, large = deltas[name] / ref - 1.0
+        print(name, "against linear:", small, large)
+        assert abs(small) < 1e-3, name
+        assert abs(large) > 1e-2, name
+    assert deltas["wang"] == pytest.approx(deltas["neohookean"], rel=1e-12)
+    assert abs(deltas["gnl"][1] / deltas["neohookean"][1] - 1.0) > 1e-2
+
+
+# -- 4. two materials -------------------------------------------------------------------------
+def two_material_beam(names):
+    """A 1 x 0.2 cantilever of two glued faces (x < 0.5 and x > 0.5) named ``names``: edges
+    fixed (x = 0), pressure (y = 0.2), interface (x = 0.5); the point tip at (1, 0)."""
+    import ngsolve as ng
+    from netgen import occ
+
+    left, right = occ.Rectangle(0.5, 0.2).Face(), occ.MoveTo(0.5, 0).Rectangle(0.5, 0.2).Face()
+    left.faces.name, right.faces.name = names
+    shape = occ.Glue([left, right])
+    for e in shape.edges:
+        c = e.center
+        e.name = ("fixed" if abs(c.x) < 1e-9 else "pressure" if abs(c.y - 0.2) < 1e-9 else
+                  "interface" if abs(c.x - 0.5) < 1e-9 else "free")
+    shape.vertices.Nearest((1, 0, 0)).name = "tip"
+    mesh = ng.Mesh(occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=0.05))
+    return mesh, dict(supports=Supports(clamp=("fixed",)), ports=Port("tip", (0.0, -1.0)),
+                      order=2)
+
+
+def test_two_materials():
+    """E2 = E1 gives the one-material part's Δ (same mesh, materials soft/stiff against solid);
+    a stiff root half (E2 = 10 E1) lowers it (measured to 0.17 of it), but less than a part all
+    of E2 (0.10 of it)."""
+    one, kw = two_material_beam(("solid", "solid"))
+    two, _ = two_material_beam(("stiff", "soft"))
+    assert set(two.GetMaterials()) == {"soft", "stiff"} and (one.ne, one.nv) == (two.ne, two.nv)
+    params = LINEAR.replace(model="neohookean")
+    P = 1e3
+    d_one = PartAnalysis(one, "follower", params=params, **kw).solve(P).delta
+    d_same = PartAnalysis(two, "follower", params=params, **kw).solve(P).delta
+    d_stiff = PartAnalysis(two, "follower", params=params.replace(E2=10 * E), **kw).solve(P).delta
+    d_all = PartAnalysis(one, "follower", params=params.replace(E1=10 * E, E0=1e-2 * E),
+                         **kw).solve(P).delta
+    assert d_one > 0
+    assert d_same == pytest.approx(d_one, rel=1e-10)
+    assert d_all < 0.11 * d_one
+    print("two materials: Δ", d_one, d_same / d_one - 1, d_stiff / d_one, d_all / d_one)
+    assert d_all < 0.9 * d_stiff and d_stiff < 0.5 * d_one
+
+
+# -- 5. a point port and a face port in 3D ----------------------------------------------------
+def test_point_and_face_ports_3d():
+    """A 1 x 0.2 x 0.2 cantilever under fixed pressure on its top face, read at its tip face
+    (mean) and at one of that face's vertices: both against the displacement field itself,
+    and the point within the range of the face's values."""
+    import ngsolve as ng
+    from netgen import occ
+
+    box = occ.Box((0, 0, 0), (1.0, 0.2, 0.2))
+    for f in box.faces:
+        c = f.center
+        f.name = ("fixed" if abs(c.x) < 1e-9 else "right" if abs(c.x - 1) < 1e-9 else
+                  "pressure" if abs(c.y - 0.2) < 1e-9 else "free")
+    box.vertices.Nearest((1.0, 0.0, 0.2)).name = "corner"
+    mesh = ng.Mesh(occ.OCCGeometry(box).GenerateMesh(maxh=0.1))
+    down = (0.0, -1.0, 0.0)
+    ports = (Port("right", down), Port("corner", down, weight=0.5))
+    pa = PartAnalysis(mesh, "fixed", params=LINEAR, supports=Supports(clamp=("fixed",)),
+                      ports=ports, order=2)
+    sw = pa.sweep([1e3])
+    face, point = sw.points[0].ports
+    u = sw.displacement()
+    assert point == pytest.approx(-u(mesh(1.0, 0.0, 0.2))[1], rel=1e-10)
+    area = ng.Integrate(1.0, mesh, ng.BND, definedon=mesh.Boundaries("right"))
+    mean = np.array(ng.Integrate(u, mesh, ng.BND, definedon=mesh.Boundaries("right"))) / area
+    assert sw.points[0].vectors[0] == pytest.approx(tuple(mean), rel=1e-10)
+    assert sw.points[0].vectors[1] == pytest.approx(tuple(u(mesh(1.0, 0.0, 0.2))), rel=1e-10)
+    xyz = np.array([mesh[v].point for el in mesh.Elements(ng.BND)
+                    if el.mat == "right" for v in el.vertices])
+    values = -np.asarray(u(mesh(xyz[:, 0], xyz[:, 1], xyz[:, 2])))[:, 1]
+    assert face > 0 and values.min() <= point <= values.max()
+    assert values.min() <= face <= values.max()
+    assert sw.points[0].delta == pytest.approx(face + 0.5 * point, rel=1e-12)
+
+
+# -- 6. nearly incompressible: the mixed formulation -------------------------------------------
+def test_nearly_incompressible_selects_mixed(ring):
+    """ν = 0.49, Neo-Hookean, order 2 on triangles: the mixed formulation (formulation=auto),
+    which converges and is closer to Lamé at P = 1e-5 E than the displacement formulation
+    (measured 1.2e-4 against -7.2e-4)."""
+    params = LINEAR.replace(model="neohookean", nu=0.49)
+    assert PartAnalysis(ring, "fixed", params=params, supports=RING_SUPPORTS,
+                        ports=INNER).order == 1  # params.order 0: order 1
+    err = {}
+    for setting in ("auto", "displacement"):
+        pa = PartAnalysis(ring, "fixed", params=params.replace(order=2, formulation=setting),
+                          supports=RING_SUPPORTS, ports=INNER)
+        sw = pa.sweep([1e-5 * E, 0.05 * E])
+        assert sw.converged.all() and pa.model == "neohookean"
+        err[pa.formulation] = sw.delta[0] / lame_cylinder(1e-5 * E, 0.49) - 1.0
+    print("nu = 0.49 against Lamé:", err)
+    assert set(err) == {"mixed", "displacement"}  # auto chose the mixed formulation
+    assert abs(err["mixed"]) < 3e-4 and abs(err["mixed"]) < abs(err["displacement"]) / 3
+
+
+# -- the sweep ---------------------------------------------------------------------------------
+def test_sweep_stops_at_the_first_failure_and_says_each_pressure(ring):
+    params = LINEAR.replace(model="neohookean", newton_max_iter=3, newton_min_increment=0.5)
+    pa = PartAnalysis(ring, "fixed", params=params, supports=RING_SUPPORTS, ports=INNER,
+                      order=1)
+    lines = []
+    sw = pa.sweep([1e-5 * E, 3.0 * E, 4.0 * E], say=lines.append)
+    assert sw.converged.tolist() == [True, False, False]
+    assert sw.points[1].load_reached < 1.0 and np.isnan(sw.delta[1])
+    assert sw.points[2].iterations == 0 and sw.states[2] is None
+    assert len(lines) == 3 and "Δ = " in lines[0] and "not attempted" in lines[2]
+    assert sw.displacement().vec.FV().NumPy() @ sw.states[0] > 0  # the last converged state
+    with pytest.raises(ValueError, match="increasing"):
+        pa.sweep([2e3, 1e3])
