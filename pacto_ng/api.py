@@ -137,6 +137,7 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
     >>> result = run("my_case.py", out="output/mine", iterations=10)   # doctest: +SKIP
     >>> result.objective, result.summary["volume_fraction"]             # doctest: +SKIP
     """
+    from .post.part_stage import finish_run
     from .runner import optimise_case
 
     if not isinstance(case, Case):
@@ -144,7 +145,8 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
     params = case_parameters(case, settings)
     folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=f"pacto-{case.name}-"))
     done = optimise_case(case, params, folder, quiet=quiet, overwrite=overwrite)
-    return Result(folder, done.exit_code, done.summary, done.history, done.x, done.problem)
+    summary = finish_run(folder, done.problem, done.summary, quiet=quiet)
+    return Result(folder, done.exit_code, summary, done.history, done.x, done.problem)
 
 
 def check_gradients(case: Case | str | os.PathLike, *, seed: int = 0, quiet: bool = True,

@@ -329,6 +329,19 @@ def main(argv=None) -> int:
             signal.signal(sig, handler)
 
 
+def _run_with_part(case, params, out, args) -> int:
+    """``pacto run``: the optimisation, then its part (:mod:`pacto_ng.post.part_stage`) made,
+    checked and analysed by the rank that writes the folder."""
+    from .parallel import leads
+    from .post.part_stage import finish_run
+    from .runner import optimise_case
+
+    done = optimise_case(case, params, out, quiet=args.quiet, overwrite=args.overwrite)
+    if leads():
+        finish_run(out, done.problem, done.summary, quiet=args.quiet)
+    return done.exit_code
+
+
 def _main(argv) -> int:
     from .case import available_cases, get_case
 
@@ -374,10 +387,7 @@ def _main(argv) -> int:
 
             return run_analysis_case(case, params, _default_out(args, case, params),
                                      quiet=args.quiet, overwrite=args.overwrite)
-        from .runner import run_case
-
-        return run_case(case, params, _default_out(args, case, params), quiet=args.quiet,
-                        overwrite=args.overwrite)
+        return _run_with_part(case, params, _default_out(args, case, params), args)
     if args.command == "sweep":
         from . import sweep
 

@@ -87,11 +87,12 @@ class BoundaryLocator:
 
 
 def named_points(mesh) -> dict:
-    """Named points (co-dimension 2 regions other than 'default') of a mesh: name -> (x, y)."""
-    from ngsolve import BBND
+    """Named points (vertex regions other than 'default': co-dimension 2 in 2D, 3 in 3D) of a
+    mesh: name -> (x, y) or (x, y, z)."""
+    from ngsolve import BBBND, BBND
 
     out = {}
-    for el in mesh.Elements(BBND):
+    for el in mesh.Elements(BBBND if mesh.dim == 3 else BBND):
         if el.mat != "default" and el.mat not in out:
             out[el.mat] = tuple(mesh[el.vertices[0]].point)
     return out

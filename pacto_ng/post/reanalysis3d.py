@@ -40,12 +40,13 @@ cases define their output), each port with its spring on the same face.
 from __future__ import annotations
 
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..physics.newton import NewtonSettings
+from .boundary import named_points
 from .materials import MATERIALS, modulus_cf
 from .reanalysis import Reanalysis, output_ports
 
@@ -61,6 +62,7 @@ class Remeshed3D:
     areas: dict  # boundary name -> area
     dropped: int = 0  # tetrahedra of the pieces not joined to the clamp through faces
     materials: str | None = None  # two materials: how they were assigned ("element-wise")
+    ports: dict = field(default_factory=dict)  # named point -> (source position, new vertex)
 
 
 def _bounding_faces(source, exclude):
@@ -180,7 +182,7 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
     module docstring).  ValueError when Netgen fails (or takes longer than ``timeout`` s) or
     no face lies on the clamp."""
     import ngsolve
-    from netgen.meshing import FaceDescriptor, Mesh as NGMesh
+    from netgen.meshing import Element0D, FaceDescriptor, Mesh as NGMesh
 
     gen = _netgen_stl(surface, maxh, timeout)
     pts = np.asarray(gen.Coordinates(), dtype=float)
@@ -251,9 +253,15 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
             new.Add(FaceDescriptor(bc=fd, domin=int(k) + 1, domout=0, surfnr=fd))
             new.SetBCName(fd - 1, name)
             new.AddElements(dim=2, index=fd, data=tris[sel & (side == k)], base=0)
+    # the source's named points, each on the nearest vertex of the part
+    ports = {}
+    for name, point in named_points(source).items():
+        k = int(np.argmin(np.linalg.norm(pts - np.asarray(point), axis=1)))
+        new.Add(Element0D(k + 1, index=new.AddRegion(name, dim=0)))
+        ports[name] = (tuple(map(float, point)), tuple(map(float, pts[k])))
     mesh = ngsolve.Mesh(new)
     return Remeshed3D(mesh, float(ngsolve.Integrate(1.0, mesh)), areas, dropped,
-                      None if stiff_at is None else "element-wise")
+                      None if stiff_at is None else "element-wise", ports)
 
 
 class Reanalysis3D(Reanalysis):

@@ -33,8 +33,7 @@ when several share them).  A leak's opening is the reached zero point (a void ve
 facet, or the centroid of a zero facet of an excluded element) nearest in straight-line distance
 to the chamber's seed points, and its boundary that point's.  With no seed at all (the inlet
 covered by solid, no passive void behind it) there is no chamber: sealed.  Two materials: pass
-ρ̄1 (the solid, either material); nothing else changes.  :func:`check_part_boundary` asks the
-same of a remeshed, body-fitted part.
+ρ̄1 (the solid, either material); nothing else changes.
 """
 from __future__ import annotations
 
@@ -346,45 +345,3 @@ def _chambers(labels, seeds, zeros, excl_mats, nv):
     names = [f[0] for f in found]
     return tuple(Chamber(f"{n} #{names[:i + 1].count(n)}" if names.count(n) > 1 else n, *rest)
                  for i, (n, *rest) in enumerate(found))
-
-
-def check_part_boundary(mesh, *, wetted="pressure", zero=(), barrier=()) -> list:
-    """The zero-pressure boundaries a remeshed part's wetted walls run into.
-
-    The boundary facets of ``mesh`` (a body-fitted mesh of the solid only) are grouped into
-    connected pieces, facets sharing a vertex: closed curves in 2D, closed surfaces in 3D.
-    A chamber is closed off when the piece of its wetted facets holds no ``zero`` facet.
-
-    Parameters
-    ----------
-    mesh : ngsolve.Mesh
-    wetted : str or iterable of str
-        The chamber walls' boundary names.
-    zero : str or iterable of str
-        The zero-pressure boundary names.  Names the mesh lacks are simply never reached.
-    barrier : str or iterable of str
-        Boundary names whose facets join no pieces (e.g. ``symmetry``): a half model's chamber
-        cut by the symmetry line, or one open onto an inlet on the domain's edge, lies on the
-        outer boundary's curve and is reported open unless the boundary between is a barrier.
-
-    Returns
-    -------
-    list of str
-        Sorted names of the ``zero`` boundaries sharing a piece with a wetted facet; empty:
-        every wetted piece is closed off.
-    """
-    wetted, zero, barrier = ({n} if isinstance(n, str) else set(n)
-                             for n in (wetted, zero, barrier))
-    facets, names = _boundary_facets(mesh)
-    keep = ~np.isin(names, list(barrier))
-    facets, names = facets[keep], names[keep]
-    if not len(facets):
-        return []
-    nv = int(facets.max()) + 1
-    last = facets[:, -1]  # sorted: the last vertex id of a facet is never padding
-    first = np.broadcast_to(last[:, None], facets.shape)
-    ok = facets >= 0
-    graph = coo_matrix((np.ones(int(ok.sum())), (first[ok], facets[ok])), shape=(nv, nv))
-    piece = connected_components(graph.tocsr(), directed=False)[1][last]
-    wet = np.isin(piece, piece[np.isin(names, list(wetted))])
-    return sorted(set(names[wet & np.isin(names, list(zero))]))

@@ -13,7 +13,7 @@ import pytest
 
 from pacto_ng.box import Block, Box, Patch, netgen_box_mesh, structured_box
 from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
-from pacto_ng.post.seal import Seal, check_part_boundary, check_seal
+from pacto_ng.post.seal import Seal, check_seal
 
 # --- 2D: a 0.1 x 0.05 rectangle, outer edges ``zero``, a passive void chamber (wall ``inlet``)
 W, H = 0.1, 0.05
@@ -430,76 +430,3 @@ def test_3d_tunnel_to_the_top_leaks_at_its_mouth(chamber3d):
     assert abs(z - B) < 1e-9
     lo, hi = TUNNEL[0][0] - h3, TUNNEL[1][0] + h3
     assert lo <= x <= hi and lo <= y <= hi
-
-
-# --- check_part_boundary on remeshed (body-fitted) parts ------------------------------------
-def _named_mesh(shape, maxh, name, dim=2):
-    import ngsolve as ng
-    from netgen import occ
-
-    for e in shape.edges if dim == 2 else ():
-        e.name = name(e.Value(0.5 * sum(e.parameter_interval)))  # a point on the edge
-    for f in shape.faces if dim == 3 else ():
-        f.name = name(f.center)  # planar faces: the centre lies on them
-    return ng.Mesh(occ.OCCGeometry(shape, dim=dim).GenerateMesh(maxh=maxh))
-
-
-def _ring(slot=False, half=False):
-    from netgen import occ
-
-    shape = occ.Circle((0, 0), 1.0).Face() - occ.Circle((0, 0), 0.4).Face()
-    if slot:
-        shape = shape - occ.MoveTo(0.2, -0.1).Rectangle(1.0, 0.2).Face()
-    if half:
-        shape = shape * occ.MoveTo(-1.1, 0).Rectangle(2.2, 1.1).Face()
-
-    def name(c):
-        r = np.hypot(c.x, c.y)
-        if abs(r - 0.4) < 1e-6 or abs(r - 1.0) < 1e-6:
-            return "pressure" if r < 0.5 else "zero_pressure"
-        return "symmetry" if abs(c.y) < 1e-9 else "free"
-    return _named_mesh(shape, 0.15, name)
-
-
-def test_part_boundary_ring_is_closed():
-    assert check_part_boundary(_ring(), zero=("zero_pressure",)) == []
-
-
-def test_part_boundary_c_shape_is_open():
-    """The slot's walls (free) run from the hole's wall (pressure) to the outer arc."""
-    mesh = _ring(slot=True)
-    assert set(mesh.GetBoundaries()) == {"pressure", "free", "zero_pressure"}
-    assert check_part_boundary(mesh, zero=("zero_pressure",)) == ["zero_pressure"]
-
-
-def test_part_boundary_half_ring_needs_the_symmetry_as_barrier():
-    """The upper half ring: the hole's arc and the outer arc meet the symmetry line, so they are
-    one closed curve unless the symmetry facets are a barrier."""
-    mesh = _ring(half=True)
-    assert check_part_boundary(mesh, zero="zero_pressure") == ["zero_pressure"]
-    assert check_part_boundary(mesh, zero="zero_pressure", barrier="symmetry") == []
-
-
-def _hollow_box(tunnel):
-    from netgen import occ
-
-    cavity = occ.Box((0.3, 0.3, 0.3), (0.7, 0.7, 0.7))
-    if tunnel:
-        cavity = cavity + occ.Box((0.4, 0.4, 0.5), (0.6, 0.6, 1.5))
-    shape = occ.Box((0, 0, 0), (1, 1, 1)) - cavity
-
-    def name(c):
-        outer = min(c.x, c.y, c.z, 1 - c.x, 1 - c.y, 1 - c.z) < 1e-9
-        return "zero_pressure" if outer else "pressure"
-    return _named_mesh(shape, 0.3, name, dim=3)
-
-
-def test_part_boundary_hollow_box_is_closed():
-    assert check_part_boundary(_hollow_box(False), zero="zero_pressure") == []
-
-
-def test_part_boundary_box_with_a_tunnel_is_open():
-    """The tunnel's walls (pressure) meet the top face (zero_pressure) around its mouth."""
-    mesh = _hollow_box(True)
-    assert set(mesh.GetBoundaries()) == {"pressure", "zero_pressure"}
-    assert check_part_boundary(mesh, zero="zero_pressure") == ["zero_pressure"]

@@ -1,0 +1,206 @@
+"""Every run ends with its part: made, checked for a seal, analysed, reported.
+
+After the optimisation, :func:`finish_run` makes the part of the reported design
+(:func:`~.part.make_part`: threshold, remesh, the chambers checked), analyses it at the run's
+load with the run's own model and load type (:class:`~.part_analysis.PartAnalysis`: the
+pressure on the wetted walls, fixed or following the deformation, as the run's Darcy load
+was) and writes into the run folder:
+
+=================  ===========================================================================
+``part.stl``       the part, closed, whole (mirrored about the symmetry lines or planes), in mm
+``part.png``       the part deformed at the run's load, true scale, over its undeformed outline
+``summary.json``   ``part`` (below) and ``sealed`` added
+=================  ===========================================================================
+
+``part`` holds: ``made`` (False with ``why`` when there is no part), the threshold and how it
+was chosen, the part's area (2D) or volume (3D) against the design's material, the seal (each
+chamber, and where a leaking one opens), the analysis (kind, model, order, elements, the
+output displacement Δ at the ports and each port's displacement vector), ``gap`` =
+(Δ_part − Δ_design)/|Δ_design| against the run's own figure, and ``warnings`` (an output
+point the part does not reach, a port that moves more across its direction than along it).
+The run's last line says in words whether the part works and what to change when it does not.
+
+The part's analysis in 3D is of order 1 on tetrahedra of the design's element size (a fast
+setting: ``pacto analyse`` gives the full study); in 2D of order 2 on half the design's size.
+"""
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..files import atomic_write_text
+from ..params import InputError
+from ..physics.equilibrium import NewtonFailure
+from .domain import symmetry_line
+from .export import plot_deformed
+from .mirror3d import mirror_surface, symmetry_planes
+from .part import Part, make_part, part_ports, present_supports
+from .part2d import part_mesh, write_part_stl as write_stl_2d
+from .part3d import write_part_stl as write_stl_3d
+from .part_analysis import PartAnalysis
+from .plots3d import deformed_picture
+from .runs import copy_gridfunction
+
+#: a part whose output moves further than this from the design's (relative) is not "as
+#: designed" (the issue's figure: ±20 %)
+GAP_LIMIT = 0.2
+#: the part's element size and displacement order, by dimension
+PART_MAXH = {2: 0.5, 3: 1.0}  # times the design's element size
+PART_ORDER = {2: 2, 3: 1}
+
+
+def finish_run(path, problem, summary: dict, *, quiet: bool = False) -> dict:
+    """Make, check and analyse the part of the design ``problem`` holds (a finished run's,
+    its final design analysed), write ``part.stl``, ``part.png`` and the ``part`` entry of
+    ``path/summary.json``; print the run's last line.  Returns the updated summary."""
+    path = Path(path)
+    t0 = time.perf_counter()
+    try:
+        part, analysis = _part_and_analysis(path, problem, summary)
+        entry = dict(made=True, **part.summary(), **analysis)
+    except InputError as err:
+        entry, part = {"made": False, "why": str(err)}, None
+    entry["wall_time_s"] = time.perf_counter() - t0
+    summary = dict(summary, part=entry, sealed=entry.get("sealed"))
+    atomic_write_text(path / "summary.json", json.dumps(summary, indent=1))
+    line = last_line(summary, path)
+    if not quiet or not _works(entry):
+        print(line, flush=True)
+    return summary
+
+
+def _part_and_analysis(path, problem, summary):
+    """``(Part, analysis entry)``: the part made and written, analysed at the run's load."""
+    params, setup = problem.params, problem.setup
+    if problem.numbering is not None:
+        raise InputError("the part of a distributed run is made by 'pacto analyse DIR' "
+                         "(serially)")
+    pressure = problem.pressure_block
+    part = make_part(problem, setup, maxh=PART_MAXH[problem.mesh.dim] * problem.h,
+                     pressure=None if pressure is None else copy_gridfunction(pressure.gfp),
+                     p_in=params.load, mesh_time_limit=params.mesh_time_limit)
+    _write_stl(path / "part.stl", part, problem)
+    if pressure is None or not setup.ports:
+        return part, {"analysed": False,
+                      "why_not_analysed": "the part is analysed for pressure cases with an "
+                                          "output port"}
+    return part, _analyse(path, part, problem, summary)
+
+
+def _analyse(path, part: Part, problem, summary) -> dict:
+    """The part at the run's load (the load it reached) with the run's model and load type."""
+    params, setup = problem.params, problem.setup
+    load = float(summary.get("load_reached") or params.load)
+    order = PART_ORDER[part.dim]
+    kind = params.load_type
+    ports = part_ports(setup)
+    try:
+        ana = PartAnalysis(part.mesh, kind, params=params.replace(order=order),
+                           supports=present_supports(setup.supports, part.mesh), ports=ports)
+    except ValueError as err:
+        raise InputError(f"the part cannot be analysed: {err}") from None
+    point = ana.solve(load)
+    entry = {"analysed": True, "kind": kind, "model": ana.model, "order": order,
+             "formulation": ana.formulation, "load": load, "converged": point.converged,
+             "newton_iterations": point.iterations, "min_J": _num(point.min_j),
+             "output_displacement": _num(point.delta),
+             "ports": {p.region: {"along": _num(a), "vector": [_num(c) for c in v]}
+                       for p, a, v in zip(ports, point.ports, point.vectors)}}
+    design = summary.get("output_displacement")
+    entry["output_displacement_design"] = design
+    entry["gap"] = (None if not point.converged or not design else
+                    (point.delta - design) / abs(design))
+    entry["warnings"] = _warnings(part, problem, ports, point)
+    if point.converged:
+        title = (f"{problem.case.name} part, {load:.3g} {problem.case.load_unit} {kind}, "
+                 f"{ana.model} (true scale)")
+        u = ana.mech.gfu
+        if part.dim == 2:
+            plot_deformed(path / "part.png", part.mesh, u, title=title,
+                          mirror=symmetry_line(problem.mesh) or False)
+        else:
+            deformed_picture(path / "part.png", part.mesh, u, title=title)
+    return entry
+
+
+def _num(v):
+    return None if v is None or not np.isfinite(v) else float(v)
+
+
+def _warnings(part: Part, problem, ports, point) -> list[str]:
+    """What a user must know of the part beyond its figures."""
+    out = []
+    for region, (src, new) in part.ports.items():
+        shift = float(np.linalg.norm(np.subtract(new, src)))
+        if region in {p.region for p in ports} and shift > 2.0 * problem.h:
+            out.append(f"the part does not reach the output point '{region}': its nearest "
+                       f"vertex is {shift:.3g} m away (the output ends in void)")
+    if point.converged:
+        for port, along, vec in zip(ports, point.ports, point.vectors):
+            d = np.asarray(port.direction, dtype=float)
+            d /= np.linalg.norm(d)
+            v = np.asarray(vec, dtype=float)
+            across = float(np.linalg.norm(v - (v @ d) * d))
+            if across > abs(along):
+                out.append(f"the output '{port.region}' moves more across its direction "
+                           f"({across:.3g} m) than along it ({along:.3g} m): the objective "
+                           f"leaves that motion free")
+    return out
+
+
+def _write_stl(path, part: Part, problem):
+    """The part, closed and whole (mirrored), in mm."""
+    name = problem.case.name
+    if part.dim == 2:
+        line = symmetry_line(problem.mesh)
+        t = float(problem.params.thickness)
+        write_stl_2d(path, part_mesh(part.mesh, line), t, units="mm",
+                     header=f"pacto_ng {name} part, thickness {t * 1e3:g} mm"
+                            + (", whole (mirrored)" if line is not None else ""))
+    else:
+        planes = symmetry_planes(problem.mesh)
+        surface = part.pieces[0].surface
+        write_stl_3d(path, mirror_surface(surface, planes) if planes else surface, "mm",
+                     header=f"pacto_ng {name} part (3D)" + (", whole (mirrored)"
+                                                            if planes else ""))
+
+
+def _works(entry: dict) -> bool:
+    return bool(entry.get("made")) and entry.get("sealed") is not False and (
+        entry.get("gap") is None or abs(entry["gap"]) <= GAP_LIMIT) and not entry.get("warnings")
+
+
+def last_line(summary: dict, path) -> str:
+    """The run's last line: whether the part works, in words, and what to change."""
+    part = summary.get("part") or {}
+    if not part.get("made"):
+        return f"part: none was made ({part.get('why', 'not asked')}) — {path}"
+    head = "part"
+    bits = []
+    if part.get("sealed") is False:
+        chambers = [c for c in part["seal"]["chambers"] if not c["sealed"]]
+        where = (f"chamber '{chambers[0]['name']}' is open to '{chambers[0]['boundary']}' near "
+                 f"({', '.join(f'{c:.3g}' for c in chambers[0]['opening'])}) m")
+        bits.append(f"NOT SEALED: {where}, it will not hold pressure (raise volfrac, or "
+                    f"limit the leak: --set leak_max=1e-3)")
+    elif part.get("sealed"):
+        bits.append("sealed")
+    if part.get("analysed"):
+        unit = summary.get("load_unit", "")
+        if not part["converged"]:
+            bits.append(f"its {part['kind']} analysis at {part['load']:.4g} {unit} did not "
+                        f"converge")
+        else:
+            d, e = part["output_displacement"], part["output_displacement_design"]
+            text = f"moves {d:.4g} m at {part['load']:.4g} {unit}"
+            if part.get("gap") is not None:
+                text += f" against the design's {e:.4g} m ({100 * part['gap']:+.1f} %)"
+                if abs(part["gap"]) > GAP_LIMIT:
+                    text += (" — not as designed: --set robust=1 designs hinges the part keeps "
+                             "(docs/guide.md, 'The part')")
+            bits.append(text)
+    bits += part.get("warnings", [])
+    return f"{head}: " + "; ".join(bits) + f" — {path}/part.stl"

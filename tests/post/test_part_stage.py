@@ -1,0 +1,96 @@
+"""Every run ends with its part (pacto_ng.post.part_stage): made, checked for a seal, analysed
+at the run's load, reported in summary.json and in the run's last line."""
+import json
+
+import numpy as np
+import pytest
+
+from pacto_ng.case import build_problem, get_case
+from pacto_ng.cli import main
+from pacto_ng.post.part_stage import finish_run
+from pacto_ng.threads import compute
+
+#: the PneuNet member (chamber x 0.02-0.08, y 0.01-0.02 in a 0.1 x 0.05 domain), coarse
+COARSE = dict(maxh=0.004)
+#: a void channel from the chamber's roof to the top edge
+CHANNEL = (0.042, 0.058, 0.02, 0.05)
+
+
+def _design(problem, channel: bool) -> np.ndarray:
+    """All solid, or with a void channel through the roof."""
+    from ngsolve import VOL
+
+    mesh = problem.mesh
+    c = np.array([np.mean([mesh[v].point for v in el.vertices], axis=0)
+                  for el in mesh.Elements(VOL)])
+    x = np.ones(len(c))
+    if channel:
+        x0, x1, y0, y1 = CHANNEL
+        x[(c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0 - 0.002) & (c[:, 1] < y1)] = 0.0
+    return x[problem.field.design]  # the design variables: the chamber is passive void
+
+
+@pytest.fixture(scope="module")
+def pneunet():
+    case = get_case("pneunet")
+    params = case.resolve(case.defaults.replace(**COARSE))
+    with compute():
+        problem = build_problem(case, params)
+        problem.apply_schedule(3.0, 32.0, 1.0)
+    return problem
+
+
+def _finish(problem, x, tmp_path, capsys):
+    with compute():
+        problem.evaluate(x, gradients=False)
+    summary = {"output_displacement": float(problem.values["delta"]),
+               "load_reached": problem.params.load, "load_unit": "Pa"}
+    out = finish_run(tmp_path, problem, summary, quiet=False)
+    return out, capsys.readouterr().out
+
+
+def test_a_solid_member_is_sealed_and_its_part_is_analysed(pneunet, tmp_path, capsys):
+    summary, line = _finish(pneunet, _design(pneunet, False), tmp_path, capsys)
+    part = summary["part"]
+    assert part["made"] and part["sealed"] is True and summary["sealed"] is True
+    assert [c["name"] for c in part["seal"]["chambers"]] == ["chamber"]
+    assert part["analysed"] and part["converged"] and part["kind"] == "fixed"
+    # all solid: the part is the whole member, whose area is the domain's less the chamber's
+    assert part["measure"] == pytest.approx(0.1 * 0.05 - 0.06 * 0.01, rel=1e-3)
+    assert part["gap"] is not None
+    assert (tmp_path / "part.stl").stat().st_size > 84 and (tmp_path / "part.png").exists()
+    assert json.loads((tmp_path / "summary.json").read_text())["part"]["sealed"] is True
+    assert "sealed" in line and "NOT SEALED" not in line
+
+
+def test_an_open_chamber_is_reported_in_the_summary_and_the_last_line(pneunet, tmp_path,
+                                                                      capsys):
+    summary, line = _finish(pneunet, _design(pneunet, True), tmp_path, capsys)
+    part = summary["part"]
+    assert part["sealed"] is False and summary["sealed"] is False
+    (chamber,) = part["seal"]["chambers"]
+    assert chamber["name"] == "chamber" and chamber["boundary"] == "zero_pressure"
+    x0, x1, _, y1 = CHANNEL
+    assert x0 - 0.004 <= chamber["opening"][0] <= x1 + 0.004
+    assert chamber["opening"][1] == pytest.approx(y1)
+    assert "NOT SEALED" in line and "will not hold pressure" in line
+
+
+def test_a_run_s_last_line_says_its_chamber_is_open(tmp_path, capsys):
+    """``pacto run`` from a design with an open chamber (init_design), one iteration: the
+    optimiser's move limit cannot close the channel, and the run says so."""
+    case = get_case("pneunet")
+    with compute():
+        problem = build_problem(case, case.resolve(case.defaults.replace(**COARSE)))
+    start = tmp_path / "start"
+    start.mkdir()
+    np.savez(start / "checkpoint.npz", x=_design(problem, True))
+    out = tmp_path / "run"
+    code = main(["run", "pneunet", "--maxh", "0.004", "--iterations", "1", "--quiet",
+                 "--set", f"init_design={start}", "--set", "beta=32", "--set", "penal_start=3",
+                 "--out", str(out)])
+    printed = capsys.readouterr().out
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["sealed"] is False
+    assert "NOT SEALED" in printed.strip().splitlines()[-1]
