@@ -105,26 +105,27 @@ def pressure_picture(path, mesh, p_rel, rho, title: str = "") -> None:
 
 def deformed_picture(path, mesh, u, title: str = "") -> None:
     """The deformed part of a 3D analysis: its surface moved by ``u`` (a vector field on
-    ``mesh``, true scale) coloured by |u| over the undeformed surface's edges, seen obliquely
-    and from the front (-y), with the axes in metres."""
+    ``mesh``, true scale) coloured by |u| over the undeformed surface's feature edges, seen
+    obliquely and from above (+z), with the axes in metres."""
     from .grid import mesh_to_pyvista
 
     grid = mesh_to_pyvista(mesh)
     pts = np.asarray(grid.points, dtype=float)
     uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy(), pts[:, 2].copy())))
-    uv = uv.reshape(-1, 3)
-    grid.point_data["|u| (m)"] = np.linalg.norm(uv, axis=1)
-    surface = grid.extract_surface()
+    grid.point_data["u_mag"] = np.linalg.norm(uv.reshape(-1, 3), axis=1)
+    edges = grid.extract_surface(algorithm="dataset_surface").extract_feature_edges()
     moved = grid.copy()
-    moved.points = pts + uv
+    moved.points = pts + uv.reshape(-1, 3)
+    surface = moved.extract_surface(algorithm="dataset_surface")
     p = _plotter((1, 2))
-    for col, view in enumerate(("isometric", "xz")):
+    for col, view in enumerate(("isometric", "xy")):
         p.subplot(0, col)
-        p.add_mesh(surface.extract_feature_edges(), color="black", line_width=1)
-        p.add_mesh(moved.extract_surface(), scalars="|u| (m)", cmap="viridis",
-                   show_scalar_bar=col == 1, scalar_bar_args={"title": "|u| (m)"})
-        p.show_bounds(xtitle="x (m)", ytitle="y (m)", ztitle="z (m)", font_size=8)
+        p.add_mesh(edges, color="black", line_width=1)
+        p.add_mesh(surface, scalars="u_mag", cmap="viridis", show_scalar_bar=col == 1,
+                   scalar_bar_args={"title": "displacement (m)", "fmt": "%.3g"})
+        p.show_bounds(xtitle="x (m)", ytitle="y (m)", ztitle="z (m)", font_size=8,
+                      fmt="%.3g")
         getattr(p, f"view_{view}")()
-        if col == 0 and title:
-            p.add_text(title, font_size=9)
+        p.add_text(title if col == 0 and title else
+                   "from above: the undeformed outline in black", font_size=9)
     _screenshot(p, path)
