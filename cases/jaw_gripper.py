@@ -87,21 +87,6 @@ def setup(p: pn.Parameters) -> pn.Setup:
     )
 
 
-def chain(b: pn.Builder) -> pn.Problem:
-    """The standard chain (design, energy, pressure, mechanics, -Δ/SE, volume), and each jaw's
-    own d·u reported every iteration (history.csv columns ``delta_top_jaw``,
-    ``delta_bottom_jaw``): whether both jaws close, or one swings while the other stays."""
-    design = b.design()
-    model = b.energy(design)
-    pressure = b.pressure(model, design)
-    mech = b.mechanics(model, design, pressure)
-    response = b.responses(mech, pressure)
-    for port in b.setup.ports:
-        response.blocks.append(pn.output_displacement(mech, port, output=f"delta_{port.region}"))
-        response.reports.append(f"delta_{port.region}")
-    return b.problem(design, pressure, mech, response, b.volume(design))
-
-
 CASE = pn.Case(
     name="jaw-gripper",
     summary="two-jaw pressure gripper on its full tapered body, two output ports, mouth closes",
@@ -114,6 +99,5 @@ CASE = pn.Case(
         obj_tol=1e-3),
     geometry=geometry,
     setup=setup,
-    chain=chain,
     load_unit="Pa",
 )

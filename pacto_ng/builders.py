@@ -308,9 +308,15 @@ class Builder:
         if not setup.ports:
             raise InputError(f"objective '{obj}' needs an output port")
         blocks = [R.output_displacement(mech, setup.output, output=n["delta"])]
+        # several ports (a gripper's jaws): each one's own d·u reported too (history.csv
+        # delta_<region>: whether both close, or one swings while the other stays)
+        ports = [R.output_displacement(mech, port, output=f"delta_{port.region}{suffix}")
+                 for port in setup.ports] if len(setup.ports) > 1 else []
+        each = [b.output for b in ports]
+        blocks += ports
         if obj == "output":
             return Responses(blocks + [R.Scale(-1.0, (n["delta"],), n["objective"])],
-                             n["objective"], [n["delta"]])
+                             n["objective"], [n["delta"]] + each)
         if obj == "output_se":  # max Δ subject to SE <= se_max
             se_max = params.se_max or setup.se_max
             if not se_max > 0:
@@ -319,10 +325,11 @@ class Builder:
             blocks += [R.Scale(-1.0, (n["delta"],), n["objective"]),
                        R.StrainEnergy(mech, output=n["se"]),
                        Bound(se_max, (n["se"],), n["se_limit"])]
-            return Responses(blocks, n["objective"], [n["delta"], n["se"]], [n["se_limit"]])
+            return Responses(blocks, n["objective"], [n["delta"], n["se"]] + each,
+                             [n["se_limit"]])
         blocks += [R.StrainEnergy(mech, output=n["se"]),
                    R.MechanismRatio(inputs=(n["delta"], n["se"]), output=n["objective"])]
-        return Responses(blocks, n["objective"], [n["delta"], n["se"]])
+        return Responses(blocks, n["objective"], [n["delta"], n["se"]] + each)
 
     def volume(self, design: DesignChain) -> Responses:
         """``V(ρ̄)/V* - 1 <= 0`` on the (total) solid, and on the stiff material where

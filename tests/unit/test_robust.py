@@ -1,12 +1,14 @@
 """The robust formulation's parts (pacto_ng.robust): MMA's bound formulation of a worst case on
 problems with a known minimax, the worst-case block, the dilated design's volume target and the
 refused set-ups; and a short robust run through the driver."""
+import dataclasses
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
+from pacto_ng.builders import standard_chain
 from pacto_ng.case import build_problem, get_case
 from pacto_ng.core import check_gradient
 from pacto_ng.optimize.mma import Optimizer
@@ -105,11 +107,24 @@ def test_refused_set_ups():
     mm = get_case("mm-gripper")
     with pytest.raises(InputError, match="^robust: case 'mm-gripper' has two design fields"):
         build_problem(mm, mm.defaults.replace(robust=1, maxh=0.02))
-    jaw = get_case("jaw-gripper")
-    with pytest.raises(InputError, match="^robust: case 'jaw-gripper' builds its own chain"):
-        build_problem(jaw, jaw.defaults.replace(robust=2))
+    own = dataclasses.replace(pa, name="own-chain", chain=lambda b: standard_chain(b))
+    with pytest.raises(InputError, match="^robust: case 'own-chain' builds its own chain"):
+        build_problem(own, pa.defaults.replace(robust=2, nelx=12, nely=6))
     with pytest.raises(InputError, match="^robust: must be one of 0, 1, 2"):
         pa.defaults.replace(robust=3)
+
+
+def test_several_ports_each_reported_in_every_realisation():
+    """The jaw-gripper's two jaws: each jaw's own d·u is a reported value of the standard
+    chain, of the blueprint and of the eroded and dilated designs, and they add up to Δ."""
+    jaw = get_case("jaw-gripper")
+    problem = build_problem(jaw, jaw.defaults.replace(robust=1, maxh=0.01))
+    for tag in ("", "_e", "_d"):
+        assert {f"delta_top_jaw{tag}", f"delta_bottom_jaw{tag}"} <= set(problem.reports)
+    vals = problem.chain.forward(x=np.full(problem.n_design, 0.5))
+    for tag in ("", "_e", "_d"):
+        assert vals[f"delta{tag}"] == pytest.approx(
+            vals[f"delta_top_jaw{tag}"] + vals[f"delta_bottom_jaw{tag}"], rel=1e-12)
 
 
 def test_cli_refuses_a_bad_robust_setting_in_one_line():
