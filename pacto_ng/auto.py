@@ -16,6 +16,11 @@ the corner of a load patch or a clamp is singular in linear elasticity.
 - the load ramp (:func:`choose_ramp`).
 
 The choice, the figures and the reason are recorded in summary.json.
+
+The same analysis tells whether the set-up's sizes and moduli look consistent
+(:func:`scale_warnings`, a one-line warning, never an error): e.g. moduli in Pa where the
+loads are in MPa, or the reverse, make that analysis' displacements a millionth of the domain
+or its strains a thousand and more.
 """
 from __future__ import annotations
 
@@ -101,9 +106,28 @@ def choose_ramp(strain: float, schedule, iterations: int) -> tuple[int, str]:
     return n, why
 
 
-def first_linear_strain(case, params, comm=None) -> tuple[float, float]:
-    """:func:`material_strain` of one linear analysis of the initial design at the full load
-    (on the ranks of ``comm``, an mpi4py communicator, as the run itself)."""
+def displacement_ratio(mech) -> float:
+    """The largest displacement ``max |u|`` at the quadrature points of ``mech`` (void
+    included) over the domain's size, the largest side of the mesh's bounding box.  On a
+    distributed mesh over every rank's part."""
+    from ngsolve import VOL
+
+    from .parallel import largest as rank_max
+
+    mesh = mech.mesh
+    u = np.asarray(mech.gfu(mesh.MapToAllElements(mech.rules, VOL))).reshape(-1, mesh.dim)
+    u_max = max(rank_max(mesh, np.linalg.norm(u, axis=1)), 0.0)
+    pts = np.array([v.point for v in mesh.vertices]).reshape(-1, mesh.dim)
+    hi = [rank_max(mesh, pts[:, a]) for a in range(mesh.dim)]
+    lo = [-rank_max(mesh, -pts[:, a]) for a in range(mesh.dim)]
+    size = max(h - lo_a for h, lo_a in zip(hi, lo))
+    return u_max / size if size > 0 else 0.0
+
+
+def first_linear_analysis(case, params, comm=None) -> dict:
+    """One linear analysis of the initial design at the full load (on the ranks of ``comm``,
+    an mpi4py communicator, as the run itself): ``strain`` and ``largest``
+    (:func:`material_strain`) and ``displacement_ratio`` (:func:`displacement_ratio`)."""
     from .case import build_problem
     from .runner import initial_design
 
@@ -111,17 +135,66 @@ def first_linear_strain(case, params, comm=None) -> tuple[float, float]:
     problem = build_problem(case, lin, comm=comm)
     problem.apply_schedule(*lin.schedule.schedule().values(0))
     problem.evaluate(initial_design(problem), gradients=False)
-    return material_strain(problem.mech)
+    strain, largest = material_strain(problem.mech)
+    return {"strain": strain, "largest": largest,
+            "displacement_ratio": displacement_ratio(problem.mech)}
 
 
-def choose(case, params, comm=None):
+def first_linear_strain(case, params, comm=None) -> tuple[float, float]:
+    """:func:`material_strain` of :func:`first_linear_analysis`."""
+    first = first_linear_analysis(case, params, comm)
+    return first["strain"], first["largest"]
+
+
+#: bounds of :func:`scale_warnings`, from the first linear analysis of every built-in case at
+#: its defaults and at the loads its documented commands use (measured 2026-12 with
+#: :func:`first_linear_analysis`): largest displacement over the domain's size 5.6e-4 (the
+#: `pacto new` finger) to 410 (topress: unit modulus, unit pressure), 101 in a nonlinear
+#: command (pa-gripper at 1e8 Pa: its passive void); material strain (99th percentile) up to
+#: 16 in a nonlinear command (pa-inverter at 1e8 Pa; cantilever at 5e5 N 13) and 1.2e6 in
+#: the linear ports of the unit-modulus codes (topress; sorotop 3.5e5, mbb 431).
+#: Below this ratio the displacements are lost in the domain's size (a factor 1e6 between
+#: moduli and loads, Pa against MPa)
+SMALL_DISPLACEMENT = 1e-9
+#: a nonlinear model asked to carry more strain than this in the linear analysis, or a
+#: displacement larger than this many domain sizes, has moduli and loads that do not match
+#: (the linear model is scale-invariant: a unit-modulus set-up is not warned about)
+LARGE_STRAIN = 1e3
+LARGE_DISPLACEMENT = 1e4
+
+
+def scale_warnings(first: dict, model: str) -> list[str]:
+    """One-line warnings (none, usually) that the set-up's sizes and moduli look
+    inconsistent, from :func:`first_linear_analysis` ``first`` and the model the run will use:
+    a largest displacement below :data:`SMALL_DISPLACEMENT` of the domain's size (any model);
+    for a nonlinear model also a material strain above :data:`LARGE_STRAIN` or a largest
+    displacement above :data:`LARGE_DISPLACEMENT` domain sizes."""
+    ratio, strain = first["displacement_ratio"], first["strain"]
+    where = ("the initial design's linear analysis at the full load gives a largest "
+             "displacement of")
+    hint = "check the units of the geometry, the moduli (E1, E0) and the load"
+    if ratio < SMALL_DISPLACEMENT:
+        return [f"{where} {ratio:.2g} of the domain's size (below {SMALL_DISPLACEMENT:g}): "
+                f"the load is tiny for these moduli; {hint}"]
+    if model == "linear":
+        return []
+    if strain > LARGE_STRAIN or ratio > LARGE_DISPLACEMENT:
+        return [f"{where} {ratio:.3g} times the domain's size and a material strain of "
+                f"{strain:.3g}: far beyond what the {model} model can carry; {hint}"]
+    return []
+
+
+def choose(case, params, comm=None, warnings: list | None = None):
     """Resolve ``model=auto`` and ``load_ramp=-1`` from one linear analysis of the initial
     design at the full load (none where only a linear run's ramp is to be chosen), on the
     ranks of ``comm`` (an mpi4py communicator; None: serial).  Returns ``(params,
-    model_choice, ramp_choice)``; a record is None where nothing was chosen."""
+    model_choice, ramp_choice)``; a record is None where nothing was chosen.  ``warnings``,
+    a list, receives :func:`scale_warnings` of that analysis (nothing where none was done)."""
     model_choice = ramp_choice = None
+    first = None
     if params.model == "auto" or (params.load_ramp < 0 and params.model != "linear"):
-        strain, largest = first_linear_strain(case, params, comm)
+        first = first_linear_analysis(case, params, comm)
+        strain, largest = first["strain"], first["largest"]
     if params.model == "auto":
         chosen = "linear" if strain < STRAIN_THRESHOLD else "wang"
         reason = (f"Green-Lagrange strain of the first linear analysis (99th percentile of the "
@@ -142,4 +215,6 @@ def choose(case, params, comm=None):
             n, why = choose_ramp(strain, params.schedule.schedule(), params.iterations)
             ramp_choice = {"requested": -1, "chosen": n, "strain_p99": strain, "reason": why}
         params = params.replace(load_ramp=ramp_choice["chosen"])
+    if first is not None and warnings is not None:
+        warnings.extend(scale_warnings(first, params.model))
     return params, model_choice, ramp_choice

@@ -14,7 +14,9 @@ Atomic writes
 The folder lock
     :class:`FolderLock` holds ``fcntl.flock`` on ``DIR/.pacto.lock`` while a process writes
     ``DIR``; a second process is refused at once.  The kernel releases the lock when the holder
-    dies (even by ``kill -9``), so it is never left stuck; the (empty) lock file stays.
+    dies (even by ``kill -9``), so it is never left stuck; the (empty) lock file stays, except
+    after a command that was refused before it wrote anything: it removes the lock file it
+    created (``release(remove=True)``).
 
 Run folders
     :func:`folder_outputs` lists what pacto wrote in a folder (a run is recognised by its
@@ -35,7 +37,8 @@ from .params import InputError
 
 #: the files a run (``pacto run``, ``pacto evaluate``, an analysis case) writes into its folder
 RUN_FILES = ("params.json", "checkpoint.npz", "summary.json", "history.csv", "design.vtu",
-             "design.png", "pressure.png", "materials.png", "convergence.png", "deformed.png")
+             "design.png", "pressure.png", "materials.png", "convergence.png", "deformed.png",
+             "part.stl", "part.png")
 #: the files that mark a run folder (``pacto resume`` continues it)
 RUN_MARKERS = ("params.json", "checkpoint.npz")
 #: sub-folders the post-processing commands write into a run folder, and their files
@@ -150,12 +153,34 @@ class FolderLock:
     ``fcntl.flock`` on ``DIR/.pacto.lock``, taken without waiting: a folder another process
     holds gives a one-line :class:`~pacto_ng.params.InputError` naming that process.  The kernel
     drops the lock when its holder exits or is killed.  Without ``fcntl`` (Windows) no lock.
+
+    ``created``: this lock made the lock file (the folder had none); ``release(remove=True)``
+    then removes it, for a command that leaves the folder as it found it.  A lock file may so
+    be removed while another process has it open: a lock taken on a file that is no longer the
+    folder's lock file is dropped and taken again on the new one.
     """
 
     def __init__(self, folder: str | os.PathLike, command: str = "run"):
         self.folder = Path(folder)
         self.command = command
         self._fd = None
+        self.created = False
+
+    def _open(self, lock: Path) -> tuple[int, bool] | None:
+        """A descriptor of the lock file and whether this call created it (None: the file
+        went away between the two attempts)."""
+        try:
+            return os.open(lock, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644), True
+        except FileExistsError:
+            pass
+        except OSError as err:
+            raise InputError(f"--out: cannot lock '{self.folder}' ({err.strerror})") from None
+        try:
+            return os.open(lock, os.O_RDWR), False
+        except FileNotFoundError:
+            return None
+        except OSError as err:
+            raise InputError(f"--out: cannot lock '{self.folder}' ({err.strerror})") from None
 
     def acquire(self) -> "FolderLock":
         try:
@@ -163,30 +188,47 @@ class FolderLock:
         except ImportError:  # pragma: no cover - not POSIX
             return self
         lock = self.folder / LOCK_NAME
-        try:
-            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as err:
-            raise InputError(f"--out: cannot lock '{self.folder}' ({err.strerror})") from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as err:
-            holder = ""
-            with contextlib.suppress(OSError, ValueError):
-                holder = os.pread(fd, 200, 0).decode().strip()
+        for _ in range(100):
+            opened = self._open(lock)
+            if opened is None:
+                continue
+            fd, created = opened
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as err:
+                holder = ""
+                with contextlib.suppress(OSError, ValueError):
+                    holder = os.pread(fd, 200, 0).decode().strip()
+                os.close(fd)
+                if err.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                    raise InputError(f"--out: cannot lock '{self.folder}' "
+                                     f"({err.strerror})") from None
+                who = f"another pacto process ({holder})" if holder else "another pacto process"
+                raise InputError(f"{self.command}: '{self.folder}' is being written by {who}: "
+                                 "wait for it to end, or choose another --out") from None
+            try:  # still the folder's lock file (not removed by a refused command meanwhile)
+                current = os.path.samestat(os.fstat(fd), os.stat(lock))
+            except OSError:
+                current = False
+            if current:
+                break
             os.close(fd)
-            if err.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                raise InputError(f"--out: cannot lock '{self.folder}' ({err.strerror})") from None
-            who = f"another pacto process ({holder})" if holder else "another pacto process"
-            raise InputError(f"{self.command}: '{self.folder}' is being written by {who}: wait "
-                             "for it to end, or choose another --out") from None
+        else:
+            raise InputError(f"--out: cannot lock '{self.folder}' (its lock file keeps "
+                             "changing)")
         with contextlib.suppress(OSError):  # who holds it, for the message above
             os.ftruncate(fd, 0)
             os.pwrite(fd, f"pid {os.getpid()}, pacto {self.command}\n".encode(), 0)
-        self._fd = fd
+        self._fd, self.created = fd, created
         return self
 
-    def release(self) -> None:
+    def release(self, *, remove: bool = False) -> None:
+        """Drop the lock; with ``remove``, also remove the lock file if this lock created it
+        (removed while still held, so that no other process locks the old file)."""
         if self._fd is not None:
+            if remove and self.created:
+                with contextlib.suppress(OSError):
+                    (self.folder / LOCK_NAME).unlink()
             os.close(self._fd)  # closing the descriptor drops the flock
             self._fd = None
 
@@ -305,7 +347,8 @@ def claim_folder(folder: str | os.PathLike, command: str, *, overwrite: bool = F
     """Lock ``folder`` for ``command`` and make it ready to write: refuse a folder another
     process writes or one holding earlier results (unless ``resume``, or ``overwrite``: they
     are removed first); clear the temporary files of killed writers.  Returns the held lock
-    (release it when done, or use it as a context manager)."""
+    (release it when done, or use it as a context manager).  A refused folder keeps no lock
+    file this call made."""
     lock = FolderLock(folder, command).acquire()
     try:
         if overwrite:
@@ -314,6 +357,6 @@ def claim_folder(folder: str | os.PathLike, command: str, *, overwrite: bool = F
             refuse_reuse(folder, command)
         cleanup_temps(folder)
     except BaseException:
-        lock.release()
+        lock.release(remove=True)
         raise
     return lock

@@ -334,6 +334,8 @@ def check_setup_names(mesh, setup, *, extra_boundaries=()) -> None:
                          "void")
     if "design" in set(setup.solid) | set(setup.void):
         raise InputError("setup: 'design' is the design domain; it cannot be passive")
+    if setup.void:
+        check_void_inside_design(mesh, setup.void)
     sup = setup.supports
     if sup.fix_z and mesh.dim < 3:
         raise InputError(f"setup: fix_z support on a {mesh.dim}D geometry")
@@ -370,23 +372,63 @@ def check_vectors(mesh, setup) -> None:
                 raise InputError(f"setup: {role} '{it.region}': direction is zero")
 
 
+def _region_neighbours(mesh) -> dict[str, set[str]]:
+    """The regions each region shares a facet with (an edge in 2D, a face in 3D): a vertex
+    alone does not join two regions."""
+    from ngsolve import VOL
+
+    owner, neighbours = {}, {name: set() for name in mesh.GetMaterials()}
+    for el in mesh.Elements(VOL):
+        for f in el.facets:
+            other = owner.setdefault(f.nr, el.mat)
+            if other != el.mat:
+                neighbours[other].add(el.mat)
+                neighbours[el.mat].add(other)
+    return neighbours
+
+
+def check_void_inside_design(mesh, passive_void: tuple[str, ...]) -> None:
+    """Every passive void region (a chamber) lies inside the design body: it shares a facet
+    with the design domain, or with a passive region joined to it by facets.  A chamber face
+    glued beside the body instead of cut out of it, or a void region that does not touch the
+    design, is a separate body of void: its displacement is held by nothing and the
+    analysis' linear solve fails.  One InputError naming the region."""
+    neighbours = _region_neighbours(mesh)
+    body, todo = {"design"}, ["design"]
+    while todo:  # the regions joined to the design domain by facets
+        for other in neighbours.get(todo.pop(), ()):
+            if other not in body:
+                body.add(other)
+                todo.append(other)
+    kind, facet = ("solid", "face") if mesh.dim == 3 else ("face", "edge")
+    for name in passive_void:
+        if name in body:
+            continue
+        others = neighbours.get(name, set()) - {name}
+        borders = (f"; it borders only {kind} {_names(others)}, which the design does not "
+                   "border either" if others else "")
+        raise InputError(f"void: {kind} '{name}' does not lie inside the design body (it shares "
+                         f"no {facet} with {kind} 'design'{borders}): cut the chamber out of the "
+                         "body and glue it back (see docs/tutorial.md)")
+
+
 def check_inlet_touches_design(mesh, inlet: tuple[str, ...], passive_void: tuple[str, ...]):
     """A pressure inlet must border the design domain (or a passive void region, a chamber,
-    that does): an inlet only on passive solid or outside it pressurises nothing."""
+    that does): an inlet on passive solid, or one that meets the design at a vertex only,
+    pressurises nothing.  "Border": a facet of the inlet (an edge in 2D, a face in 3D) is a
+    facet of an element of the design domain or of a passive void region."""
+    from ngsolve import VOL
+
     wet = {"design", *passive_void}
     for name in inlet:
-        reg = mesh.Boundaries(name)
-        touching = set()
-        # the materials of the volume elements sharing a vertex with the inlet
-        verts = set()
-        for el in reg.Elements():
-            verts.update(v.nr for v in el.vertices)
-        for el in mesh.Elements():
-            if any(v.nr in verts for v in el.vertices):
-                touching.add(el.mat)
-        if not touching & wet:
+        facets = set()
+        for el in mesh.Boundaries(name).Elements():
+            facets.update(f.nr for f in (el.faces if mesh.dim == 3 else el.edges))
+        bordering = {el.mat for el in mesh.Elements(VOL)
+                     if any(f.nr in facets for f in el.facets)}
+        if not bordering & wet:
             where = ("a face of the 'design' solid" if mesh.dim == 3 else
                      "an edge of the 'design' face")
             raise InputError(f"setup: pressure inlet '{name}' touches no design domain (it "
-                             f"borders {_names(touching)}); put it on {where} or of a chamber "
+                             f"borders {_names(bordering)}); put it on {where} or of a chamber "
                              "inside it")

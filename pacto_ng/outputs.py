@@ -7,8 +7,8 @@ DIR/history.csv        one row per iteration
 DIR/design.vtu         x, rho_bar, u (and p) and the model's strain and stress measures
 DIR/design.png         the physical density (a half-domain case mirrored: the whole mechanism;
                        3D: the ρ̄ = 0.5 iso-surface and the mid-depth cut, pacto_ng/post/plots3d.py)
-DIR/pressure.png       pressure cases: p / P_in with the ρ̄ = 0.5 contour (leakage in summary.json;
-                       3D: on the mid-depth cut)
+DIR/pressure.png       pressure cases: p / P_in with the ρ̄ = 0.5 contour, its title the leak
+                       Q/(Kv P_in) of summary.json (3D: on the mid-depth cut)
 DIR/materials.png      two-material cases in 2D: where the soft and the stiff material are
 DIR/convergence.png    objective and volume against iteration
 
@@ -109,8 +109,10 @@ def lowest_jacobian(problem: Problem) -> dict:
     quadrature points (where the energy is evaluated and Newton's guard is checked) and
     ``lowest_J_corners`` at the vertices, edge midpoints and centroids, each
     ``{"J", "element", "rho_bar", "point"}`` (element index in NGSolve's order, its design
-    density, the kind of point); both None before any analysis."""
-    if "u" not in problem.values:
+    density, the kind of point).  Both None before any analysis and for the linear model,
+    which has no deformation gradient (``det(I + ∇u)`` of a small-strain displacement is
+    not a quantity it uses, and its Newton has no guard)."""
+    if "u" not in problem.values or problem.params.model == "linear":
         return {"lowest_J": None, "lowest_J_corners": None}
     rho = problem.design_density()
     out = {}
@@ -198,23 +200,41 @@ def output_displacement_at(problem: Problem) -> dict | None:
                        "weight": float(port.weight)} for port in ports]}
 
 
+def leak(problem: Problem) -> float | None:
+    """``Q/(Kv P_in)`` of the reported design: the Darcy flow out through the zero-pressure
+    boundaries (:class:`~pacto_ng.physics.darcy_leakage.Outflow`) of its pressure field.  The
+    chain's own value where it has one (``leak_max``: the blueprint's), else an Outflow block
+    evaluated once on the final ρ̄ and p; 0 for a set-up without zero-pressure boundaries
+    (nothing flows out), None for a case without a pressure or before its pressure is
+    solved."""
+    vals, blk = problem.values, problem.pressure_block
+    if "leak" in vals:
+        return float(vals["leak"])
+    if blk is None or blk.output not in vals or blk.inputs[0] not in vals:
+        return None
+    if not blk.zero:
+        return 0.0
+    from .physics.darcy_leakage import Outflow
+
+    return float(Outflow(blk).forward(vals[blk.inputs[0]], vals[blk.output]))
+
+
 def pressure_and_material_summary(problem: Problem) -> dict:
-    """Pressure cases: ``leakage`` (fraction of P_in, see :func:`pacto_ng.physics.darcy_leakage.leakage`)
-    and its details, and ``leak`` (Q/(Kv P_in), :class:`~pacto_ng.physics.darcy_leakage.Outflow`)
-    with ``leak_max``.  Two materials: the volume fractions of the total solid, of material 1
-    (soft, ``Σ a ρ̄1 (1-ρ̄2)``) and of material 2 (stiff, ``Σ a ρ̄1 ρ̄2``) over the design
-    elements."""
+    """Pressure cases: ``leak`` (Q/(Kv P_in), :func:`leak`), and ``leakage`` (the largest
+    pressure in solid away from the cavity, a fraction of P_in, see
+    :func:`pacto_ng.physics.darcy_leakage.leakage`) with its details.  Two materials: the
+    volume fractions of the total solid, of material 1 (soft, ``Σ a ρ̄1 (1-ρ̄2)``) and of
+    material 2 (stiff, ``Σ a ρ̄1 ρ̄2``) over the design elements."""
     out = {}
     vals = problem.values
     if problem.pressure_block is not None:
         from .physics.darcy_leakage import leakage
 
         blk = problem.pressure_block
+        out["leak"] = leak(problem)
         info = leakage(blk, vals[blk.inputs[0]], problem.h)
         out["leakage"] = info.pop("leakage")
         out["leakage_detail"] = info
-        if "leak" in vals:  # the outflow of the leak_max constraint (its blueprint's)
-            out["leak"] = float(vals["leak"])
     if problem.n_design_fields == 2:
         w = np.where(problem.field.design, problem.field.areas, 0.0)
         r1, r2 = np.asarray(vals["rho_bar1"]), np.asarray(vals["rho_bar2"])
@@ -257,8 +277,7 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
     write_vtu(path / "design", problem, x)
     density_png(path / "design.png", problem)  # the pictures are written atomically too
     if problem.pressure_block is not None:
-        pressure_png(path / "pressure.png", problem, leakage=summ.get("leakage"),
-                     leakage_any=summ["leakage_detail"]["leakage_any"])
+        pressure_png(path / "pressure.png", problem, leak=summ["leak"])
     if problem.n_design_fields == 2 and problem.mesh.dim == 2:
         materials_png(path / "materials.png", problem)
     if history:

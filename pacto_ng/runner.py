@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import time
 import zipfile
 from dataclasses import dataclass
@@ -23,12 +24,32 @@ from pathlib import Path
 import numpy as np
 
 from .case import Case, Problem, build_problem, read_run_params
-from .files import WriteError, atomic_path, atomic_write_text, claim_folder
+from .files import WriteError, atomic_path, atomic_write_text, claim_folder, folder_outputs
 from .optimize.driver import LoopResult, LoopState, optimize
 from .params import InputError, Parameters
 from .physics.energy import WHEN_NEWTON_FAILS
 from .physics.equilibrium import NewtonFailure, WarmState
 from .outputs import write_outputs
+
+
+def missing_folders(out: str | os.PathLike) -> list[Path]:
+    """``out`` and those of its parent folders that do not exist yet, deepest first: what
+    :func:`prepare_output` will create, and :func:`remove_created` removes again."""
+    missing, path = [], Path(out).absolute()
+    while not path.exists() and path != path.parent:
+        missing.append(path)
+        path = path.parent
+    return missing
+
+
+def remove_created(folders: list[Path]) -> None:
+    """Remove the folders of :func:`missing_folders` that are empty, deepest first (a command
+    refused before it wrote anything leaves the file system as it found it)."""
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:  # not empty (or gone): it and its parents stay
+            return
 
 
 def prepare_output(out: str | os.PathLike) -> Path:
@@ -248,25 +269,40 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
         return _optimise(case, params, Path(out), _Progress(Path(out), params.iterations),
                          quiet=True, resume=resume, model_choice=model_choice,
                          ramp_choice=ramp_choice)
+    # a run refused (a bad input, exit code 2) before it wrote anything leaves the file system
+    # as it found it: no lock file it made, no folder it made.  (An interrupt keeps the folder
+    # and its lock file, as before: its line says what is kept.)
+    created = missing_folders(out)
     path = prepare_output(out)
-    if overwrite and params.init_design and Path(params.init_design).resolve() == path.resolve():
-        raise InputError("run --overwrite: init_design is the --out folder, whose checkpoint it "
-                         "would remove before reading it: choose another --out")
-    lock = claim_folder(path, "resume" if resume else "run", overwrite=overwrite, resume=resume)
-    progress = _Progress(path, params.iterations)
-    if resume:  # what an interrupt before the checkpoint is loaded leaves: the one there
-        progress.saved = _checkpoint_k(path / "checkpoint.npz")
+    lock = None
     try:
-        return _optimise(case, params, path, progress, quiet=quiet, resume=resume,
-                         model_choice=model_choice, ramp_choice=ramp_choice)
-    except KeyboardInterrupt as err:  # SIGINT, and SIGTERM/SIGHUP through pacto's handlers
-        err.pacto_note = progress.note()
-        raise
-    except WriteError as err:  # a full disk: say what is kept
-        err.args = (f"{err.args[0]}; {progress.note()}",)
+        if (overwrite and params.init_design
+                and Path(params.init_design).resolve() == path.resolve()):
+            raise InputError("run --overwrite: init_design is the --out folder, whose "
+                             "checkpoint it would remove before reading it: choose another "
+                             "--out")
+        lock = claim_folder(path, "resume" if resume else "run", overwrite=overwrite,
+                            resume=resume)
+        progress = _Progress(path, params.iterations)
+        if resume:  # what an interrupt before the checkpoint is loaded leaves: the one there
+            progress.saved = _checkpoint_k(path / "checkpoint.npz")
+        try:
+            return _optimise(case, params, path, progress, quiet=quiet, resume=resume,
+                             model_choice=model_choice, ramp_choice=ramp_choice)
+        except KeyboardInterrupt as err:  # SIGINT, and SIGTERM/SIGHUP through pacto's handlers
+            err.pacto_note = progress.note()
+            raise
+        except WriteError as err:  # a full disk: say what is kept
+            err.args = (f"{err.args[0]}; {progress.note()}",)
+            raise
+    except InputError:
+        if lock is not None:
+            lock.release(remove=not folder_outputs(path))
+        remove_created(created)
         raise
     finally:
-        lock.release()
+        if lock is not None:
+            lock.release()
 
 
 def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *, quiet: bool,
@@ -279,10 +315,14 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
             pass
     if params.model == "auto" or params.load_ramp < 0:
         from .auto import choose
+        from .parallel import leads, world
 
-        from .parallel import world
-
-        params, model_choice, ramp_choice = choose(case, params, comm=world())
+        warnings = []
+        params, model_choice, ramp_choice = choose(case, params, comm=world(),
+                                                   warnings=warnings)
+        if leads():  # sizes and moduli that do not match: said even with --quiet
+            for line in warnings:
+                print(f"pacto: warning: {line}", file=sys.stderr, flush=True)
         if not quiet and model_choice is not None:
             print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
         if not quiet and ramp_choice is not None and ramp_choice["chosen"] > 0:

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -145,15 +145,12 @@ BETA_HOLD = 5
 def _analyse(evaluate, problem, state, x, penal, beta, load, scheduled, load_adapt, k,
              floor=0.0):
     """Values and gradients at ``x``, with the adaptive load continuation (module docstring).
-    Returns ``(F0, f, dF0, df, load, failed)``, ``failed`` the Newton iterations of the
-    attempts that the continuation cut short; raises NewtonFailure when no load is carried,
-    or no more than ``floor`` times the load asked for."""
-    failed = 0
+    Returns ``(F0, f, dF0, df, load)``; raises NewtonFailure when no load is carried, or no
+    more than ``floor`` times the load asked for."""
     try:
         F0, f, dF0, df = evaluate(x)
     except NewtonFailure as err:
         reached = err.result.load_reached
-        failed = err.result.iterations
         if not load_adapt or reached <= floor * load:
             raise
         # go on at the load Newton reached.  Near a limit point a fresh solve may fall just
@@ -167,16 +164,35 @@ def _analyse(evaluate, problem, state, x, penal, beta, load, scheduled, load_ada
                 F0, f, dF0, df = evaluate(x)
                 break
             except NewtonFailure as again:
-                failed += again.result.iterations
                 reached = min(again.result.load_reached, 0.95 * load)
                 if retry == 3 or reached <= 0.0:
-                    # the failure, with the Newton work of every attempt it ends
-                    raise NewtonFailure(replace(again.result, iterations=failed)) from None
+                    raise
     else:
         # raise the cap after a success, but not in the iteration after a failure
         if load_adapt and load < scheduled and k - state.load_failed_at >= 2:
             state.load_cap = min(1.0, load * load_adapt)
-    return F0, f, dF0, df, load, failed
+    return F0, f, dF0, df, load
+
+
+def _counting(problem, evaluate):
+    """``evaluate`` that adds the Newton work of every analysis it runs to its list ``work``:
+    ``[Newton iterations, accepted load steps]``.  An analysis is a mechanics block whose
+    :class:`~pacto_ng.physics.newton.NewtonResult` the call replaced, failed or not (a robust
+    realisation that failed ends the call; the realisations after it were not analysed)."""
+
+    def counted(*args, **kwargs):
+        blocks = getattr(problem, "mechanics", None) or (problem.mech,)
+        before = [m.result for m in blocks]
+        try:
+            return evaluate(*args, **kwargs)
+        finally:
+            for m, old in zip(blocks, before):
+                if m.result is not None and m.result is not old:
+                    counted.work[0] += int(m.result.iterations)
+                    counted.work[1] += int(m.result.steps)
+
+    counted.work = [0, 0]
+    return counted
 
 
 def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method: str,
@@ -197,7 +213,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
     # terms of a worst-case objective, for MMA's bound formulation, and what changes with the
     # iteration besides the schedules
     terms = len(getattr(problem, "objective_terms", ())) or 1
-    evaluate = problem.evaluate_terms if terms > 1 else problem.evaluate
+    evaluate = _counting(problem, problem.evaluate_terms if terms > 1 else problem.evaluate)
     start_iteration = getattr(problem, "start_iteration", None)
     opt = Optimizer(n, m, method="mma" if method == "mma-gcmma" else method, move=move,
                     terms=terms)
@@ -234,7 +250,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         # with load_adapt, a failed β step is cut, and a design that Newton cannot analyse (a
         # new mechanism, a wall that folds at the first increment) is brought back towards the
         # last good one, each from the last good design's equilibria (module docstring)
-        failed_newton = 0  # Newton iterations of attempts cut short (load or design step)
+        evaluate.work[:] = [0, 0]  # the Newton work of this iteration's analyses (_counting)
         cuts = 0
         before = state.history[-1]["beta"] if state.history else beta
         # the last good design's equilibria: where a cut design's analysis starts
@@ -247,14 +263,11 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
             # before the load is lowered
             can_cut = state.last_good is not None and cuts < DESIGN_CUTS
             try:
-                F0, f, dF0, df, load, failed = _analyse(evaluate, problem, state, x, penal, beta,
-                                                        load, scheduled,
-                                                        0.0 if beta_cut else load_adapt, k,
-                                                        floor=COLLAPSE if can_cut else 0.0)
-                failed_newton += failed
+                F0, f, dF0, df, load = _analyse(evaluate, problem, state, x, penal, beta, load,
+                                                scheduled, 0.0 if beta_cut else load_adapt, k,
+                                                floor=COLLAPSE if can_cut else 0.0)
                 break
             except NewtonFailure as err:
-                failed_newton += err.result.iterations
                 if beta_cut:
                     # the β step is what Newton cannot take: a smaller one (the geometric
                     # mean), held BETA_HOLD iterations, so that the optimiser can mend what the
@@ -296,16 +309,17 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
             if zigzag_at(final) is not None:
                 opt.method = "gcmma"
         # ---- record: read of x before GCMMA's inner loop analyses trial designs ------------
-        # Newton's work on every realisation of the design (the robust formulation's too)
-        results = [m.result for m in getattr(problem, "mechanics", (problem.mech,))
-                   if m.result is not None]
         row = dict(iteration=k, objective=f0, volume=problem.volume_fraction(),
                    constraint=float(np.max(f)), change=None, penal=penal, beta=beta, load=load,
-                   newton=sum(r.iterations for r in results) + failed_newton,
-                   load_steps=sum(r.steps for r in results), design_cuts=cuts, time=None,
+                   newton=None, load_steps=None, design_cuts=cuts, time=None,
                    **{name: float(problem.values[name]) for name in problem.reports})
         xnew = opt.update(k + 1, x, np.asarray(F0) * state.scale, dF0 * state.scale, f, df,
                           evaluate=values_only if opt.method == "gcmma" else None)
+        # Newton's work in this iteration: every analysis of every realisation (the robust
+        # formulation's too), the attempts cut short and GCMMA's trial designs.  The next
+        # iteration's analysis of an accepted trial design starts at its equilibrium and
+        # takes no Newton iteration: the work was done here
+        row["newton"], row["load_steps"] = evaluate.work
         change = row["change"] = float(np.max(np.abs(xnew - x)))
         row["time"] = time.perf_counter() - t0
         state.history.append(row)

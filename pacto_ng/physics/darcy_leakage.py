@@ -1,7 +1,8 @@
-r"""How much a design leaks: the leakage figure of a solved Darcy pressure field (how much of
-the inlet pressure reaches solid material away from the pressurised cavity; ``leakage`` in a
-pressure case's summary), and :class:`Outflow`, the flow out through the zero-pressure
-boundaries (the ``leak_max`` constraint).
+r"""How much a design leaks: :class:`Outflow`, the flow out through the zero-pressure
+boundaries (``leak`` in every pressure run's summary.json and in its pressure.png's title; the
+``leak_max`` constraint), and the leakage figure of a solved Darcy pressure field (how much of
+the inlet pressure reaches solid material away from the pressurised cavity; ``leakage`` in the
+summary, read by the benchmark studies' tables of docs/benchmarks.md).
 """
 from __future__ import annotations
 

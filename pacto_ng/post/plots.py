@@ -161,22 +161,27 @@ def nodal_average(mesh, values, areas) -> np.ndarray:
     return num / np.maximum(den, 1e-300)
 
 
-def pressure_png(path, problem, title: str | None = None, leakage: float | None = None,
-                 leakage_any: float | None = None, mirror=True):
+def pressure_png(path, problem, title: str | None = None, leak: float | None = None,
+                 mirror=True):
     """The Darcy pressure field with the ρ̄ = 0.5 contour of the design drawn on it (as thesis
     Figs 6.9 and 6.18): colours p / P_in at the vertices, black line the contour of the
     area-weighted nodal average of the element densities ρ̄ (the total solid for two
-    materials); a 3D run: :func:`pacto_ng.post.plots3d.pressure_picture`."""
+    materials); a 3D run: :func:`pacto_ng.post.plots3d.pressure_picture`.  ``leak``: the
+    design's Q/(Kv P_in), summary.json's ``leak`` (:func:`pacto_ng.outputs.leak`), quoted in
+    the title (None: not quoted)."""
     block = problem.pressure_block
     mesh = problem.mesh
     rho = np.asarray(problem.values[block.inputs[0]])
     p_in = block.p_in  # the load factor scales the body force, not p
     pv = block.gfp.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
+    # in 2D per unit thickness (a number), in 3D in metres
+    quoted = ("" if leak is None else
+              f"leak Q/(Kv P_in) = {leak:.3g}{' m' if mesh.dim == 3 else ''}")
     if mesh.dim == 3:
         from .plots3d import pressure_picture
 
         pressure_picture(path, mesh, pv, rho, title=title or f"{problem.case.name} (P_in = "
-                         f"{p_in:g} Pa)")
+                         f"{p_in:g} Pa)" + (f", {quoted}" if quoted else ""))
         return
     import matplotlib
 
@@ -194,11 +199,8 @@ def pressure_png(path, problem, title: str | None = None, leakage: float | None 
     ax.set_xlim(x.min(), x.max())
     ax.set_ylim(y.min(), y.max())
     ax.set_aspect("equal")
-    extra = "" if leakage is None else f"\nleakage {100 * leakage:.2f} % of P_in"
-    if leakage_any is not None:
-        extra += f" (any element outside the cavity: {100 * leakage_any:.2f} %)"
     ax.set_title(title or f"{problem.case.name} — p / P_in (P_in = {p_in:g} Pa), "
-                 f"ρ̄ = 0.5 contour{extra}", fontsize=10)
+                 f"ρ̄ = 0.5 contour" + (f"\n{quoted}" if quoted else ""), fontsize=10)
     fig.colorbar(tpc, ax=ax, fraction=0.03, label="p / P_in")
     fig.tight_layout()
     with atomic_path(path) as tmp:

@@ -79,9 +79,12 @@ def test_overwrite_removes_the_earlier_runs_files_only(tmp_path):
     (out / "notes.txt").write_text("the user's")
     assert main(["run", *MBB, "--out", str(out), "--quiet", "--overwrite"]) == 0
     names = sorted(p.name for p in out.iterdir())
+    # the mbb's own part.stl if its design made a part; its part is not analysed (no part.png)
+    made = json.loads((out / "summary.json").read_text())["part"]["made"]
     assert names == sorted([LOCK_NAME, "checkpoint.npz", "convergence.png", "design.png",
                             "design.vtu", "history.csv", "notes.txt", "params.json",
-                            "summary.json"])  # no pressure.png, no analysis/ of the pa-inverter
+                            "summary.json"] + (["part.stl"] if made else []))
+    # (no pressure.png, part.png or analysis/ of the pa-inverter)
     assert (out / "notes.txt").read_text() == "the user's"
     assert json.loads((out / "summary.json").read_text())["case"] == "mbb"
     assert json.loads((out / "params.json").read_text())["case"] == "mbb"
