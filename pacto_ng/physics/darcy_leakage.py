@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..parallel import total
+from ..parallel import bounding_box, total
 from .darcy import DarcyPressure
 
 
@@ -95,9 +95,13 @@ class Outflow:
 
         ``Q = -zᵀ(A p - f) = -Σ_e [K_e ∫_e ∇z·∇p dΩ + D_e ∫_e z (p - p_out) dΩ]``,
 
-    the outward flux ``∫ -K ∇p·n`` in the weak form (per unit thickness in 2D; in 3D Q/(Kv P_in)
-    is in metres).  Measured (PneuNet, docs/benchmarks.md): 1.9e-5 for the closed shell of the
-    linear design, 0.0086 to 0.45 for Wang designs with a gap in a chamber wall.
+    the outward flux ``∫ -K ∇p·n`` in the weak form.  It is made dimensionless: per unit
+    thickness in 2D (an open channel of height H and length L0 leaks H/L0), per unit length
+    ``ℓ`` in 3D, ``ℓ`` the smallest side of the mesh's bounding box (a channel of cross-section
+    A leaks A/(L0 ℓ)), so that one limit serves both.  Measured (PneuNet, docs/benchmarks.md):
+    1.9e-5 for the closed shell of the linear design, 0.0086 to 0.45 for Wang designs with a gap
+    in a chamber wall; in 3D 2.4e-6 for pa-gripper-3d's sealed design, 0.83 and 1.27 for the
+    open pneunet-3d and pa-inverter-3d designs.
 
     Backward: ``∂Q/∂ρ̄_e = -(K'_e ∫_e ∇z·∇p + D'_e ∫_e z (p - p_out))`` and ``∂Q/∂p = -A z``
     on the free dofs (the prescribed pressures do not vary); the ``p`` part flows back through
@@ -127,7 +131,9 @@ class Outflow:
         self._az = LinearForm(pr.fes)
         self._az += (self.K * grad(z) * grad(q) + self.D * z * q) * pr.DX
         self._free = np.array(list(pr.fes.FreeDofs()), dtype=bool)
-        self._scale = 1.0 / (pr.Kv * pr.p_in) if pr.p_in != 0 else 1.0
+        lo, hi = bounding_box(mesh)
+        length = 1.0 if mesh.dim == 2 else float(np.min(hi - lo))
+        self._scale = 1.0 / (pr.Kv * pr.p_in * length) if pr.p_in != 0 else 1.0 / length
         self._coefficients = None  # K, D and their derivatives of the last forward's design
 
     def forward(self, rho, p):

@@ -174,9 +174,7 @@ def pressure_png(path, problem, title: str | None = None, leak: float | None = N
     rho = np.asarray(problem.values[block.inputs[0]])
     p_in = block.p_in  # the load factor scales the body force, not p
     pv = block.gfp.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
-    # in 2D per unit thickness (a number), in 3D in metres
-    quoted = ("" if leak is None else
-              f"leak Q/(Kv P_in) = {leak:.3g}{' m' if mesh.dim == 3 else ''}")
+    quoted = "" if leak is None else f"leak Q/(Kv P_in) = {leak:.3g}"
     if mesh.dim == 3:
         from .plots3d import pressure_picture
 

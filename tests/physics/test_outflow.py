@@ -37,6 +37,21 @@ def test_an_open_channel_passes_kv_p_h_over_l(order):
     assert q == pytest.approx(H / L, rel=1e-10)
 
 
+def test_a_3d_channel_leaks_its_cross_section_over_length_and_the_smallest_side():
+    """3D: void everywhere in a box L x H x W (x 0 -> 0.02 the inlet at x = 0, zero pressure
+    at x = L): Q = Kv P_in H W / L, reported per unit of the smallest side W, H W / (L W) =
+    H / L, the 2D channel's figure (one limit serves both)."""
+    from ngsolve.meshes import MakeStructured3DMesh
+
+    W = 0.005
+    mesh = MakeStructured3DMesh(hexes=True, nx=8, ny=4, nz=2,
+                                mapping=lambda x, y, z: (L * x, H * y, W * z))
+    dar = DarcyPressure(mesh, inlet="back", zero="front", p_in=1e6)
+    rho = np.zeros(mesh.ne)
+    q = Outflow(dar).forward(rho, dar.forward(rho))
+    assert q == pytest.approx(H * W / (L * W), rel=1e-10)
+
+
 def test_a_solid_wall_lets_almost_nothing_through():
     """A solid wall two penetration depths thick (x in [0.006, 0.010]) between inlet and
     outlet: the drainage takes the inflow and the flow out falls to the solid's flow
