@@ -130,32 +130,45 @@ def build_parser() -> argparse.ArgumentParser:
 def _post_parsers(sub):
     """analyse, export, compare: from a finished run to a part (pacto_ng.post.cli_commands,
     pacto_ng.post.compare)."""
-    a = sub.add_parser("analyse", help="threshold, remesh and re-analyse a finished run "
-                       "(pressure cases)", description="Threshold the final design of a finished "
-                       "run, remesh it with named boundaries and run Neo-Hookean analyses over a "
-                       "pressure sweep: the Darcy pressure of the thresholded design and the "
-                       "pressure on the wetted boundary, fixed and follower; writes DIR/analysis/ "
-                       "(analysis.json, analysis.png, deformed.png, report.md, design.stl, "
-                       "remeshed.vtu, deformed.vtu).  Pressure cases only (a two-material run "
-                       "keeps both materials: regions soft and stiff, materials.png): for the "
-                       "force cases (cantilever, inverter) it stops with a one-line error; "
-                       "'pacto export' writes their part.")
-    a.add_argument("dir", help="a finished run folder")
-    a.add_argument("--pressures", help="comma-separated inlet pressures in Pa (default: 5 "
-                   "log-spaced values from load/100 to the run's load)")
+    a = sub.add_parser("analyse", help="analyse the part of a finished run (pressure cases), "
+                       "or a case's own geometry as built", description="Make the part of a "
+                       "finished run's final design (threshold, body-fitted remesh, seal check) "
+                       "and analyse it over a pressure sweep with the run's own material law "
+                       "(--model: another): the Darcy pressure of the thresholded design and "
+                       "the pressure on the wetted walls, fixed and follower, beside the Δ the "
+                       "optimisation expected; writes DIR/analysis/ (analysis.json, "
+                       "analysis.csv, analysis.png, deformed.png, report.md, part.stl, "
+                       "remeshed.vtu, deformed.vtu), in 2D and 3D.  With --as-built, CASE (a "
+                       "built-in case or a case file) is analysed as its geometry stands: all "
+                       "its material, the void regions removed, the pressure on the inlet "
+                       "walls; regions named 'stiff' take E2.  Pressure cases only.")
+    a.add_argument("dir", metavar="DIR|CASE", help="a finished run folder; with --as-built a "
+                   "built-in case's name or a case file")
+    a.add_argument("--as-built", action="store_true", help="analyse the case's own geometry as "
+                   "the part (no optimisation; output in --out, default output/CASE-as-built)")
+    a.add_argument("--pressures", help="comma-separated inlet pressures in the case's load unit "
+                   "(default: 5 log-spaced values from load/100 to the load)")
+    a.add_argument("--kinds", help="analyses to run: darcy, fixed, follower (default: all three "
+                   "for a run; fixed,follower as built)")
+    a.add_argument("--model", help="the part's material law (default: the run's, or the "
+                   "case's as built), e.g. neohookean for a linear run")
+    a.add_argument("--order", type=int, help="displacement order of the part's analysis "
+                   "(default 2 in 2D, 1 in 3D)")
+    a.add_argument("--maxh", type=float, help="element size of the part (default: half the "
+                   "run's; as built: the case's mesh size)")
     a.add_argument("--threshold", default="0.5", help="density threshold in (0, 1), or 'volume': "
-                   "the threshold at which the part has the design's material volume")
+                   "the threshold at which the part has the design's material volume (2D)")
     a.add_argument("--keep-threshold", action="store_true", help="do not lower the threshold "
-                   "when the part kept on the clamp does not contain the output point (by "
-                   "default it is lowered, to at least 0.1, until it does)")
+                   "when the part kept on the clamp misses an output (by default it is "
+                   "lowered until it reaches them)")
     a.add_argument("--threshold2", default="0.5", help="two materials: the stiff material is "
                    "where the stiff-material density rho_bar2 >= this, inside the part (default "
                    "0.5)")
-    a.add_argument("--maxh", type=float, help="element size of the new mesh (default: half the "
-                   "run's)")
-    a.add_argument("--order", type=int, default=2, help="displacement order of the re-analysis")
-    a.add_argument("--kinds", default="darcy,fixed,follower",
-                   help="analyses to run (darcy, fixed, follower)")
+    a.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="as built: any parameter, as for run (e.g. material=ecoflex-00-30)")
+    a.add_argument("--out", help="as built: the output folder (default output/CASE-as-built)")
+    a.add_argument("--time-limit", type=_positive, default=3600.0, help="refuse an analysis "
+                   "estimated to take longer (seconds, default 3600)")
     a.add_argument("--quiet", action="store_true", help="no progress output")
     x = sub.add_parser("export", help="the thresholded, remeshed part of a run as STL, VTK, "
                        "VTU or MSH")
@@ -190,11 +203,7 @@ def _post_command(args) -> int:
     from .post import cli_commands as pc
 
     if args.command == "analyse":
-        pressures = pc.parse_pressures(args.pressures) if args.pressures is not None else None
-        kinds = tuple(k.strip() for k in args.kinds.split(",") if k.strip())
-        return pc.analyse_run(args.dir, pressures=pressures, threshold_value=args.threshold,
-                              maxh=args.maxh, order=args.order, kinds=kinds, quiet=args.quiet,
-                              connect=not args.keep_threshold, threshold2=args.threshold2)
+        return _analyse_command(args)
     if args.command == "export":
         return pc.export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
                              maxh=args.maxh, quiet=args.quiet, threshold2=args.threshold2,
@@ -202,6 +211,35 @@ def _post_command(args) -> int:
     from .post.compare import compare_runs
 
     return compare_runs(args.dirs, out=args.out, quiet=args.quiet)
+
+
+def _analyse_command(args) -> int:
+    """``pacto analyse DIR`` (pacto_ng.post.analyse) or ``pacto analyse CASE --as-built``
+    (pacto_ng.post.as_built)."""
+    from .post.analyse import analyse_run, parse_pressures
+
+    pressures = parse_pressures(args.pressures) if args.pressures is not None else None
+    kinds = None if args.kinds is None else tuple(
+        k.strip() for k in args.kinds.split(",") if k.strip())
+    if args.as_built:
+        from .case import get_case
+        from .post.as_built import analyse_as_built
+
+        case = get_case(args.dir)
+        params = params_from_args(case, argparse.Namespace(
+            set=args.set, model=args.model, maxh=args.maxh, nelx=None))
+        return analyse_as_built(case, params, pressures=pressures, kinds=kinds,
+                                order=args.order, out=args.out, quiet=args.quiet,
+                                time_limit=args.time_limit)
+    for flag, value in (("--set", args.set), ("--out", args.out)):
+        if value:
+            raise InputError(f"{flag}: applies to --as-built; a run's part is analysed with the "
+                             f"run's parameters (--model names another law) in DIR/analysis/")
+    return analyse_run(args.dir, pressures=pressures, threshold_value=args.threshold,
+                       maxh=args.maxh, order=args.order,
+                       kinds=kinds if kinds is not None else ("darcy", "fixed", "follower"),
+                       quiet=args.quiet, connect=not args.keep_threshold,
+                       threshold2=args.threshold2, model=args.model, time_limit=args.time_limit)
 
 
 def params_from_args(case, args) -> Parameters:

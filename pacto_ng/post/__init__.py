@@ -2,26 +2,25 @@
 
 threshold → polygons (:mod:`.threshold`; the smoothed densities :mod:`.grid`, the boundary
 names :mod:`.boundary`, the threshold's choice :mod:`.threshold_choice`) → body-fitted Netgen
-mesh with named boundaries (:mod:`.remesh`; the part's geometry :mod:`.traced` or, on the case's
-own shape, :mod:`.domain_part`) → Neo-Hookean sweeps under fixed, follower and Darcy pressure
-(:mod:`.reanalysis`) → STL, VTU and pictures (:mod:`.export`); all of it in one call with
-:func:`.report.post_analyse`.
+mesh with named boundaries (:mod:`.remesh` in 2D, the part's geometry :mod:`.traced` or, on the
+case's own shape, :mod:`.domain_part`; :mod:`.part3d` and :mod:`.remesh3d` in 3D; both behind
+:func:`.part.make_part`) → the part analysed with the run's own material law under the Darcy,
+fixed or follower pressure (:class:`.part_analysis.PartAnalysis`) → STL, VTU and pictures
+(:mod:`.export`); ``pacto analyse`` chains it all (:func:`.analyse.analyse_run`; a case's own
+geometry as built: :mod:`.as_built`).
 """
 from .boundary import outer_boundary
 from .export import (convert, deformation_fields, extrude_solid, plot_deformed, plot_sweeps,
                      write_stl, write_vtu)
 from .grid import mesh_to_pyvista, nodal_density
-from .reanalysis import (FixedBoundaryPressure, Reanalysis, Sweep, SweepPoint, analyse,
-                         follower_pressure_terms, output_ports, outward_sign,
-                         pressure_body_force)
+from .part import Part, make_part
+from .part_analysis import PartAnalysis, Sweep, SweepPoint, outward_normal, pressure_body_force
 from .remesh import Remeshed, pressure_sampler, remesh
-from .report import PostResult, post_analyse
 from .threshold import Component, Loop, Thresholded, threshold
 from .traced import build_geometry
 
 __all__ = ["threshold", "nodal_density", "mesh_to_pyvista", "outer_boundary", "Thresholded",
            "Component", "Loop", "remesh", "Remeshed", "build_geometry", "pressure_sampler",
-           "Reanalysis", "analyse", "output_ports", "Sweep", "SweepPoint", "FixedBoundaryPressure",
-           "follower_pressure_terms", "outward_sign", "pressure_body_force", "write_stl",
-           "extrude_solid", "write_vtu", "deformation_fields", "convert", "plot_deformed",
-           "plot_sweeps", "post_analyse", "PostResult"]
+           "make_part", "Part", "PartAnalysis", "Sweep", "SweepPoint", "outward_normal",
+           "pressure_body_force", "write_stl", "extrude_solid", "write_vtu",
+           "deformation_fields", "convert", "plot_deformed", "plot_sweeps"]

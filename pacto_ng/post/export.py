@@ -2,9 +2,10 @@
 
 * ``design.stl`` — the solid extruded by the thickness with pyvista's ``extrude(...,
   capping=True)``, normals oriented consistently outward (:func:`write_stl`);
-* ``remeshed.vtu`` / ``deformed.vtu`` — the remeshed solid in the reference / deformed
-  configuration with point data ``u`` and cell data ``J`` (det F), ``stress`` (Cauchy, 3x3,
-  row-major) and ``von_mises`` (:func:`write_vtu`, written with meshio);
+* ``remeshed.vtu`` / ``deformed.vtu`` — the analysed part (2D or 3D) in the reference /
+  deformed configuration with point data ``u`` and cell data ``J`` (det F), ``stress``
+  (Cauchy, 3x3, row-major, from the analysis's own energy by automatic differentiation) and
+  ``von_mises`` (:func:`write_vtu`, written with meshio);
 * :func:`convert` — any of stl | vtk | vtu | msh to another, through meshio;
 * the fabricable part of ``pacto export`` (the whole mechanism, its fields, in the unit of
   :data:`UNITS`): :mod:`~pacto_ng.post.part2d`;
@@ -17,7 +18,17 @@ from pathlib import Path
 
 import numpy as np
 
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection, PolyCollection
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+from matplotlib.tri import Triangulation
+
 from ..files import atomic_path
+from ..physics.materials import first_piola_kirchhoff
+from .grid import mesh_to_pyvista
+from .materials import INTERFACE
+from .plots import mirror_line
 
 FORMATS = {".stl": "stl", ".vtk": "vtk", ".vtu": "vtu", ".msh": "gmsh"}
 
@@ -26,18 +37,31 @@ UNITS = {"mm": 1e-3, "m": 1.0}
 
 
 # ---------------------------------------------------------------------------------------
+#: meshio's cell types by (dimension, vertices per element)
+_CELL_TYPES = {(2, 3): "triangle", (2, 4): "quad", (3, 4): "tetra", (3, 5): "pyramid",
+               (3, 6): "wedge", (3, 8): "hexahedron"}
+
+
+def _elements(mesh):
+    """``(nodes, counts)``: the volume elements of a 2D or 3D NGSolve mesh as 0-based vertex
+    rows (padded with -1) and their vertex counts, in NGSolve's element order."""
+    ngm = mesh.ngmesh
+    els = (ngm.Elements2D() if mesh.dim == 2 else ngm.Elements3D()).NumPy()
+    nodes = np.asarray(els["nodes"], dtype=np.int64) - 1
+    return nodes, np.count_nonzero(nodes >= 0, axis=1)
+
+
 def _mesh_arrays(mesh):
-    """Vertex coordinates (nv, 2) and meshio cell blocks of a 2D NGSolve mesh."""
+    """Vertex coordinates (nv, dim) and meshio cell blocks of a 2D or 3D NGSolve mesh (one
+    block per element type, in the order of :func:`_block_order`)."""
     pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
-    tris, quads = [], []
-    for el in mesh.ngmesh.Elements2D():
-        vs = [v.nr - 1 for v in el.vertices]
-        (tris if len(vs) == 3 else quads).append(vs)
+    nodes, counts = _elements(mesh)
     blocks = []
-    if tris:
-        blocks.append(("triangle", np.array(tris, dtype=np.int64)))
-    if quads:
-        blocks.append(("quad", np.array(quads, dtype=np.int64)))
+    for n in sorted(set(counts.tolist())):
+        kind = _CELL_TYPES.get((mesh.dim, n))
+        if kind is None:
+            raise ValueError(f"elements of {n} vertices in {mesh.dim}D are not written")
+        blocks.append((kind, nodes[counts == n][:, :n]))
     return pts, blocks
 
 
@@ -49,8 +73,6 @@ def solid_surface(source):
         surf = source.extract_surface(algorithm="dataset_surface") \
             if not isinstance(source, pv.PolyData) else source
     else:
-        from .grid import mesh_to_pyvista
-
         surf = mesh_to_pyvista(source).extract_surface(algorithm="dataset_surface")
     surf = surf.triangulate().clean()
     surf.clear_data()  # bookkeeping arrays (vtkOriginalCellIds) would not survive extrusion
@@ -79,67 +101,84 @@ def write_stl(path, source, thickness: float):
 
 
 # ---------------------------------------------------------------------------------------
-def deformation_fields(mesh, u, E, nu: float) -> tuple[np.ndarray, dict]:
-    """Vertex displacements and element-centroid ``J``, Cauchy stress and von Mises stress.
+def cauchy_stress(phi, G, plane: str = "strain"):
+    """The Cauchy stress ``σ = P Fᵀ / J`` (3x3) of the energy density ``phi`` (``G -> CF``,
+    per unit reference volume, 2D or 3D: a part's :meth:`~.part_analysis.PartAnalysis.
+    energy_density`) at the displacement gradient ``G``, with ``P = ∂φ/∂F`` by automatic
+    differentiation (:func:`~pacto_ng.physics.materials.first_piola_kirchhoff`), and
+    ``J = det F``.  In 2D plane strain ``G`` is embedded in 3x3 with ``F33 = 1`` (the energy
+    of the embedded gradient is the plane-strain energy), so ``σ_zz = P33 / J`` comes out of
+    the same derivative; in plane stress ``σ_zz = 0`` and ``J`` is the in-plane one (the
+    change of thickness is not followed).  Returns ``(σ, J)`` as CFs."""
+    from ngsolve import CF, Det, Id
 
-    ``E`` is a number, or ``{material: E}`` (a part of two materials).  The first
-    Piola–Kirchhoff stress is ``∂φ/∂F`` of the Neo-Hookean energy, by automatic
-    differentiation; ``σ = P Fᵀ / J`` in plane, and ``σ_zz = λ ln J / J`` (F33 = 1).
+    if G.dims[0] == 2:
+        if plane == "strain":
+            G = CF((G[0, 0], G[0, 1], 0.0, G[1, 0], G[1, 1], 0.0, 0.0, 0.0, 0.0), dims=(3, 3))
+        else:
+            P2 = first_piola_kirchhoff(phi, G)
+            F2 = Id(2) + G
+            J = Det(F2)
+            s2 = P2 * F2.trans / J
+            return CF((s2[0, 0], s2[0, 1], 0.0, s2[1, 0], s2[1, 1], 0.0, 0.0, 0.0, 0.0),
+                      dims=(3, 3)), J
+    P = first_piola_kirchhoff(phi, G)
+    F = Id(3) + G
+    J = Det(F)
+    return P * F.trans / J, J
+
+
+def deformation_fields(mesh, u, phi=None, plane: str = "strain") -> tuple[np.ndarray, dict]:
+    """Vertex displacements and, with the energy density ``phi``, element-centroid ``J``,
+    Cauchy stress and von Mises stress (:func:`cauchy_stress`), of a 2D or 3D mesh.
 
     Returns
     -------
-    u_vertices : ndarray, shape (nv, 2)
+    u_vertices : ndarray, shape (nv, 3)
+        z = 0 in 2D.
     cell_data : dict of ndarray
-        ``J`` (ne,), ``stress`` (ne, 9), ``von_mises`` (ne,)
+        ``J`` (ne,), ``stress`` (ne, 9, row-major), ``von_mises`` (ne,); empty without ``phi``.
     """
-    from ngsolve import Grad, Id, log
+    from ngsolve import Grad
 
-    from ..physics.materials import first_piola_kirchhoff, jacobian, lame, neohookean_energy
-    from .materials import modulus_cf
-
-    E = modulus_cf(mesh, E)
-    pts, _ = _mesh_arrays(mesh)
-    uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy()))).reshape(-1, 2)
-    cen = []
-    for el in mesh.ngmesh.Elements2D():
-        cen.append(pts[[v.nr - 1 for v in el.vertices]].mean(axis=0))
-    cen = np.array(cen)
-    mips = mesh(cen[:, 0].copy(), cen[:, 1].copy())
-    Pk = first_piola_kirchhoff(lambda G: neohookean_energy(G, E, nu, "strain"), Grad(u))
-    F = Id(2) + Grad(u)
-    J = jacobian(Grad(u))
-    sig = (Pk * F.trans) / J
-    _, lam = lame(E, nu)
-    szz = lam * log(J) / J
-    Jv = np.asarray(J(mips)).ravel()
-    s2 = np.asarray(sig(mips)).reshape(-1, 2, 2)
-    sz = np.asarray(szz(mips)).ravel()
-    s3 = np.zeros((len(cen), 3, 3))
-    s3[:, :2, :2] = s2
-    s3[:, 2, 2] = sz
+    d = mesh.dim
+    pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
+    uv = np.asarray(u(mesh(*(pts[:, i].copy() for i in range(d))))).reshape(-1, d)
+    uv = np.c_[uv, np.zeros((len(uv), 3 - d))]
+    if phi is None:
+        return uv, {}
+    nodes, counts = _elements(mesh)
+    cen = np.array([pts[row[:n]].mean(axis=0) for row, n in zip(nodes, counts)])
+    mips = mesh(*(cen[:, i].copy() for i in range(d)))
+    sig, J = cauchy_stress(phi, Grad(u), plane)
+    s3 = np.asarray(sig(mips)).reshape(-1, 3, 3)
     dev = s3 - np.einsum("ijj->i", s3)[:, None, None] / 3.0 * np.eye(3)
     vm = np.sqrt(1.5 * np.einsum("ijk,ijk->i", dev, dev))
-    return uv, {"J": Jv, "stress": s3.reshape(-1, 9), "von_mises": vm}
+    return uv, {"J": np.asarray(J(mips)).ravel(), "stress": s3.reshape(-1, 9), "von_mises": vm}
 
 
-def write_vtu(path, mesh, u=None, *, E: float | None = None, nu: float | None = None,
-              deformed: bool = False):
-    """Write a 2D NGSolve mesh (and its displacement fields) as VTU with meshio.
+def write_vtu(path, mesh, u=None, *, phi=None, plane: str = "strain", E=None,
+              deformed: bool = False, point_data=None):
+    """Write a 2D or 3D NGSolve mesh (and its displacement fields) as VTU with meshio.
 
-    A mesh of named materials other than ``solid`` (a two-material part) gets cell data
-    ``material`` (1, 2, ... in the order of the sorted names: ``soft``, ``stiff``), one
-    indicator array ``material_<name>`` per material (1 in its cells, else 0) and, with ``E``
-    a dict, ``E`` (Pa).
+    A mesh of named materials other than ``solid`` (a two-material part, an as-built part of
+    several regions) gets cell data ``material`` (1, 2, ... in the order of the sorted
+    names), one indicator array ``material_<name>`` per material (1 in its cells, else 0)
+    and, with ``E`` a dict ``{material: E}``, ``E`` (Pa).
 
     Parameters
     ----------
     path : str or Path
     mesh : ngsolve.Mesh
     u : GridFunction, optional
-        Displacement; with ``E`` and ``nu`` the cell data ``J``, ``stress``, ``von_mises`` are
-        written too.
+        Displacement (point data ``u``, 3 components); with ``phi`` the cell data ``J``,
+        ``stress`` and ``von_mises`` too (:func:`deformation_fields`).
+    phi : callable ``G -> CF``, optional
+        The energy density the stress comes from; ``plane`` its 2D model.
     deformed : bool
         Move the points by ``u`` (``deformed.vtu``); otherwise the reference configuration.
+    point_data : dict, optional
+        More point data (one value or row per vertex).
 
     Returns
     -------
@@ -148,16 +187,14 @@ def write_vtu(path, mesh, u=None, *, E: float | None = None, nu: float | None = 
     import meshio
 
     pts, blocks = _mesh_arrays(mesh)
-    point_data, cell_data = {}, {}
+    pts = np.c_[pts, np.zeros((len(pts), 3 - mesh.dim))]
+    pdata, cdata = dict(point_data or {}), {}
+    order = _block_order(mesh)
     if u is not None:
-        if E is not None and nu is not None:
-            uv, cells = deformation_fields(mesh, u, E, nu)
-            order = _block_order(mesh)
-            for key, val in cells.items():
-                cell_data[key] = [val[idx] for idx in order]
-        else:
-            uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy()))).reshape(-1, 2)
-        point_data["u"] = np.c_[uv, np.zeros(len(uv))]
+        uv, cells = deformation_fields(mesh, u, phi, plane)
+        for key, val in cells.items():
+            cdata[key] = [val[idx] for idx in order]
+        pdata["u"] = uv
         if deformed:
             pts = pts + uv
     elif deformed:
@@ -168,43 +205,43 @@ def write_vtu(path, mesh, u=None, *, E: float | None = None, nu: float | None = 
         # names of their own) one indicator array per material, material_<name>; with E given
         # as {material: E}, its Young's modulus
         ids, _ = material_ids(mesh)
-        order = _block_order(mesh)
-        cell_data["material"] = [ids[idx] for idx in order]
+        cdata["material"] = [ids[idx] for idx in order]
         for i, n in enumerate(names):
-            cell_data[f"material_{n}"] = [(ids[idx] == i + 1).astype(np.int64) for idx in order]
+            cdata[f"material_{n}"] = [(ids[idx] == i + 1).astype(np.int64) for idx in order]
         if isinstance(E, dict):
-            mod = np.array([E[n] for n in names], dtype=float)[ids - 1]
-            cell_data["E"] = [mod[idx] for idx in order]
-    out = meshio.Mesh(np.c_[pts, np.zeros(len(pts))], blocks, point_data=point_data,
-                      cell_data=cell_data)
+            mod = np.array([E.get(n, np.nan) for n in names], dtype=float)[ids - 1]
+            cdata["E"] = [mod[idx] for idx in order]
+    out = meshio.Mesh(pts, blocks, point_data=pdata, cell_data=cdata)
     with atomic_path(path) as tmp:
         out.write(str(tmp), file_format="vtu")
     return out
 
 
 def material_names(mesh) -> list[str]:
-    """The distinct materials of a 2D NGSolve mesh (several faces may share a name), sorted."""
-    return sorted(set(mesh.GetMaterials()))
+    """The distinct materials of the elements of a 2D or 3D NGSolve mesh (several regions may
+    share a name; a name without elements, e.g. a void region cut out of an as-built part,
+    is left out), sorted."""
+    region = mesh.GetMaterials()
+    nodes = (mesh.ngmesh.Elements2D() if mesh.dim == 2 else mesh.ngmesh.Elements3D()).NumPy()
+    return sorted({region[i - 1] for i in np.unique(nodes["index"])})
 
 
 def material_ids(mesh) -> tuple[np.ndarray, dict]:
     """``(ids, field_data)``: every element's material as its 1-based number in
-    :func:`material_names` (NGSolve element order) and ``{name: [id, 2]}`` (the Gmsh convention
-    of named physical groups)."""
+    :func:`material_names` (NGSolve element order) and ``{name: [id, dim]}`` (the Gmsh
+    convention of named physical groups)."""
     names = material_names(mesh)
     region = mesh.GetMaterials()  # region index - 1 -> name
     number = {n: i + 1 for i, n in enumerate(names)}
-    ids = np.array([number[region[el.index - 1]] for el in mesh.ngmesh.Elements2D()],
-                   dtype=np.int64)
-    return ids, {n: np.array([i, 2]) for n, i in number.items()}
+    els = (mesh.ngmesh.Elements2D() if mesh.dim == 2 else mesh.ngmesh.Elements3D()).NumPy()
+    ids = np.array([number[region[i - 1]] for i in els["index"]], dtype=np.int64)
+    return ids, {n: np.array([i, mesh.dim]) for n, i in number.items()}
 
 
 def _block_order(mesh):
-    """Element indices of the triangle block and the quad block (meshio's cell order)."""
-    tri, quad = [], []
-    for k, el in enumerate(mesh.ngmesh.Elements2D()):
-        (tri if len(el.vertices) == 3 else quad).append(k)
-    return [np.array(b, dtype=np.int64) for b in (tri, quad) if b]
+    """Element indices of each block of :func:`_mesh_arrays` (meshio's cell order)."""
+    _, counts = _elements(mesh)
+    return [np.flatnonzero(counts == n) for n in sorted(set(counts.tolist()))]
 
 
 def write_binary_stl(path, solid, header: str = "", scale: float = 1.0):
@@ -264,9 +301,6 @@ def convert(src, dst):
 
 # ---------------------------------------------------------------------------------------
 def _figure(figsize):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     fig = Figure(figsize=figsize, layout="constrained")
     FigureCanvasAgg(fig)
     return fig
@@ -294,9 +328,6 @@ def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mi
     image about too (a part solved on a symmetric half), True for the line of ``mesh``'s own
     straight ``symmetry`` boundary if it has one, False for the half alone.
     """
-    from .plots import mirror_line
-    from matplotlib.collections import LineCollection
-    from matplotlib.tri import Triangulation
     from ngsolve import BND
 
     pts, blocks = _mesh_arrays(mesh)
@@ -385,12 +416,7 @@ def plot_materials(path, mesh, *, title: str | None = None, dpi: int = 150, mirr
     """``materials.png``: the remeshed part's elements coloured by material (soft orange,
     stiff blue, the colours of the run's ``materials.png``), the part's boundary in black and
     the ``interface`` between the materials in red; mirrored like :func:`plot_deformed`."""
-    from matplotlib.collections import LineCollection, PolyCollection
-    from matplotlib.patches import Patch
     from ngsolve import BND
-
-    from .materials import INTERFACE
-    from .plots import mirror_line
 
     pts, _ = _mesh_arrays(mesh)
     ids, names = material_ids(mesh)

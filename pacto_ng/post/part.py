@@ -9,7 +9,7 @@ by dimension:
   Netgen triangles on the case's own geometry (:func:`~.remesh.remesh`); a part Netgen cannot
   mesh is retried a little below the threshold;
 * 3D: the iso-surface of the nodal density is clipped, smoothed (:func:`~.part3d.part3d`) and
-  meshed with Netgen tetrahedra (:func:`~.reanalysis3d.remesh_part`); a part that misses an
+  meshed with Netgen tetrahedra (:func:`~.remesh3d.remesh_part`); a part that misses an
   output face or point is made again at lower thresholds.
 
 Both carry the case's boundary and point names over (the supports, ports and springs act on
@@ -34,7 +34,7 @@ from ..physics.mechanics import Supports
 from .materials import material_areas
 from .part3d import part3d, void_regions
 from .post3d import RHO2, split_materials, stiff_sampler
-from .reanalysis3d import PRESSURE, remesh_part
+from .remesh3d import PRESSURE, remesh_part
 from .remesh import remesh
 from .runs import design_density, domain_of, materials_of
 from .seal import Seal, check_seal
@@ -200,6 +200,8 @@ def _part_2d(problem, setup, rho, requested, maxh, threshold2, connect, pressure
     shape, exclude = domain_of(problem, setup)
     choice, th = choose_threshold(problem.mesh, rho, requested, [p.region for p in ports],
                                   setup.supports.clamp, connect=connect, exclude=exclude)
+    th = reach_boundary_ports(problem.mesh, rho, choice, th, [p.region for p in ports],
+                              setup.supports.clamp, connect=connect, exclude=exclude)
     choice["exclude"] = tuple(exclude)
     stiff, _ = materials_of(problem, setup, problem.params, threshold2, exclude)
     wet = dict(pressure=pressure, p_in=p_in, wet_boundaries=inlet_names(problem, setup))
@@ -220,6 +222,55 @@ def _part_2d(problem, setup, rho, requested, maxh, threshold2, connect, pressure
         choice["note"] += f"; Netgen could not mesh the part at {used:.4g}, meshed at {t:.4g}"
     return Part(rm.mesh, 2, t, choice, rm.area, float(problem.field.areas @ rho),
                 rm.wetted_length, None, rm.geometry, rm.materials, (th, rm), rm.ports)
+
+
+def reach_boundary_ports(mesh, rho, choice: dict, th, regions, clamp, *, connect: bool = True,
+                         exclude=(), floor: float = 0.1, resolution: float = 0.005):
+    """2D: the output ports on a *boundary* of ``mesh`` (an edge port: its mean is read),
+    which :func:`~.threshold_choice.choose_threshold` does not check (it checks named
+    points), must be touched by the part kept on ``clamp``.  When the part at the chosen
+    threshold ``th`` misses one, the threshold is lowered by bisection, down to ``floor`` and
+    to within ``resolution``, to the largest value at which every such port is touched (a
+    lower threshold only adds solid, so the named points stay in the part).  ``choice`` (the
+    record) is updated in place: ``boundary_ports`` (port -> touched), and ``used``,
+    ``lowered`` and ``note`` when lowered.  Returns the Thresholded at the threshold used;
+    ValueError when even ``floor`` misses a port (and ``connect``)."""
+    edges = [r for r in regions if r in set(mesh.GetBoundaries())]
+    if not edges:
+        return th
+    clamp = set(clamp)
+
+    def missed(cand):
+        kept = [c for c in cand.components if not clamp or c.names & clamp]
+        return [r for r in edges if not any(r in c.names for c in kept)]
+
+    miss = missed(th)
+    if miss and connect:
+        low = threshold_2d(mesh, rho, floor, exclude=exclude)
+        if missed(low):
+            raise ValueError(f"the part on the clamp does not reach the output boundary "
+                             f"'{missed(low)[0]}' (thresholds {choice['used']:g} down to "
+                             f"{floor:g})")
+        lo, hi, start = floor, choice["used"], choice["used"]
+        while hi - lo > resolution:
+            mid = 0.5 * (lo + hi)
+            cand = threshold_2d(mesh, rho, mid, exclude=exclude)
+            if missed(cand):
+                hi = mid
+            else:
+                lo, low = mid, cand
+        choice["note"] += (f"; lowered to {lo:.4g} from {start:.4g}: there the part on the "
+                           f"clamp does not reach the output boundary "
+                           + ", ".join(f"'{r}'" for r in miss))
+        th, miss = low, []
+        choice.update(used=lo, lowered=True, part_area=th.area)
+    elif miss:
+        choice["note"] += (f"; the part on the clamp does not reach the output boundary "
+                           f"'{miss[0]}' (not lowered: --keep-threshold)")
+    choice["boundary_ports"] = {r: r not in miss for r in edges}
+    points = choice.get("reaches_output")
+    choice["reaches_output"] = not miss if points is None else bool(points and not miss)
+    return th
 
 
 def _part_3d(problem, setup, rho, requested, maxh, threshold2, connect, pressure, p_in, ports,

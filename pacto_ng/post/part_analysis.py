@@ -1,22 +1,27 @@
 """One analysis of a part -- a body-fitted mesh of the solid only -- with the run's own material
 law, under a wall pressure that is fixed or follows the deformation, in 2D and 3D alike.
 
-The part (:func:`~pacto_ng.post.remesh.remesh` in 2D, :func:`~pacto_ng.post.reanalysis3d.
-remesh_part` in 3D) is the reference configuration Ω0 with boundary names: ``pressure`` (the
-wetted chamber walls) and the case's own (``fixed``, ``symmetry``, ``inlet``, ``free``, ...);
-in 2D also named points.  The dimension ``d`` is the mesh's; in 2D every integral carries the
-thickness ``t`` (``params.thickness``; ``t = 1`` in 3D), in plane strain or stress
-(``params.plane``).
+The part (:func:`~pacto_ng.post.remesh.remesh` in 2D, :func:`~pacto_ng.post.remesh3d.
+remesh_part` in 3D, or a case's own mesh as built: :mod:`~pacto_ng.post.as_built`) is the
+reference configuration Ω0 with boundary names: ``pressure`` (the wetted chamber walls) and
+the case's own (``fixed``, ``symmetry``, ``inlet``, ``free``, ...) and named points.  The
+dimension ``d`` is the mesh's; in 2D every integral carries the thickness ``t``
+(``params.thickness``; ``t = 1`` in 3D), in plane strain or stress (``params.plane``).
 
 Material.  The energy is the run's, built by :func:`~pacto_ng.physics.energy.make_energy` from
 the run's :class:`~pacto_ng.params.Parameters` (model, E0, E1, E2, ν, plane, material preset,
-Wang parameters) on element fields that describe solid material everywhere:
+Wang parameters) on element fields that describe solid material everywhere
+(:func:`solid_fields`):
 
-* one material: ``ρ̄ = 1`` on every element, so SIMP gives ``E = E0 + 1^p (E1 - E0) = E1``
-  (Bendsøe and Sigmund 2003, *Topology optimization*, eq. 1.3; thesis eq. A.23);
-* two materials (element materials ``soft`` and ``stiff``, :mod:`.materials`): ``ρ̄1 = 1`` and
-  ``ρ̄2 = 1`` on ``stiff``, 0 on ``soft``, so the two-material SIMP (thesis eq. 6.1)
-  ``E = (1-ρ̄1^p) E0 + ρ̄1^p [(1-ρ̄2^p) E1 + ρ̄2^p E2]`` gives exactly E1 and E2.
+* one material (no element material named ``stiff``): ``ρ̄ = 1`` on every element, so SIMP
+  gives ``E = E0 + 1^p (E1 - E0) = E1`` (Bendsøe and Sigmund 2003, *Topology optimization*,
+  eq. 1.3; thesis eq. A.23);
+* a part with a region named ``stiff`` (a two-material design's ``soft`` and ``stiff``,
+  :mod:`.materials`; an as-built case's faces or solids named ``stiff`` beside any others):
+  ``ρ̄1 = 1`` and ``ρ̄2 = 1`` on ``stiff``, 0 elsewhere, so the two-material SIMP (thesis
+  eq. 6.1) ``E = (1-ρ̄1^p) E0 + ρ̄1^p [(1-ρ̄2^p) E1 + ρ̄2^p E2]`` gives exactly E2 on ``stiff``
+  and E1 on every other region.  A rubber law (a preset's) scales with E as every law does:
+  ``stiff`` has the same law, E2/E1 times stiffer.
 
 For the Wang model (Wang, Lazarov, Sigmund and Jensen 2014, *Comput. Methods Appl. Mech.
 Engrg.* 277; thesis eqs 5.1-5.2) ``γ = H(ρ̄^p; η1, β1) = H(1) = 1`` (exactly; in floating point
@@ -27,7 +32,7 @@ here too).  The displacement or mixed formulation is
 :func:`~pacto_ng.physics.mixed.formulation_for` of the run's setting.
 
 Loads, on the wall ``Γp`` (``boundary``) with ``N0`` the outward unit normal of the solid
-(:func:`outward_normal`), with the pressure ``P`` as the load factor of
+(:func:`outward_normal`), or in the volume, with the pressure ``P`` as the load factor of
 :class:`~pacto_ng.physics.mechanics.Mechanics`:
 
 ``fixed``
@@ -43,10 +48,18 @@ Loads, on the wall ``Γp`` (``boundary``) with ``N0`` the outward unit normal of
     gives on a boundary).  It is exact: ``F̃ T = F T`` on every tangent ``T`` and ``F̃ N0 =
     N0``, and ``cof(A) N0`` depends only on ``A T`` -- in 3D ``cof(F̃) N0 = F T1 × F T2`` for
     tangents with ``T1 × T2 = N0``, in 2D ``cof(A) = R A Rᵀ`` (``R = ((0, 1), (-1, 0))``)
-    gives ``cof(F̃) N0 = R F T`` for ``N0 = R T``, the identity ``J F⁻ᵀ N0 = Rot(F T)`` of
-    :mod:`.reanalysis`.  In plane stress the change of thickness is not followed.  Not the
+    gives ``cof(F̃) N0 = R F T`` for ``N0 = R T``, the identity ``J F⁻ᵀ N0 = Rot(F T)``
+    (docs/theory.md §4).  In plane stress the change of thickness is not followed.  Not the
     derivative of a potential: a residual term, with its load stiffness from
     ``AssembleLinearization`` (an unsymmetric tangent); Newton for every model.
+``darcy``
+    a Darcy pressure field ``p`` of the design (thesis §6.1.1, "deformation-independent load
+    analysis"; docs/theory.md §4) as the body force ``-∇p`` on the part, scaled with
+    ``P / P_in``: the residual gains ``-t ∫ (P/P_in) (-∇p) · v dΩ0``.  ``p`` is a field at inlet
+    pressure ``P_in`` on any mesh (the design's, on which the Darcy block solved it), set onto
+    an H1 space of the part (:func:`pressure_body_force`: NGSolve's ``Set`` evaluates a field
+    of another mesh by point search) and differentiated there.  Deformation independent and
+    conservative: a linear model is one linear solve per pressure, as ``fixed``.
 
 Output.  The ports are read with :meth:`~pacto_ng.physics.loads.Port.functional`, the
 functional of the optimisation's output (a named point's value, or the mean over a named edge
@@ -74,9 +87,9 @@ from ..physics.materials import jacobian
 from ..physics.mechanics import Mechanics, Supports
 from ..physics.mixed import formulation_for, has_simplices
 from ..threads import compute
-from .materials import MATERIALS, STIFF
+from .materials import STIFF
 
-KINDS = ("fixed", "follower")
+KINDS = ("fixed", "follower", "darcy")
 AXES = "xyz"
 
 
@@ -208,20 +221,37 @@ def follower_terms(boundary: str, pressure, thickness: float, normal, dim: int) 
 
 
 def solid_fields(mesh) -> dict:
-    """The element fields of a solid part: ``{"rho_bar": 1}``, or for a part of materials
-    ``soft`` and ``stiff`` ``{"rho_bar1": 1, "rho_bar2": 1 on stiff, 0 on soft}`` (numpy, one
-    value per element in NGSolve's order)."""
+    """The element fields of a solid part (numpy, one value per element in NGSolve's order):
+    ``{"rho_bar": 1}``, or for a part with an element material named ``stiff``
+    ``{"rho_bar1": 1, "rho_bar2": 1 on stiff, 0 on every other material}`` (see the module:
+    E2 on ``stiff``, E1 elsewhere)."""
     from ngsolve import VOL
 
     mats = [el.mat for el in mesh.Elements(VOL)]
     ones = np.ones(len(mats))
-    known = set(mesh.GetMaterials())
-    if not known & set(MATERIALS):
+    if STIFF not in mats:
         return {"rho_bar": ones}
-    if not known <= set(MATERIALS):
-        raise ValueError(f"a two-material part has materials {', '.join(MATERIALS)} only (got "
-                         f"{', '.join(sorted(known))})")
     return {"rho_bar1": ones, "rho_bar2": np.array([m == STIFF for m in mats], dtype=float)}
+
+
+def pressure_body_force(p, order: int = 1) -> Callable:
+    """A body-force callable ``mesh -> -∇p`` for the ``darcy`` kind.
+
+    ``p`` is a pressure field (a GridFunction or CF, e.g. the Darcy pressure of the thresholded
+    design on the design's mesh at inlet pressure ``P_in``, which the analysis then takes as
+    ``body_pressure``); it is set onto an H1 space of ``order`` on the part's mesh (NGSolve's
+    ``Set`` evaluates a field of another mesh by point search; a point a little outside it,
+    as the smoothed 3D part's, takes the nearest element's value) and differentiated there.
+    """
+
+    def body(mesh):
+        from ngsolve import H1, Grad, GridFunction
+
+        gp = GridFunction(H1(mesh, order=order))
+        gp.Set(p)
+        return -Grad(gp)
+
+    return body
 
 
 class PartAnalysis:
@@ -231,8 +261,8 @@ class PartAnalysis:
     ----------
     mesh : ngsolve.Mesh
         The part: 2D (plane strain or stress, thickness ``params.thickness``) or 3D.
-    kind : {"fixed", "follower"}
-        The wall pressure's kind.
+    kind : {"fixed", "follower", "darcy"}
+        The load: the wall pressure, fixed or follower, or the Darcy body force (``body``).
     params : pacto_ng.params.Parameters
         The run's parameters: model, E0, E1, E2, ν, plane, thickness, material, Wang's β1, η1
         (and γ), penal, formulation, order, Newton's settings, realcompile.
@@ -245,19 +275,29 @@ class PartAnalysis:
     order : int, optional
         Displacement order (default ``params.order``, else 1).
     boundary : str
-        The wetted wall.
+        The wetted wall (``fixed`` and ``follower``).
+    body : callable ``mesh -> CF``, optional
+        ``darcy``: the body force per unit volume at inlet pressure ``body_pressure``
+        (:func:`pressure_body_force`); the load scales with ``P / body_pressure``.
+    body_pressure : float, optional
+        The inlet pressure ``body`` belongs to.
 
     Attributes: ``formulation`` (``displacement`` or ``mixed``), ``model``, ``mech`` (the
     :class:`Mechanics` block), ``ports``, ``kind``, ``order``, ``thickness``.
     """
 
     def __init__(self, mesh, kind: str, *, params, supports: Supports, ports,
-                 springs: tuple = (), order: int | None = None, boundary: str = "pressure"):
-        from ngsolve import VOL, Grad, Parameter
+                 springs: tuple = (), order: int | None = None, boundary: str = "pressure",
+                 body: Callable | None = None, body_pressure: float | None = None):
+        from ngsolve import VOL, Grad, InnerProduct, Parameter
 
         if kind not in KINDS:
             raise ValueError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
-        if boundary not in mesh.GetBoundaries():
+        if kind == "darcy":
+            if body is None or not body_pressure:
+                raise ValueError("the darcy kind needs a body force (pressure_body_force) and "
+                                 "its inlet pressure body_pressure")
+        elif boundary not in mesh.GetBoundaries():
             raise ValueError(f"the part has no '{boundary}' boundary to apply the pressure on")
         if params.model == "auto":
             raise InputError("model: auto is chosen by a run; give the model the run used")
@@ -265,6 +305,11 @@ class PartAnalysis:
         self.ports = (ports,) if isinstance(ports, Port) else tuple(ports)
         if not self.ports or not all(isinstance(p, Port) for p in self.ports):
             raise ValueError("ports: give a Port or a non-empty tuple of Ports")
+        regions = [p.region for p in self.ports]
+        twice = sorted({r for r in regions if regions.count(r) > 1})
+        if twice:
+            raise ValueError(f"two output ports on '{twice[0]}': the analysis records every "
+                             f"port's value by its region, one port to a region")
         if not all(isinstance(s, Spring) for s in springs):
             raise ValueError("springs: give a tuple of Springs")
         self.model = params.model
@@ -278,17 +323,22 @@ class PartAnalysis:
                                            simplices=has_simplices(mesh))
         # the pressure is the block's load factor; the unit pressure carries its sign
         self._unit = Parameter(1.0)
-        normal = outward_normal(mesh, boundary)
-        loads, terms = (), None
-        if kind == "fixed":
+        loads, terms, bodyf = (), None, None
+        if kind == "darcy":
+            b, scale = body(mesh), 1.0 / float(body_pressure)
+            bodyf = lambda u, coeffs: (scale * self._unit) * InnerProduct(b, u)  # noqa: E731
+        elif kind == "fixed":
+            normal = outward_normal(mesh, boundary)
             loads = (WallPressure(boundary, self._unit, self.thickness, normal),)
         else:
+            normal = outward_normal(mesh, boundary)
             terms = follower_terms(boundary, self._unit, self.thickness, normal, mesh.dim)
+        self._energy = energy
         self.mech = Mechanics(
             mesh, order=self.order, energy=energy, fields=tuple(self._values),
-            supports=supports, loads=loads,
+            supports=supports, loads=loads, body=bodyf,
             springs=tuple(sp for p in self.ports for sp in p.springs()) + tuple(springs),
-            thickness=self.thickness, guard=guard, linear=linear and kind == "fixed",
+            thickness=self.thickness, guard=guard, linear=linear and kind != "follower",
             newton=params.newton.settings(), residual_terms=terms,
             realcompile=params.realcompile, formulation=self.formulation)
         self._forms = self._port_forms()
@@ -296,6 +346,12 @@ class PartAnalysis:
         self._qpoints = mesh.MapToAllElements(self.mech.rules, VOL)
         xyz = np.array([v.point for v in mesh.vertices], dtype=float)
         self._vertices = mesh(*(xyz[:, i].copy() for i in range(mesh.dim)))
+
+    def energy_density(self, G):
+        """The part's strain-energy density ``φ(G)`` per unit reference volume (its materials'
+        moduli in place), for stresses by automatic differentiation
+        (:func:`~pacto_ng.physics.materials.first_piola_kirchhoff`)."""
+        return self._energy(G, self.mech.coeffs)
 
     def _port_forms(self):
         """``(Δ, [[e_i-component of port k] for k])`` as vectors on the block's space, from

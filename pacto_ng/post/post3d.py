@@ -1,42 +1,40 @@
-"""``pacto export`` and ``pacto analyse`` of a 3D run (docs/postprocessing.md, "3D runs").
+"""``pacto export`` of a 3D run, and the 3D part's two materials (docs/postprocessing.md, "3D
+runs"; ``pacto analyse`` of a 3D run is :mod:`.analyse`'s, as of a 2D run).
 
 ``export DIR --format stl`` writes the part of :mod:`.part3d` (the closed, smoothed surface of
 {ρ̄ >= threshold}, pieces off the clamp dropped) as binary STL; ``--format vtk`` or ``vtu`` the
 clipped tetrahedral solid (not smoothed) with the run's final state on it (:func:`part_solid`:
 ρ̄, u, p, the model's strain and stress).  With ``mirror`` (the default) a case solved on a
 half or a quarter is written whole, reflected about its symmetry planes (:mod:`.mirror3d`).
-``analyse DIR`` remeshes that surface (the half or quarter as solved)
-with Netgen tetrahedra (:func:`~.reanalysis3d.remesh_part`: the case's face names carried over
-by position, the wetted faces named ``pressure``) and sweeps the pressures with the
-Neo-Hookean ``fixed`` and ``follower`` analyses of :class:`~.reanalysis3d.Reanalysis3D`,
-beside the expected Δ (the density design with the optimisation's own model, as in 2D).  It
-writes ``DIR/analysis/``: ``analysis.json``, ``analysis.png``, ``design.stl``, ``part.vtu``
-(the clipped solid) and ``remeshed.vtu`` (the tetrahedra with ``u`` of the follower state).
 
 A two-material design (mm-gripper's chain in 3D): the part is that of the total solid ρ̄1,
 as for one material (the STL is the whole part); its clipped solid is cut at the iso-surface
 of the nodal ρ̄2 (smoothed to the vertices as ρ̄1 is) at ``threshold2`` (default 0.5), the
 rule of the 2D part (:mod:`.materials`): ``stiff`` (E2) where ρ̄2 >= threshold2, ``soft`` (E1)
 elsewhere (:func:`split_materials`), so that ``--format vtk|vtu`` carries each cell's material
-and modulus.  ``analyse`` gives each remeshed tetrahedron the material of the nodal ρ̄2 at its
-centroid (:func:`stiff_sampler`; the interface a staircase of tetrahedron faces, the 2D
-part's element-wise mode) and analyses each with its modulus; analysis.json's ``materials``
-holds each material's volume in the remesh and in the part cut at the iso-surface.
+and modulus.  The remeshed part (:func:`~.remesh3d.remesh_part`) gives each tetrahedron the
+material of the nodal ρ̄2 at its centroid (:func:`stiff_sampler`; the interface a staircase
+of tetrahedron faces, the 2D part's element-wise mode).
 
-Not in 3D yet, refused in one line (exit code 2): the ``darcy`` analysis (skipped with a note
-when other kinds are asked too), ``--threshold volume``, ``--format msh``, and output ports
-on named points or edges (the 3D cases read their output on faces).
+Not in 3D yet, refused in one line (exit code 2): ``--format msh``.
 """
 from __future__ import annotations
 
 import json
-import time
 
 import numpy as np
+from scipy.spatial import cKDTree
 
-from ..files import atomic_path, atomic_write_text
+from ..files import atomic_path
+from ..outputs import strain_stress_measures, tensor_components
 from ..params import InputError
 from ..threads import compute
+from .export import UNITS
+from .grid import cell_volumes
+from .materials import MATERIALS, SOFT, STIFF
+from .mirror3d import is_symmetry_name, mirror_solid, mirror_surface, symmetry_planes
+from .part3d import closed_checks, part3d, void_regions, write_part_stl
+from .runs import design_density, export_destination, rebuild
 
 EXPORT_FORMATS_3D = ("stl", "vtk", "vtu")
 
@@ -61,9 +59,6 @@ def part_of_run_3d(run, threshold_value: float, threshold2: float = 0.5):
     design at ``threshold_value``; InputError when there is none.  A two-material design: the
     part of ρ̄1, its solid cut into the materials at ρ̄2 = ``threshold2``
     (:func:`split_materials`)."""
-    from .part3d import part3d, void_regions
-    from .runs import design_density, rebuild
-
     setup = run.case.make_setup(run.params)
     with compute():
         problem = rebuild(run)
@@ -90,8 +85,6 @@ def split_materials(solid, threshold2: float):
     the cells where ρ̄2 >= ``threshold2`` get cell data ``material`` 2 (``stiff``, E2), the
     others 1 (``soft``, E1), the numbers of the sorted names as in the 2D part's VTU.  The
     volume is kept (the two pieces fill the solid); the points on the cut are merged."""
-    from .materials import MATERIALS, SOFT, STIFF
-
     if not 0.0 < float(threshold2) < 1.0:
         raise ValueError(f"threshold2 must lie in (0, 1), got {threshold2!r}")
     solid = solid.copy()
@@ -114,12 +107,20 @@ def split_materials(solid, threshold2: float):
 def material_volumes(solid) -> dict:
     """``{material: m³}`` of a solid of :func:`split_materials` (every material, 0 when it has
     no cell)."""
-    from .grid import cell_volumes
-    from .materials import MATERIALS
-
     vol = cell_volumes(solid)
     mat = np.asarray(solid.cell_data["material"])
     return {name: float(vol[mat == i + 1].sum()) for i, name in enumerate(MATERIALS)}
+
+
+def solid_elements(solid, volumes) -> np.ndarray:
+    """Element ρ in {0, 1} of a thresholded 3D design: 1 where at least half of the element's
+    volume (``volumes``, one per source element) lies inside the clipped ``solid`` of
+    :func:`~.part3d.part3d` (cell data ``cid``: the source element of each clipped cell), 0
+    elsewhere (the 3D counterpart of :func:`~.runs.thresholded_elements`)."""
+    volumes = np.asarray(volumes, dtype=float)
+    inside = np.bincount(np.asarray(solid.cell_data["cid"]), weights=cell_volumes(solid),
+                         minlength=len(volumes))
+    return (inside >= 0.5 * volumes).astype(float)
 
 
 def part_solid(part, problem=None):
@@ -147,9 +148,7 @@ def part_solid(part, problem=None):
     found in the run's mesh or a field is not finite."""
     from ngsolve import GridFunction
 
-    from ..outputs import strain_stress_measures, tensor_components
 
-    from .materials import MATERIALS
 
     solid = part.solid.copy()
     cid = np.asarray(solid.cell_data["cid"])
@@ -221,11 +220,6 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
     (:func:`~.mirror3d.symmetry_planes`), whole; else the half or quarter as solved.  A
     two-material design: the STL is the whole part, the VTK/VTU has each cell's material and
     modulus, ρ̄2 thresholded at ``threshold2`` (default 0.5; :func:`split_materials`)."""
-    from .export import UNITS
-    from .mirror3d import is_symmetry_name, mirror_solid, mirror_surface, symmetry_planes
-    from .part3d import closed_checks, write_part_stl
-    from .runs import export_destination
-
     if fmt not in EXPORT_FORMATS_3D:
         raise _not_yet(f"--format {fmt}")
     prev = run.path / "analysis" / "analysis.json"
@@ -272,37 +266,13 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
     return 0
 
 
-def _remeshed_vtu(path, mesh, gfu, E=None) -> None:
-    """The part's tetrahedra with point data ``u`` (at the vertices); for a part of several
-    materials (``E`` a dict ``{material: E}``) cell data ``material`` (1 ``soft``, 2 ``stiff``)
-    and ``E``."""
-    import meshio
-
-    pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
-    els = mesh.ngmesh.Elements3D().NumPy()
-    tets = np.asarray(els["nodes"], dtype=np.int64)[:, :4] - 1
-    u = np.asarray(gfu(mesh(pts[:, 0].copy(), pts[:, 1].copy(), pts[:, 2].copy())))
-    cells = {}
-    if isinstance(E, dict):
-        from .materials import MATERIALS
-
-        names = np.array(mesh.GetMaterials(), dtype=object)[np.asarray(els["index"]) - 1]
-        cells = {"material": [np.array([MATERIALS.index(n) + 1 for n in names])],
-                 "E": [np.array([E[n] for n in names], dtype=float)]}
-    m = meshio.Mesh(pts, [("tetra", tets)], point_data={"u": u.reshape(-1, 3)},
-                    cell_data=cells)
-    with atomic_path(path) as tmp:
-        m.write(str(tmp), file_format="vtu")
-
-
 def stiff_sampler(solid, threshold2: float):
-    """A two-material part's rule for the remesh (:func:`~.reanalysis3d.remesh_part`'s
+    """A two-material part's rule for the remesh (:func:`~.remesh3d.remesh_part`'s
     ``stiff_at``): points -> whether the nodal ρ̄2, interpolated linearly in the clipped
     ``solid`` (point data :data:`RHO2`), reaches ``threshold2``; a point outside the solid
     (the smoothed surface runs up to a fraction of an element outside the clipped one) takes
     the value at the solid's nearest vertex."""
     import pyvista as pv
-    from scipy.spatial import cKDTree
 
     r2 = np.asarray(solid.point_data[RHO2], dtype=float)
     tree = cKDTree(np.asarray(solid.points, dtype=float))
@@ -317,124 +287,3 @@ def stiff_sampler(solid, threshold2: float):
         return val >= threshold2
 
     return stiff_at
-
-
-def analyse_run_3d(run, *, pressures, threshold_value, maxh, order, kinds, threshold2=0.5,
-                   quiet=False) -> int:
-    """``pacto analyse`` of a 3D run (see the module docstring).  A two-material design:
-    the remeshed part's tetrahedra are soft (E1) or stiff (E2) by the nodal ρ̄2 at their
-    centroids (:func:`stiff_sampler`, ``threshold2``).  Returns the exit code (0)."""
-    from .cli_commands import case_ports, default_pressures, expected_sweep
-    from .export import plot_sweeps
-    from .materials import MATERIALS, SOFT, STIFF, material_areas
-    from .part3d import closed_checks, write_part_stl
-    from .reanalysis3d import PRESSURE, Reanalysis3D, remesh_part
-    from .report import _jsonable, _present
-    from .runs import copy_gridfunction
-
-    if threshold_value == "volume":
-        raise _not_yet("--threshold volume")
-    kinds3 = tuple(k for k in kinds if k != "darcy")
-    if not kinds3:
-        raise _not_yet("the darcy analysis")
-    setup = run.case.make_setup(run.params)
-    two = setup.materials == 2
-    if setup.pressure is None:
-        raise InputError(f"analyse: case '{run.case.name}' has no pressure load; the re-analysis "
-                         f"applies to pressure cases only ('pacto export {run.path}' writes its "
-                         f"part)")
-    t0 = time.perf_counter()
-    part, problem, setup, exclude = part_of_run_3d(run, threshold_value, threshold2)
-    faces = set(problem.mesh.GetBoundaries())
-    if any(port.region not in faces for port in setup.ports):
-        raise _not_yet("an output port on a named point or edge")
-    ports = case_ports(setup)
-    pressures = default_pressures(run.load) if pressures is None else list(pressures)
-    _say(quiet, f"analyse {run.path}: {run.case.name} (3D), model {run.params.model}, load "
-                f"{run.load:g} Pa" + ("; darcy is not in 3D yet: skipped"
-                                      if kinds3 != tuple(kinds) else ""))
-    h = float(problem.h)
-    maxh = 0.5 * h if maxh is None else float(maxh)
-    try:
-        rm = remesh_part(part.surface, problem.mesh, maxh, h, clamp=setup.supports.clamp,
-                         exclude=exclude, wet_boundaries=setup.pressure.inlet,
-                         pressure=copy_gridfunction(problem.pressure_block.gfp),
-                         p_in=run.load, timeout=run.params.mesh_time_limit,
-                         stiff_at=stiff_sampler(part.solid, threshold2) if two else None)
-    except ValueError as err:
-        raise InputError(f"analyse: {err}") from None
-    if PRESSURE not in rm.areas:
-        raise InputError(f"analyse: no face of the part is wetted (threshold "
-                         f"{part.threshold:g}): it borders neither the inlet nor the "
-                         f"pressurised region of the run's Darcy field")
-    missing = [p.region for p in ports if p.region not in rm.areas]
-    if missing:
-        raise InputError(f"analyse: the part does not reach the output face '{missing[0]}' "
-                         f"(threshold {part.threshold:g})")
-    expected = expected_sweep(problem, run.x, pressures, run.load)
-    supports = _present(setup.supports, rm.mesh)
-    _say(quiet, f"  part: volume {part.volume:.4g} m³ ({100 * part.volume_error:+.2f} % of the "
-                f"thresholded), remeshed {rm.mesh.ne} tetrahedra (maxh {maxh:g}; {rm.dropped} "
-                f"off the clamp dropped), wetted area {rm.areas[PRESSURE]:.4g} m²; sweeps "
-                f"{', '.join(kinds3)} at {len(pressures)} pressures")
-    E = run.params.E1
-    materials = None
-    if two:
-        E = {SOFT: run.params.E1, STIFF: run.params.E2}
-        materials = dict(mode=rm.materials, threshold2=threshold2, E=E,
-                         remeshed=material_areas(rm.mesh), part=material_volumes(part.solid))
-        _say(quiet, "  materials (remeshed, " + rm.materials + " by ρ̄2 at the centroids; the "
-                    "part cut at the iso-surface): " + ", ".join(
-                        f"{k} {materials['remeshed'].get(k, 0.0):.4g} m³ "
-                        f"({materials['part'][k]:.4g})" for k in MATERIALS))
-    newton = run.params.newton.settings()
-    sweeps = {}
-    for kind in kinds3:
-        ana = Reanalysis3D(rm.mesh, kind, E=E, nu=run.params.nu, supports=supports,
-                           output=ports, order=order, newton=newton)
-        sweeps[kind] = ana.sweep(pressures)
-    out_dir = run.path / "analysis"
-    out_dir.mkdir(parents=True, exist_ok=True)
-    write_part_stl(out_dir / "design.stl", part.surface)
-    write_part_solid(out_dir / "part.vtu", part_solid(part)[0])
-    shown = next((sweeps[k] for k in ("follower", "fixed") if k in sweeps
-                  and sweeps[k].converged.any()), None)
-    if shown is not None:
-        _remeshed_vtu(out_dir / "remeshed.vtu", rm.mesh, shown.displacement(), E)
-    rows = []
-    for i, P in enumerate(pressures):
-        row = dict(pressure=P, expected=expected[i]["delta"])
-        for kind, sw in sweeps.items():
-            row[kind] = _jsonable({k: v for k, v in sw.table()[i].items() if k != "kind"})
-        rows.append(row)
-    data = dict(
-        run=dict(case=run.case.name, model=run.params.model, load=run.load, design=run.design,
-                 dim=3),
-        settings=dict(threshold=part.threshold, maxh=maxh, order=order, kinds=list(kinds3),
-                      E=E, nu=run.params.nu, supports={
-                          k: list(v) for k, v in supports.__dict__.items()},
-                      void=list(exclude)),
-        volumes=dict(thresholded=part.volume_thresholded, kept=part.volume_kept,
-                     surface=part.volume, surface_vs_kept=part.volume_error,
-                     remeshed=rm.volume, pieces=part.pieces, dropped=part.dropped,
-                     **closed_checks(part.surface)),
-        remesh=dict(tetrahedra=rm.mesh.ne, dropped_tetrahedra=rm.dropped, areas=rm.areas,
-                    wetted_area=rm.areas[PRESSURE]),
-        pressures=rows, wall_time_s=time.perf_counter() - t0)
-    if materials is not None:
-        data["materials"] = materials
-    if {"fixed", "follower"} <= set(sweeps):
-        d = [(r["follower"]["delta"], r["fixed"]["delta"]) for r in rows]
-        data["follower_vs_fixed"] = [None if a is None or b is None else (a - b) / abs(b)
-                                     for a, b in d]
-    atomic_write_text(out_dir / "analysis.json", json.dumps(data, indent=1))
-    ok_exp = [r for r in expected if r["converged"]]
-    plot_sweeps(out_dir / "analysis.png", list(sweeps.values()),
-                expected=([r["pressure"] for r in ok_exp], [r["delta"] for r in ok_exp])
-                if ok_exp else None, log=True,
-                title=f"{run.case.name} — {run.params.model} design, 3D part")
-    for r in rows:
-        _say(quiet, f"  P = {r['pressure']:.3g} Pa: expected {r['expected']}, " + ", ".join(
-            f"{k} {r[k]['delta']}" for k in sweeps))
-    _say(quiet, f"  written to {out_dir} ({data['wall_time_s']:.1f} s)")
-    return 0

@@ -41,6 +41,9 @@ def test_show_parameters(capsys):
     (["run", "mbb", "--model", "rubber"], "model"),
     (["run", "mbb", "--order", "5"], "order"),
     (["evaluate", "mbb", "--density", "/nonexistent/file.npy"], "--density"),
+    (["analyse", "output/any", "--set", "E1=2e9"], "--set"),
+    (["analyse", "pneunet", "--as-built", "--kinds", "darcy"], "--kinds"),
+    (["analyse", "pneunet", "--as-built", "--order", "5"], "--order"),
 ])
 def test_bad_input_one_line_exit_2(args, field):
     r = run_cli(*args)

@@ -78,18 +78,27 @@ def chamber_remeshed(chamber_quads):
     return th, remesh(th, 0.003, pressure=chamber_pressure)
 
 
+#: the chamber's solid: Neo-Hookean, E = 1e8 Pa, ν = 0.4, plane strain, t = 1 mm
+CHAMBER_PARAMS = dict(model="neohookean", E1=1e8, E0=1e2, E2=1e8, nu=0.4, thickness=1e-3,
+                      plane="strain")
+
+
 @pytest.fixture(scope="session")
 def chamber_sweeps(chamber_remeshed):
-    """Fixed and follower sweeps of the remeshed chamber at 1e3, 1e4 and 1e5 Pa (E = 1e8,
-    ν = 0.4, t = 1 mm, output spring 1e4 N/m, order 2)."""
-    from pacto_ng.physics.mechanics import Supports
+    """Fixed and follower sweeps of the remeshed chamber at 1e3, 1e4 and 1e5 Pa
+    (:class:`~pacto_ng.post.part_analysis.PartAnalysis`, :data:`CHAMBER_PARAMS`, output spring
+    1e4 N/m, order 2): ``{kind: Sweep}``."""
+    from pacto_ng.params import Parameters
     from pacto_ng.physics.loads import Port
-    from pacto_ng.post.reanalysis import analyse
+    from pacto_ng.physics.mechanics import Supports
+    from pacto_ng.post.part_analysis import PartAnalysis
 
     th, rm = chamber_remeshed
-    return analyse(rm.mesh, [1e3, 1e4, 1e5], E=1e8, nu=0.4, thickness=1e-3,
-                   supports=Supports(clamp=("fixed",)),
-                   output=Port("output", (0.0, -1.0), 1e4), order=2)
+    params = Parameters(**CHAMBER_PARAMS)
+    return {kind: PartAnalysis(rm.mesh, kind, params=params, order=2,
+                               supports=Supports(clamp=("fixed",)),
+                               ports=Port("output", (0.0, -1.0), 1e4)).sweep([1e3, 1e4, 1e5])
+            for kind in ("fixed", "follower")}
 
 
 def ring_quarter_mesh(maxh, a=1.0, b=2.0, curve=3):

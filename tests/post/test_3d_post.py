@@ -1,4 +1,5 @@
-"""pacto export / analyse of a 3D run, and the 3D follower pressure against a closed form.
+"""pacto export / analyse of a 3D run, and the 3D follower pressure against the 2D one (the
+homogeneous closed form of the 3D fixed and follower pressure: test_part_analysis.py).
 
 The run: pneunet-3d on tetrahedra of 0.006 m, one iteration (the run folder: params, summary,
 checkpoint), its design then replaced by a hand-made one: solid below y = 0.03 m (the chamber's
@@ -67,71 +68,50 @@ def test_export_vtk_and_refusals(run3d, tmp_path, capsys):
     capsys.readouterr()
     assert main(["export", str(run3d), "--format", "msh"]) == 2
     assert "not supported for 3D runs yet" in _one_line_error(capsys)
-    assert main(["analyse", str(run3d), "--kinds", "darcy"]) == 2
-    assert "darcy analysis is not supported for 3D" in _one_line_error(capsys)
     assert main(["analyse", str(run3d), "--threshold", "volume"]) == 2
-    assert "--threshold volume is not supported for 3D" in _one_line_error(capsys)
+    assert "--threshold volume is a 2D option" in _one_line_error(capsys)
 
 
-def test_analyse_fixed_and_follower(run3d):
-    assert main(["analyse", str(run3d), "--pressures", "1e3,1e4", "--order", "1",
-                 "--quiet"]) == 0
+def test_analyse_darcy_fixed_and_follower(run3d):
+    """``pacto analyse`` of the 3D run: the three kinds (the darcy one on the Darcy field of
+    the thresholded design, its element indicator from the clipped solid's volumes), order 1
+    by default, every file of the 2D analysis."""
+    import pyvista as pv
+
+    assert main(["analyse", str(run3d), "--pressures", "1e3,1e4", "--quiet"]) == 0
     out = run3d / "analysis"
     data = json.loads((out / "analysis.json").read_text())
-    for name in ("design.stl", "part.vtu", "remeshed.vtu", "analysis.png"):
-        assert (out / name).exists()
-    areas = data["remesh"]["areas"]
+    for name in ("analysis.json", "analysis.csv", "analysis.png", "deformed.png", "report.md",
+                 "part.stl", "remeshed.vtu", "deformed.vtu"):
+        assert (out / name).stat().st_size > 0, name
+    assert data["settings"]["order"] == 1 and data["settings"]["model"] == "linear"
+    areas = data["part"]["boundaries"]
     # the chamber's walls (the inlet) are wetted; clamp, tip and symmetry carried over
     for name in ("pressure", "fixed", "tip", "symmetry_z"):
         assert areas[name] > 0
     assert data["settings"]["supports"]["fix_z"] == ["symmetry_z"]
     # the chamber's wetted walls: 2 (0.06 x 0.01) + 2 (0.01 x 0.01) + 0.06 x 0.01 (half)
     assert areas["pressure"] == pytest.approx(0.06 * 0.01 * 3 + 0.01 * 0.01 * 2, rel=0.05)
+    assert data["part"]["wetted"] == pytest.approx(areas["pressure"], rel=1e-12)
+    assert data["part"]["sealed"] and data["seal"]["chambers"][0]["sealed"]
     rows = data["pressures"]
-    assert all(r[k]["converged"] for r in rows for k in ("fixed", "follower"))
+    assert all(r[k]["converged"] for r in rows for k in ("darcy", "fixed", "follower"))
     # the chamber bulges: the tip moves; fixed and follower agree to first order in P
-    diff = data["follower_vs_fixed"]
+    diff = [(r["follower"]["delta"] - r["fixed"]["delta"]) / abs(r["fixed"]["delta"])
+            for r in rows]
     assert abs(diff[0]) < 1e-2
     assert diff[1] / diff[0] == pytest.approx(10.0, rel=0.2)
     assert abs(rows[0]["fixed"]["delta"]) > 0
-
-
-def _cube(maxh=0.5):
-    import ngsolve
-    from netgen import occ
-
-    box = occ.Box((0, 0, 0), (1, 1, 1))
-    box.faces.name = "pressure"
-    for f in box.faces:
-        for axis, name in ((0, "x0"), (1, "y0"), (2, "z0")):
-            if abs(f.center[axis]) < 1e-9:
-                f.name = name
-    return ngsolve.Mesh(occ.OCCGeometry(box).GenerateMesh(maxh=maxh))
-
-
-@pytest.mark.parametrize("kind", ["fixed", "follower"])
-def test_cube_under_pressure_closed_form(kind):
-    """A unit cube on rollers (x0, y0, z0), pressure P on its other three faces: F = s I.
-    Neo-Hookean P1(s) = μ (s - 1/s) + λ ln(s³)/s; the dead load gives P1 = -P, the follower
-    load (the pressure on the deformed area) P1 = -P s²."""
-    from scipy.optimize import brentq
-
-    from pacto_ng.physics.loads import Port
-    from pacto_ng.physics.mechanics import Supports
-    from pacto_ng.post.reanalysis3d import Reanalysis3D
-
-    E, nu = 1e6, 0.3
-    mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
-    ana = Reanalysis3D(_cube(), kind, E=E, nu=nu, order=1,
-                       supports=Supports(fix_x=("x0",), fix_y=("y0",), fix_z=("z0",)),
-                       output=(Port("pressure", (1.0, 0.0, 0.0)),))
-    sweep = ana.sweep([1e3, 1e5])
-    for pt in sweep.points:
-        P = pt.pressure
-        s = brentq(lambda s: mu * (s - 1 / s) + lam * np.log(s ** 3) / s
-                   + (P if kind == "fixed" else P * s * s), 0.3, 1.0)
-        # mean u_x over the three loaded faces: s - 1 on x = 1, (s - 1)/2 on y = 1 and z = 1
-        assert pt.delta == pytest.approx(2.0 * (s - 1.0) / 3.0, rel=1e-9)
+    # the linear law: the deformation-independent kinds exactly linear in P
+    for kind in ("darcy", "fixed"):
+        assert rows[1][kind]["delta"] / rows[0][kind]["delta"] == pytest.approx(10.0, rel=1e-8)
+    stl = pv.read(str(out / "part.stl"))  # whole: mirrored about symmetry_z, in mm
+    assert stl.n_open_edges == 0 and stl.is_manifold
+    assert abs(stl.volume) * 1e-9 == pytest.approx(2 * data["part"]["measures"]["surface"],
+                                                   rel=1e-3)
+    vtu = pv.read(str(out / "remeshed.vtu"))
+    assert {"u", "p"} <= set(vtu.point_data) and {"J", "stress"} <= set(vtu.cell_data)
+    assert vtu.n_cells == data["part"]["elements"]
 
 
 def test_export_of_a_short_optimisation(tmp_path):
@@ -165,18 +145,18 @@ def _named_beam(shape, parts):
 
 def test_follower_in_3d_as_in_plane_strain():
     """A cantilever 1 x 0.1 (x 0.1, held in z on both sides: plane strain) under pressure on
-    its top face, to a tip deflection of 27 % of its length: the follower effect
+    its top face, to a tip deflection of 27 % of its length, Neo-Hookean: the follower effect
     (Δ_follower - Δ_fixed)/Δ_fixed of the 3D term (rotating normals) against the 2D one's
-    (tested in test_reanalysis.py).  Measured: -1.708e-3 (2D) / -1.705e-3 (3D) at 1e2 Pa,
-    +1.34e-3 / +1.41e-3 at 2e3 Pa (the 2D output at the top corner, the 3D one the mean over
-    the end face: Δ differs by 1.2 % there)."""
+    (tested in test_reanalysis.py), both PartAnalysis.  Measured: -1.708e-3 (2D) / -1.705e-3
+    (3D) at 1e2 Pa, +1.34e-3 / +1.41e-3 at 2e3 Pa (the 2D output at the top corner, the 3D
+    one the mean over the end face: Δ differs by 1.2 % there)."""
     import ngsolve
     from netgen import occ
 
+    from pacto_ng.params import Parameters
     from pacto_ng.physics.loads import Port
     from pacto_ng.physics.mechanics import Supports
-    from pacto_ng.post.reanalysis import Reanalysis
-    from pacto_ng.post.reanalysis3d import Reanalysis3D
+    from pacto_ng.post.part_analysis import PartAnalysis
 
     rect = occ.Rectangle(1.0, 0.1).Face()
     _named_beam(rect, rect.edges)
@@ -185,16 +165,17 @@ def test_follower_in_3d_as_in_plane_strain():
     _named_beam(box, box.faces)
     m2 = ngsolve.Mesh(occ.OCCGeometry(rect, dim=2).GenerateMesh(maxh=0.05))
     m3 = ngsolve.Mesh(occ.OCCGeometry(box).GenerateMesh(maxh=0.05))
-    kw = dict(E=1e7, nu=0.3, order=2)
+    kw = dict(params=Parameters(model="neohookean", E1=1e7, E0=1e4, E2=1e7, nu=0.3,
+                                thickness=1.0, plane="strain"), order=2)
     effect = {}
     for dim in (2, 3):
         d = {}
         for kind in ("fixed", "follower"):
             if dim == 2:
-                ana = Reanalysis(m2, kind, thickness=1.0, supports=Supports(clamp=("left",)),
-                                 output=Port("tip", (0.0, -1.0)), **kw)
+                ana = PartAnalysis(m2, kind, supports=Supports(clamp=("left",)),
+                                   ports=Port("tip", (0.0, -1.0)), **kw)
             else:
-                ana = Reanalysis3D(m3, kind, output=(Port("right", (0.0, -1.0, 0.0)),),
+                ana = PartAnalysis(m3, kind, ports=(Port("right", (0.0, -1.0, 0.0)),),
                                    supports=Supports(clamp=("left",), fix_z=("side",)), **kw)
             sweep = ana.sweep([1e2, 2e3])
             assert sweep.converged.all()

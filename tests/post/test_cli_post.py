@@ -19,8 +19,8 @@ from pacto_ng.cli import main
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
 PRESSURES = [1e2, 1e3, 1e4, 1e5]
-FILES = ("analysis.json", "analysis.png", "deformed.png", "report.md", "design.stl",
-         "remeshed.vtu", "deformed.vtu")
+FILES = ("analysis.json", "analysis.csv", "analysis.png", "deformed.png", "report.md",
+         "part.stl", "remeshed.vtu", "deformed.vtu")
 
 
 def _serial(argv):
@@ -90,7 +90,7 @@ def test_analyse_writes_every_file(analysed):
         assert {"u", "p"} <= set(m.point_data) and {"J", "stress"} <= set(m.cell_data)
     np.testing.assert_allclose(dfm.points - ref.points, ref.point_data["u"], atol=1e-15)
     # the deformed state is the follower's at the largest pressure: Δ read back from the file
-    port = np.array(data["remesh"]["ports"]["output"]["new"])
+    port = np.array(data["part"]["points"]["output"]["new"])
     k = int(np.argmin(np.linalg.norm(ref.points[:, :2] - port, axis=1)))
     d = np.array(data["settings"]["output_ports"][0]["direction"])
     assert d @ ref.point_data["u"][k, :2] == pytest.approx(
@@ -121,22 +121,26 @@ def test_remeshed_area_within_2_percent_of_thresholded(analysed):
     folder, data = analysed
     m = meshio.read(folder / "remeshed.vtu")
     area = _triangle_area(m.points, m.cells_dict["triangle"])
-    assert area == pytest.approx(data["areas"]["remeshed"], rel=1e-10)
-    kept = data["areas"]["thresholded"] - data["areas"]["removed_specks"] \
-        - data["areas"]["dropped_floating"]
+    m = data["part"]["measures"]
+    assert area == pytest.approx(m["remeshed"], rel=1e-10) == data["part"]["measure"]
+    kept = m["thresholded"] - m["removed_specks"] - m["dropped_floating"]
     assert kept > 0
     assert abs(area - kept) / kept < 0.02
 
 
-def test_design_stl_is_a_closed_manifold(pa_run, analysed):
+def test_part_stl_is_the_whole_closed_part_in_mm(pa_run, analysed):
+    """part.stl (as every run writes it): the half as analysed and its mirror image about the
+    symmetry line, extruded by t, in mm: volume 2 × the remeshed area × t."""
     import pyvista as pv
 
     folder, data = analysed
     t = json.loads((pa_run / "params.json").read_text())["params"]["thickness"]
-    stl = pv.read(folder / "design.stl").clean()
+    assert json.loads((pa_run / "summary.json").read_text())["symmetric_half_domain"]
+    stl = pv.read(folder / "part.stl").clean()
     assert stl.n_open_edges == 0 and stl.is_manifold
-    assert stl.volume == pytest.approx(data["areas"]["remeshed"] * t, rel=1e-6)
-    assert np.ptp(stl.points[:, 2]) == pytest.approx(t, rel=1e-12)
+    assert stl.volume == pytest.approx(2 * data["part"]["measures"]["remeshed"] * t * 1e9,
+                                       rel=1e-6)
+    assert np.ptp(stl.points[:, 2]) == pytest.approx(t * 1e3, rel=1e-6)  # float32
 
 
 def test_follower_equals_fixed_at_vanishing_pressure(analysed):
@@ -160,7 +164,7 @@ def test_export_round_trips(pa_run, analysed, tmp_path):
     from netgen.read_gmsh import ReadGmsh
 
     folder, data = analysed
-    area = data["areas"]["remeshed"]
+    area = data["part"]["measures"]["remeshed"]
     t = json.loads((pa_run / "params.json").read_text())["params"]["thickness"]
     ref = meshio.read(folder / "remeshed.vtu")
     for fmt in ("stl", "vtk", "msh"):
@@ -176,7 +180,8 @@ def test_export_round_trips(pa_run, analysed, tmp_path):
     assert ngsolve.Integrate(1.0, msh) == pytest.approx(area, rel=1e-10)
     assert {"fixed", "pressure", "free"} <= set(msh.GetBoundaries())
     wetted = ngsolve.Integrate(1.0, msh, definedon=msh.Boundaries("pressure"))
-    assert wetted == pytest.approx(data["remesh"]["wetted_length"], rel=1e-10)
+    assert wetted == pytest.approx(data["part"]["wetted"], rel=1e-10)
+    assert data["part"]["boundaries"]["pressure"] == pytest.approx(wetted, rel=1e-10)
 
 
 # -- compare ----------------------------------------------------------------------------------
@@ -201,7 +206,7 @@ def test_the_part_is_built_on_the_case_geometry(pa_run, analysed):
     from pacto_ng.post.runs import load_run
 
     _, data = analysed
-    assert data["remesh"]["geometry"] == "domain"
+    assert data["part"]["geometry"] == "domain"
     line = run_symmetry(load_run(pa_run, "compare"))
     assert line is not None and line.direction == pytest.approx((1.0, 0.0))
     assert abs(line.point[1]) < 1e-15
@@ -293,7 +298,7 @@ def test_the_part_mesh_estimate_is_near_netgens_count(pa_run, analysed):
         problem = rebuild(load_run(pa_run, "analyse"))
     area = float(problem.field.areas @ problem.values["rho_bar"])
     est = resources.estimate_part(area, summary["settings"]["maxh"], 2)
-    real = summary["remesh"]["elements"]
+    real = summary["part"]["elements"]
     assert 0.5 < est.elements / real < 2.0, (est.elements, real)
 
 
@@ -334,10 +339,10 @@ def test_analyse_records_its_threshold_choice(analysed):
     assert data["settings"]["threshold"] == ch["used"] <= 0.35
     assert ch["reaches_output"] is True and not ch["missed"]
     assert ch["lowered"] == (ch["used"] < 0.35)
-    assert ch["part_area"] == pytest.approx(data["areas"]["thresholded"], rel=1e-12)
+    assert ch["part_area"] == pytest.approx(data["part"]["measures"]["thresholded"], rel=1e-12)
     assert 0 < ch["design_volume"] < ch["part_area"] * 2
     # the output point lies in the part: the remeshed part's nearest vertex is within an element
-    assert data["remesh"]["output_port_shift"] < data["run"]["mesh_h"]
+    assert data["part"]["output_port_shift"] < data["run"]["mesh_h"]
     assert "The threshold: threshold 0.35" in (folder / "report.md").read_text()
 
 
@@ -346,22 +351,62 @@ def test_analyse_retries_a_part_netgen_cannot_mesh(pa_run, tmp_path, monkeypatch
     pieces and the output point): the record says at which threshold it was meshed.  The
     failure is simulated on the first attempt (measured on a PneuNet part at 0.4594, meshed at
     0.4544)."""
-    from pacto_ng.post import cli_commands as pc
-    from pacto_ng.post import report
+    from pacto_ng.post import part as part_module
+    from pacto_ng.post.analyse import analyse_run
 
     run = tmp_path / "retry"
     shutil.copytree(pa_run, run, ignore=shutil.ignore_patterns("analysis"))
-    real, calls = report.post_analyse, []
+    real, calls = part_module.remesh, []
 
-    def flaky(*args, **kw):
-        calls.append(kw["threshold_value"])
+    def flaky(th, *args, **kw):
+        calls.append(th.threshold)
         if len(calls) == 1:
             raise ValueError("Netgen could not mesh the part: simulated; threshold x, maxh y")
-        return real(*args, **kw)
+        return real(th, *args, **kw)
 
-    monkeypatch.setattr(report, "post_analyse", flaky)
-    assert pc.analyse_run(run, pressures=[1e5], threshold_value=0.35, kinds=("fixed",),
-                          quiet=True) == 0
+    monkeypatch.setattr(part_module, "remesh", flaky)
+    assert analyse_run(run, pressures=[1e5], threshold_value=0.35, kinds=("fixed",),
+                       quiet=True) == 0
     ch = json.loads((run / "analysis" / "analysis.json").read_text())["settings"]["threshold_choice"]
     assert len(calls) == 2 and calls[1] == pytest.approx(calls[0] - 0.005)
     assert ch["used"] == calls[1] and ch["mesh_retries"] == 1 and "meshed at" in ch["note"]
+
+
+def test_another_model_for_the_part_of_a_linear_run(pa_run, analysed, tmp_path):
+    """``--model neohookean`` on a linear run: the part is analysed with the Neo-Hookean law
+    (Newton iterates), the expected Δ is still the run's own (linear) one; the Neo-Hookean Δ
+    leaves the linear analysis of the same part in proportion to the pressure, the
+    geometrically nonlinear term (measured 2.1e-6 at 100 Pa, 2.1e-3 at 1e5 Pa: the thin
+    hinges of a 15-iteration design rotate)."""
+    _, linear = analysed
+    run = tmp_path / "nh"
+    shutil.copytree(pa_run, run, ignore=shutil.ignore_patterns("analysis"))
+    assert main(["analyse", str(run), "--pressures", "1e2,1e5", "--threshold", "0.35",
+                 "--kinds", "fixed", "--model", "neohookean", "--quiet"]) == 0
+    data = json.loads((run / "analysis" / "analysis.json").read_text())
+    assert data["settings"]["model"] == "neohookean" and data["run"]["model"] == "linear"
+    assert data["part"]["elements"] == linear["part"]["elements"]  # the same part
+    lin = {r["pressure"]: r for r in linear["pressures"]}
+    for r in data["pressures"]:
+        assert r["expected"] == pytest.approx(lin[r["pressure"]]["expected"], rel=1e-12)
+        assert r["fixed"]["converged"] and r["fixed"]["newton_iterations"] >= 2
+        assert lin[r["pressure"]]["fixed"]["newton_iterations"] == 1  # the linear one solve
+    small, large = (r["fixed"]["delta"] / lin[r["pressure"]]["fixed"]["delta"] - 1.0
+                    for r in data["pressures"])
+    print("neohookean against linear at 1e2 and 1e5 Pa:", small, large)
+    assert 1e-5 < abs(large) < 1e-2
+    assert small / large == pytest.approx(1e2 / 1e5, rel=0.1)
+    assert "Model `neohookean`" in (run / "analysis" / "report.md").read_text()
+
+
+def test_an_analysis_that_would_take_too_long_is_refused_with_its_estimate(pa_run, capsys):
+    """--time-limit 1: the analysis of the pa-inverter part (a few seconds) is refused before
+    anything is meshed or written, with one line giving the estimated time and memory."""
+    before = {p: p.read_bytes() for p in pa_run.rglob("*") if p.is_file()}
+    assert main(["analyse", str(pa_run), "--threshold", "0.35", "--time-limit", "1"]) == 2
+    line = _one_line_error(capsys)
+    for words in ("--maxh = ", "triangles", "displacement dofs at order 2",
+                  "the analysis would take about", "Newton iterations", "GB of memory",
+                  "longer than --time-limit 1 s", "give a larger --maxh"):
+        assert words in line, line
+    assert {p: p.read_bytes() for p in pa_run.rglob("*") if p.is_file()} == before

@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from pacto_ng.physics.materials import neohookean_energy
 from pacto_ng.post.export import (convert, plot_deformed, plot_sweeps, write_stl, write_vtu)
 
 T = 1e-3  # thickness (m)
@@ -39,7 +40,8 @@ def _square(n=4):
 def test_vtu_fields_of_a_homogeneous_stretch(tmp_path):
     """u = (a x, b y): F = diag(1+a, 1+b, 1), J = (1+a)(1+b), and the Neo-Hookean Cauchy stress
     σ = μ/J (F Fᵀ - I) + λ ln J / J I, the closed form for
-    φ = μ/2 (I1-3) - μ ln J + λ/2 ln² J."""
+    φ = μ/2 (I1-3) - μ ln J + λ/2 ln² J: the stress by automatic differentiation of the
+    energy the VTU is given, σ_zz from the plane-strain embedding F33 = 1."""
     import meshio
     import ngsolve as ng
 
@@ -47,8 +49,9 @@ def test_vtu_fields_of_a_homogeneous_stretch(tmp_path):
     a, b, E, nu = 0.1, -0.05, 2e6, 0.3
     u = ng.GridFunction(ng.VectorH1(mesh, order=1))
     u.Set(ng.CF((a * ng.x, b * ng.y)))
-    write_vtu(tmp_path / "remeshed.vtu", mesh, u, E=E, nu=nu)
-    write_vtu(tmp_path / "deformed.vtu", mesh, u, E=E, nu=nu, deformed=True)
+    phi = lambda G: neohookean_energy(G, E, nu)  # noqa: E731 - the part's energy density
+    write_vtu(tmp_path / "remeshed.vtu", mesh, u, phi=phi)
+    write_vtu(tmp_path / "deformed.vtu", mesh, u, phi=phi, deformed=True)
     ref, dfm = meshio.read(tmp_path / "remeshed.vtu"), meshio.read(tmp_path / "deformed.vtu")
     X = ref.points
     np.testing.assert_allclose(ref.point_data["u"][:, :2], np.c_[a * X[:, 0], b * X[:, 1]],
@@ -64,6 +67,40 @@ def test_vtu_fields_of_a_homogeneous_stretch(tmp_path):
     np.testing.assert_allclose(ref.cell_data["stress"][0], np.tile(sig.ravel(), (mesh.ne, 1)),
                                rtol=1e-12, atol=1e-9 * mu)
     np.testing.assert_allclose(ref.cell_data["von_mises"][0], vm, rtol=1e-12)
+
+
+def test_vtu_fields_of_a_homogeneous_stretch_3d(tmp_path):
+    """The same in 3D: u = (a x, b y, c z) on tetrahedra, F = diag(1+a, 1+b, 1+c), and a
+    two-region part (material, material_<name> and E per cell)."""
+    import meshio
+    import ngsolve as ng
+    from netgen import occ
+
+    lower, upper = occ.Box((0, 0, 0), (1, 1, 0.5)), occ.Box((0, 0, 0.5), (1, 1, 1))
+    lower.mat("design")
+    upper.mat("stiff")
+    mesh = ng.Mesh(occ.OCCGeometry(occ.Glue([lower, upper])).GenerateMesh(maxh=0.5))
+    a, b, c, E, nu = 0.1, -0.05, 0.02, 2e6, 0.3
+    u = ng.GridFunction(ng.VectorH1(mesh, order=1))
+    u.Set(ng.CF((a * ng.x, b * ng.y, c * ng.z)))
+    write_vtu(tmp_path / "r.vtu", mesh, u, phi=lambda G: neohookean_energy(G, E, nu),
+              E={"design": E, "stiff": 10 * E})
+    write_vtu(tmp_path / "d.vtu", mesh, u, deformed=True)
+    ref, dfm = meshio.read(tmp_path / "r.vtu"), meshio.read(tmp_path / "d.vtu")
+    X = ref.points
+    np.testing.assert_allclose(ref.point_data["u"], X * [a, b, c], atol=1e-14)
+    np.testing.assert_allclose(dfm.points, X + ref.point_data["u"], atol=1e-14)
+    mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+    F = np.diag([1 + a, 1 + b, 1 + c])
+    J = np.linalg.det(F)
+    sig = mu / J * (F @ F.T - np.eye(3)) + lam * np.log(J) / J * np.eye(3)
+    np.testing.assert_allclose(ref.cell_data["J"][0], J, rtol=1e-13)
+    np.testing.assert_allclose(ref.cell_data["stress"][0], np.tile(sig.ravel(), (mesh.ne, 1)),
+                               rtol=1e-12, atol=1e-9 * mu)
+    mat = ref.cell_data["material"][0]
+    assert set(mat) == {1, 2}
+    np.testing.assert_array_equal(ref.cell_data["E"][0], np.where(mat == 2, 10 * E, E))
+    np.testing.assert_array_equal(ref.cell_data["material_stiff"][0], mat == 2)
 
 
 def test_convert_round_trip(tmp_path):

@@ -7,8 +7,11 @@ Independent references:
   (E (b² - a²)) ((1-2ν) a + b²/a)``; the thick-walled sphere (ibid. §141),
   ``u_r(a) = P a³ / (E (b³ - a³)) ((1-2ν) a + (1+ν) b³ / (2 a²))``;
 * the divergence theorem, ``∫_∂Ω N0 · x dA = d |Ω|`` for the outward normal;
-* the classes this one replaces (:class:`~pacto_ng.post.reanalysis.Reanalysis`,
-  :class:`~pacto_ng.post.reanalysis3d.Reanalysis3D`: Neo-Hookean, their own loads);
+* a homogeneous state: a square (plane strain) or a cube on rollers under pressure, F = s I,
+  the Neo-Hookean stress against the fixed or the follower load (the classes this one
+  replaced, ``Reanalysis`` and ``Reanalysis3D``, were checked against it and equalled it
+  to 1e-8);
+* a clamped bar under the Darcy body force of a linear pressure field (uniaxial strain);
 * the small-strain limit: every hyperelastic law tends to the linear one as P -> 0;
 * the displacement GridFunction itself, evaluated and integrated here.
 """
@@ -18,7 +21,8 @@ import pytest
 from pacto_ng.params import Parameters
 from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
-from pacto_ng.post.part_analysis import PartAnalysis, outward_normal
+from pacto_ng.post.part_analysis import (PartAnalysis, outward_normal, pressure_body_force,
+                                        solid_fields)
 
 A, B, E, NU = 0.5, 1.0, 1e6, 0.3
 LINEAR = Parameters(model="linear", E1=E, E0=1e-3 * E, E2=E, nu=NU, thickness=1.0,
@@ -177,37 +181,91 @@ def test_lame_sphere_3d_linear():
     assert pt.vectors[1] == pytest.approx((pt.ports[1],) * 3, rel=1e-3)  # by symmetry
 
 
-# -- 2. against the classes it replaces -------------------------------------------------------
+# -- 2. Neo-Hookean closed forms of a homogeneous state (fixed and follower) ---------------
+def _square(maxh=0.25):
+    """The unit square: rollers x0 (x = 0), y0 (y = 0); the faces x = 1, y = 1 ``pressure``."""
+    import ngsolve as ng
+    from netgen import occ
+
+    sq = occ.Rectangle(1.0, 1.0).Face()
+    for e in sq.edges:
+        c = e.center
+        e.name = "x0" if abs(c.x) < 1e-9 else "y0" if abs(c.y) < 1e-9 else "pressure"
+    return ng.Mesh(occ.OCCGeometry(sq, dim=2).GenerateMesh(maxh=maxh))
+
+
+def _cube(maxh=0.5):
+    """The unit cube on rollers x0, y0, z0; its other three faces ``pressure``."""
+    import ngsolve as ng
+    from netgen import occ
+
+    box = occ.Box((0, 0, 0), (1, 1, 1))
+    box.faces.name = "pressure"
+    for f in box.faces:
+        for axis, name in ((0, "x0"), (1, "y0"), (2, "z0")):
+            if abs(f.center[axis]) < 1e-9:
+                f.name = name
+    return ng.Mesh(occ.OCCGeometry(box).GenerateMesh(maxh=maxh))
+
+
+@pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("kind", ["fixed", "follower"])
-def test_equals_reanalysis_2d(ring, kind):
-    from pacto_ng.post.reanalysis import Reanalysis
+def test_neohookean_homogeneous_closed_form(dim, kind):
+    """A unit square (plane strain) or cube on rollers under the pressure P on its other
+    faces: F = s I (in plane), J = s^d.  Neo-Hookean P11 = μ (s - 1/s) + λ ln(J)/s; the fixed
+    pressure gives P11 = -P, the follower (on the deformed area, cof(F) N0 = s^(d-1) N0)
+    P11 = -P s^(d-1).  Exact on linear elements: Δ (the mean u_x over the loaded faces:
+    s - 1 on x = 1, (s - 1)/2 on the others) and min J = s^d to 1e-9.  These replace the
+    checks against ``Reanalysis`` and ``Reanalysis3D`` (PartAnalysis equalled them to 1e-8;
+    they were checked against this closed form: 1e-13 in 3D)."""
+    from scipy.optimize import brentq
 
-    params = LINEAR.replace(model="neohookean")
-    new = PartAnalysis(ring, kind, params=params, supports=RING_SUPPORTS, ports=INNER,
-                       order=2).sweep([1e4, 1e5])
-    old = Reanalysis(ring, kind, E=E, nu=NU, thickness=1.0, supports=RING_SUPPORTS,
-                     output=INNER, order=2).sweep([1e4, 1e5])
-    assert new.converged.all() and old.converged.all()
-    assert new.delta == pytest.approx(old.delta, rel=1e-8)
-    assert [p.min_j for p in new.points] == pytest.approx([p.min_j for p in old.points],
-                                                         rel=1e-8)
+    mesh = _square() if dim == 2 else _cube()
+    mu, lam = E / (2 * (1 + NU)), E * NU / ((1 + NU) * (1 - 2 * NU))
+    supports = Supports(fix_x=("x0",), fix_y=("y0",), fix_z=("z0",) if dim == 3 else ())
+    port = Port("pressure", (1.0,) + (0.0,) * (dim - 1))
+    pa = PartAnalysis(mesh, kind, params=LINEAR.replace(model="neohookean"),
+                      supports=supports, ports=port, order=1)
+    sweep = pa.sweep([1e3, 1e5])
+    assert sweep.converged.all()
+    for pt in sweep.points:
+        P = pt.pressure
+        s = brentq(lambda s: mu * (s - 1 / s) + lam * dim * np.log(s) / s
+                   + P * (1.0 if kind == "fixed" else s ** (dim - 1)), 0.3, 1.0, xtol=1e-15)
+        # mean u_x over the loaded faces: s - 1 on x = 1, (s - 1)/2 on the others
+        assert pt.delta == pytest.approx((s - 1.0) * (1 + 0.5 * (dim - 1)) / dim, rel=1e-9)
+        assert pt.min_j == pytest.approx(s ** dim, rel=1e-9)
 
 
-@pytest.mark.parametrize("kind", ["fixed", "follower"])
-def test_equals_reanalysis_3d(kind):
-    from pacto_ng.post.reanalysis3d import Reanalysis3D
+def test_darcy_body_force_3d_uniaxial_bar():
+    """The ``darcy`` kind in 3D: a bar L x 0.2 x 0.2 clamped at x = 0, on rollers on its sides
+    (uniaxial strain), under the body force -∇p of p = P (1 - x/L) given on *another* mesh (a
+    coarse box holding the bar: set onto the part by point search), scaled with P / P_in:
+    (λ+2μ) u'' = -P/L, so the end face moves by u(L) = P L / (2 (λ+2μ)).  Linear model,
+    order 2: exact (to 1e-10), one linear solve per pressure."""
+    import ngsolve as ng
+    from netgen import occ
 
-    mesh = hollow_box()
-    port = Port("right", (1.0, 0.0, 0.0))
-    supports = Supports(clamp=("fixed",))
-    params = LINEAR.replace(model="neohookean")
-    new = PartAnalysis(mesh, kind, params=params, supports=supports, ports=port,
-                       order=2).sweep([3e4, 1e5])
-    old = Reanalysis3D(mesh, kind, E=E, nu=NU, supports=supports, output=port,
-                       order=2).sweep([3e4, 1e5])
-    assert new.converged.all() and old.converged.all()
-    assert new.delta == pytest.approx(old.delta, rel=1e-8)
-    assert new.delta[1] > 1e-3  # the cavity pushes the right face out
+    L, P_in = 1.0, 1e4
+    src = ng.Mesh(occ.OCCGeometry(occ.Box((-0.1, -0.1, -0.1), (1.1, 0.3, 0.3)))
+                  .GenerateMesh(maxh=0.6))
+    p = ng.GridFunction(ng.H1(src, order=1))
+    p.Set(P_in * (1.0 - ng.x / L))
+    bar = occ.Box((0, 0, 0), (L, 0.2, 0.2))
+    for f in bar.faces:
+        c = f.center
+        f.name = ("fixed" if abs(c.x) < 1e-9 else "right" if abs(c.x - L) < 1e-9 else
+                  "yside" if min(abs(c.y), abs(c.y - 0.2)) < 1e-9 else "zside")
+    mesh = ng.Mesh(occ.OCCGeometry(bar).GenerateMesh(maxh=0.1))
+    pa = PartAnalysis(mesh, "darcy", params=LINEAR, ports=Port("right", (1.0, 0.0, 0.0)),
+                      supports=Supports(clamp=("fixed",), fix_y=("yside",), fix_z=("zside",)),
+                      order=2, body=pressure_body_force(p), body_pressure=P_in)
+    sw = pa.sweep([0.5 * P_in, P_in])
+    mu, lam = E / (2 * (1 + NU)), E * NU / ((1 + NU) * (1 - 2 * NU))
+    for pt in sw.points:
+        assert pt.converged and pt.iterations == 1
+        assert pt.delta == pytest.approx(pt.pressure * L / (2 * (lam + 2 * mu)), rel=1e-10)
+    assert "pressure" not in mesh.GetBoundaries()  # the darcy kind needs no wetted wall
 
 
 # -- 3. every hyperelastic law in the small-strain limit --------------------------------------
@@ -278,6 +336,14 @@ def test_two_materials():
     assert d_all < 0.11 * d_one
     print("two materials: Δ", d_one, d_same / d_one - 1, d_stiff / d_one, d_all / d_one)
     assert d_all < 0.9 * d_stiff and d_stiff < 0.5 * d_one
+    # any other name than stiff takes E1 (an as-built part's regions): the same part
+    named, _ = two_material_beam(("stiff", "wall"))
+    fields = solid_fields(named)
+    assert set(fields) == {"rho_bar1", "rho_bar2"} and fields["rho_bar1"].min() == 1.0
+    assert 0 < fields["rho_bar2"].sum() < named.ne
+    d_named = PartAnalysis(named, "follower", params=params.replace(E2=10 * E), **kw).solve(P)
+    assert d_named.delta == pytest.approx(d_stiff, rel=1e-12)
+    assert set(solid_fields(one)) == {"rho_bar"}
 
 
 # -- 5. a point port and a face port in 3D ----------------------------------------------------

@@ -1,50 +1,100 @@
-"""The one-call post-analysis (post.report)."""
+"""What ``pacto analyse`` writes about a part (post.report): analysis.json, analysis.csv and
+report.md from the sweeps, in one layout (the files of a whole analysis: test_cli_post.py,
+test_analyse.py)."""
 import csv
+import io
 import json
 
 import numpy as np
 import pytest
 
-from conftest import chamber_density, chamber_pressure
 from pacto_ng.physics.loads import Port
-from pacto_ng.post.report import post_analyse
+from pacto_ng.post.report import analysis_csv, analysis_json, part_warnings, report_md
+
+PORT = Port("output", (0.0, -1.0), 1e4)
 
 
-@pytest.fixture(autouse=True)
-def _off_screen(monkeypatch):
-    import pyvista as pv
+def _data(chamber_remeshed, chamber_sweeps, expected=True):
+    th, rm = chamber_remeshed
+    pressures = [1e3, 1e4, 1e5]
+    exp = [dict(pressure=P, delta=4e-10 * P, converged=True, newton_iterations=1)
+           for P in pressures] if expected else None
+    run = {"as_built": not expected, "case": "chamber", "model": "linear", "load": 1e5,
+           "load_unit": "Pa", "dim": 2, "dir": "x", "design": "x", "iterations": 1,
+           "stopped": "iterations", "output_displacement_summary": 4e-5,
+           "output_displacement_rebuilt": 4e-5, "load_path_note": None}
+    settings = dict(threshold=0.5, threshold_choice={"note": "threshold 0.5"}, maxh=0.003,
+                    model="neohookean", material="", E=1e8, nu=0.4, thickness=1e-3,
+                    plane="strain", order=2, formulation="displacement", pressures=pressures,
+                    supports={"clamp": ["fixed"]}, output_ports=[
+                        {"region": "output", "direction": [0.0, -1.0], "spring": 1e4,
+                         "weight": 1.0}])
+    part = {"measure_unit": "m²", "measure": rm.area, "design_measure": th.area,
+            "elements": rm.mesh.ne, "geometry": rm.geometry, "wetted": rm.wetted_length,
+            "measures": {"remeshed": rm.area}, "port_shifts": {"output": 0.0}}
+    return analysis_json(run=run, settings=settings, part=part, seal=None, materials=None,
+                         sweeps=chamber_sweeps, ports=(PORT,), expected=exp,
+                         deformed={"kind": "follower", "pressure": 1e5}, warnings=[], wall=1.0)
 
-    monkeypatch.setattr(pv, "OFF_SCREEN", True)
-    monkeypatch.setenv("MPLBACKEND", "Agg")
 
-
-def test_post_analyse_writes_a_consistent_folder(chamber_quads, tmp_path):
-    import meshio
-    import pyvista as pv
-
-    res = post_analyse(chamber_quads, chamber_density(chamber_quads), tmp_path / "post",
-                       pressures=[3e4, 1e5], E=1e8, nu=0.4, thickness=1e-3,
-                       output=Port("output", (0.0, -1.0), 1e4), maxh=0.003,
-                       pressure=chamber_pressure, expected=([1e5], [4e-5]))
-    for path in res.files.values():
-        assert path.exists() and path.stat().st_size > 0
-    summary = json.loads(res.files["json"].read_text())
-    assert summary["thresholded_area"] == res.thresholded.area
-    assert summary["remeshed_area"] == pytest.approx(res.remeshed.area, rel=1e-15)
-    assert summary["deformed_state"] == "follower"
-    rows = list(csv.DictReader(open(res.files["csv"])))
+def test_analysis_json_csv_and_report_agree(chamber_remeshed, chamber_sweeps):
+    data = json.loads(json.dumps(_data(chamber_remeshed, chamber_sweeps)))  # JSON-able
+    assert data["settings"]["kinds"] == ["fixed", "follower"]
+    for i, row in enumerate(data["pressures"]):
+        for kind, sw in chamber_sweeps.items():
+            pt = sw.points[i]
+            assert row[kind]["delta"] == pt.delta and row[kind]["converged"]
+            assert row[kind]["ports"] == {"output": pt.ports[0]}
+            assert row[kind]["vectors"]["output"] == list(pt.vectors[0])
+            assert row[kind]["min_J"] == pt.min_j and row[kind]["max_u"] == pt.max_u
+    # the gaps: (analysed - expected)/|expected| at the largest and the smallest pressure
+    for key, i in (("gap_at_largest_pressure", -1), ("gap_at_smallest_pressure", 0)):
+        row = data["pressures"][i]
+        for kind in ("fixed", "follower"):
+            assert data[key][kind] == pytest.approx(
+                (row[kind]["delta"] - row["expected"]) / abs(row["expected"]), rel=1e-14)
+    rows = list(csv.DictReader(io.StringIO(analysis_csv(data))))
     assert [(r["kind"], float(r["pressure"])) for r in rows] == [
-        ("fixed", 3e4), ("fixed", 1e5), ("follower", 3e4), ("follower", 1e5)]
-    for r, sw in zip(rows, [res.sweeps["fixed"]] * 2 + [res.sweeps["follower"]] * 2):
-        assert float(r["delta"]) in sw.delta
-    stl = pv.read(res.files["stl"]).clean()
-    assert stl.n_open_edges == 0
-    assert stl.volume == pytest.approx(res.remeshed.area * 1e-3, rel=1e-6)
-    dfm = meshio.read(res.files["deformed"])
-    ref = meshio.read(res.files["remeshed"])
-    np.testing.assert_allclose(dfm.points - ref.points, ref.point_data["u"], atol=1e-15)
-    # the deformed state is the follower's at the last pressure: Δ read back from the VTU
-    out = np.array(res.remeshed.ports["output"][1])
-    k = int(np.argmin(np.linalg.norm(ref.points[:, :2] - out, axis=1)))
-    assert -ref.point_data["u"][k, 1] == pytest.approx(res.sweeps["follower"].delta[-1],
-                                                       rel=1e-10)
+        (k, P) for k in ("fixed", "follower") for P in (1e3, 1e4, 1e5)]
+    for r, (kind, i) in zip(rows, [(k, i) for k in ("fixed", "follower") for i in range(3)]):
+        assert float(r["delta"]) == chamber_sweeps[kind].delta[i]
+        assert float(r["port_output"]) == chamber_sweeps[kind].points[i].ports[0]
+        assert float(r["u_output_y"]) == chamber_sweeps[kind].points[i].vectors[0][1]
+    md = report_md(data)
+    for section in ("## The part", "## The seal", "## The analyses", "## The gap",
+                    "## Warnings", "## Pictures"):
+        assert section in md
+    assert format(data["pressures"][-1]["follower"]["delta"], ".4g") in md
+    assert "![analysis](analysis.png)" in md and "![deformed](deformed.png)" in md
+    # every row of the table has as many columns as its header
+    table = [ln for ln in md.splitlines() if ln.startswith("| P |")]
+    head = table[0].replace("\\|", "").count("|")  # (an escaped pipe is no column)
+    body = md.split(table[0])[1].splitlines()[1:5]
+    assert all(ln.count("|") == head for ln in body), body
+
+
+def test_a_part_as_built_has_no_expected_and_no_gap(chamber_remeshed, chamber_sweeps):
+    data = _data(chamber_remeshed, chamber_sweeps, expected=False)
+    assert data["gap_at_largest_pressure"] is None and data["gap_at_smallest_pressure"] is None
+    assert all(r["expected"] is None for r in data["pressures"])
+    assert "expected" not in data["definitions"] and "darcy" not in data["definitions"]
+    md = report_md(data)
+    assert "as built" in md and "No expected Δ" in md
+
+
+def test_warnings_name_what_the_figures_hide(chamber_remeshed, chamber_sweeps):
+    """An output point the part does not reach (more than two design elements away) and a
+    port that moves more across its direction than along it."""
+    from pacto_ng.post.part import Part
+
+    th, rm = chamber_remeshed
+    part = Part(rm.mesh, 2, 0.5, {}, rm.area, th.area, rm.wetted_length, None, "traced", None,
+                (th, rm), {"output": ((0.05, 0.005), (0.05, 0.02))})
+    vx, vy = chamber_sweeps["follower"].points[-1].vectors[0]
+    across = Port("output", (vy, -vx))  # at right angles to the port's motion
+    out = part_warnings(part, (across,), chamber_sweeps, "follower", h=0.001, unit="Pa")
+    assert any("does not reach the output point 'output'" in w for w in out)
+    assert any("moves more across its direction" in w for w in out)
+    along = Port("output", (vx, vy))  # along it: no warning (nor with a coarse design)
+    assert not part_warnings(part, (along,), chamber_sweeps, "follower", h=0.1, unit="Pa")
+    assert np.isfinite(chamber_sweeps["follower"].delta).all()

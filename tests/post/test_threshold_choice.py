@@ -139,9 +139,36 @@ def test_check_threshold_rejects_with_the_option_named(value):
 def test_load_path_note(rebuilt, summary, warned):
     """A Δ of the final design loaded from rest that is not the optimisation's (measured on a
     PneuNet design at 1e6 Pa: 3.2e-5 and 7.3e-5 m from rest, 5.1e-4 m in summary.json)."""
-    from pacto_ng.post.cli_commands import load_path_note
+    from pacto_ng.post.analyse import load_path_note
 
     note = load_path_note(rebuilt, summary)
     assert (note is not None) == warned
     if warned:
         assert "depends on the load path" in note and f"{rebuilt:.4g}" in note
+
+
+def test_an_output_port_on_a_boundary_lowers_the_threshold_until_the_part_reaches_it():
+    """A port on an edge (its mean is read) is checked too (post.part.reach_boundary_ports):
+    a solid block on the clamp with a grey (ρ = 0.3) bar out to the right edge ``tip``, the
+    port: the edge's vertices have the nodal density 0.3, so the part on the clamp touches
+    the edge from threshold 0.3 down; at 0.5 it does not (and with --keep-threshold the
+    record says so)."""
+    from pacto_ng.mesh import Layout, Segment, structured_mesh
+    from pacto_ng.post.part import reach_boundary_ports
+
+    layout = Layout(W, H, segments=(Segment("fixed", (0.0, H), (0.0, 0.0)),
+                                    Segment("tip", (W, 0.0), (W, H))))
+    mesh = structured_mesh(layout, 40, 20)
+    rho = box_density(mesh, [(0.0, 0.01, 0.09, 0.04)]) \
+        + 0.3 * box_density(mesh, [(0.09, 0.01, W, 0.04)])
+    choice, th = choose_threshold(mesh, rho, 0.5, ["tip"], ("fixed",))
+    assert choice["reaches_output"] is None  # no named point: choose_threshold checks none
+    th = reach_boundary_ports(mesh, rho, choice, th, ["tip"], ("fixed",))
+    assert 0.295 <= choice["used"] <= 0.3 and choice["lowered"]
+    assert choice["boundary_ports"] == {"tip": True} and choice["reaches_output"] is True
+    assert "'tip'" in choice["note"] and th.threshold == choice["used"]
+    assert any("tip" in c.names and "fixed" in c.names for c in th.components)
+    kept, th = choose_threshold(mesh, rho, 0.5, ["tip"], ("fixed",), connect=False)
+    th = reach_boundary_ports(mesh, rho, kept, th, ["tip"], ("fixed",), connect=False)
+    assert kept["used"] == 0.5 and kept["boundary_ports"] == {"tip": False}
+    assert kept["reaches_output"] is False and "--keep-threshold" in kept["note"]

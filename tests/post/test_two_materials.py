@@ -15,8 +15,9 @@ not (at 1e5 Pa the closed form with E1 throughout is 4.43e-3 m against 2.44e-3 m
 small-strain two-material answer 2.57e-3 m, 5 % off: the check sees the Neo-Hookean model).
 
 End to end: a short mm-gripper run on a coarse mesh (20 iterations, maxh 0.008), `pacto
-analyse` at two pressures and `pacto export` as stl, vtk and msh; both materials are in the part
-and Δ is read back from remeshed.vtu at the case's output point.
+analyse` at two pressures (the run's own linear law, each region its modulus) and `pacto
+export` as stl, vtk and msh; both materials are in the part and Δ is read back from
+remeshed.vtu at the case's output point.
 """
 import json
 
@@ -65,24 +66,46 @@ def _layered_design():
     return mesh, (cen[:, 1] > 0.5 * H).astype(float)
 
 
+class Analysed:
+    """The layered block's part and its sweeps (what ``pacto analyse`` makes of a design)."""
+
+    def __init__(self, remeshed, sweeps):
+        self.remeshed, self.sweeps = remeshed, sweeps
+
+
+def _analysed(mesh, rho2, out, kinds):
+    """The layered design's part (ρ̄1 = 1, ρ̄2 thresholded at 0.5; the top wetted), its
+    Neo-Hookean sweeps (E1 soft, E2 stiff, each region its own: PartAnalysis), and the files
+    a part's analysis writes of its regions: remeshed.vtu and materials.png."""
+    from pacto_ng.params import Parameters
+    from pacto_ng.post.export import plot_materials, write_vtu
+    from pacto_ng.post.materials import stiff_region
+    from pacto_ng.post.part_analysis import PartAnalysis
+    from pacto_ng.post.remesh import remesh
+    from pacto_ng.post.threshold import threshold
+
+    rm = remesh(threshold(mesh, np.ones(mesh.ne)), H / 6, clamp=("bottom",),
+                wet_boundaries=("top",), stiff=stiff_region(mesh, rho2, 0.5))
+    params = Parameters(model="neohookean", E1=E1, E2=E2, E0=1e-3 * E1, nu=NU, thickness=T,
+                        plane="strain")
+    sweeps = {kind: PartAnalysis(rm.mesh, kind, params=params, order=2,
+                                 ports=Port("output", (0.0, -1.0)),
+                                 supports=Supports(clamp=("bottom",), fix_x=("left", "right")))
+              .sweep(PRESSURES) for kind in kinds}
+    sw = sweeps[kinds[-1]]
+    write_vtu(out / "remeshed.vtu", rm.mesh, sw.displacement(),
+              phi=sw.analysis.energy_density, E={"soft": E1, "stiff": E2})
+    plot_materials(out / "materials.png", rm.mesh, mirror=False)
+    return Analysed(rm, sweeps)
+
+
 @pytest.fixture(scope="module")
 def block(tmp_path_factory):
     """The layered block's design on a structured quad mesh (the interface y = H/2 on element
-    edges, where the nodal ρ̄2 is exactly 0.5) and its post-analysis."""
-    from pacto_ng.post.materials import stiff_region
-    from pacto_ng.post.report import post_analyse
-
+    edges, where the nodal ρ̄2 is exactly 0.5) and its analysis."""
     mesh, rho2 = _layered_design()
-    rho1 = np.ones(mesh.ne)
-    stiff = stiff_region(mesh, rho2, 0.5)
     out = tmp_path_factory.mktemp("layered")
-    res = post_analyse(mesh, rho1, out, pressures=PRESSURES, E={"soft": E1, "stiff": E2},
-                       nu=NU, thickness=T, output=Port("output", (0.0, -1.0)),
-                       clamp=("bottom",), supports=Supports(clamp=("bottom",),
-                                                            fix_x=("left", "right")),
-                       maxh=H / 6, wet_boundaries=("top",), kinds=("fixed", "follower"),
-                       order=2, stiff=stiff, mirror=False)
-    return res, out
+    return _analysed(mesh, rho2, out, ("fixed", "follower")), out
 
 
 def test_layered_block_has_two_body_fitted_regions(block):
@@ -104,7 +127,6 @@ def test_layered_block_has_two_body_fitted_regions(block):
             assert min(ys) >= 0.5 * H - 1e-9 * H
         else:
             assert max(ys) <= 0.5 * H + 1e-9 * H
-    assert res.summary["materials"]["mode"] == "body-fitted"
     assert (out / "materials.png").stat().st_size > 0
 
 
@@ -159,9 +181,6 @@ def block_elementwise(tmp_path_factory):
     one-material part and gives each element the material of ρ̄2 at its centroid."""
     import importlib
 
-    from pacto_ng.post.materials import stiff_region
-    from pacto_ng.post.report import post_analyse
-
     def fail(*args, **kwargs):
         raise RuntimeError("forced for the test")
 
@@ -170,13 +189,7 @@ def block_elementwise(tmp_path_factory):
     out = tmp_path_factory.mktemp("layered_elementwise")
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(remesh, "split_part", fail)
-        res = post_analyse(mesh, np.ones(mesh.ne), out, pressures=PRESSURES,
-                           E={"soft": E1, "stiff": E2}, nu=NU, thickness=T,
-                           output=Port("output", (0.0, -1.0)), clamp=("bottom",),
-                           supports=Supports(clamp=("bottom",), fix_x=("left", "right")),
-                           maxh=H / 6, wet_boundaries=("top",), kinds=("fixed",), order=2,
-                           stiff=stiff_region(mesh, rho2, 0.5), mirror=False)
-    return res
+        return _analysed(mesh, rho2, out, ("fixed",))
 
 
 def test_elementwise_fallback_assigns_each_element_by_its_centroid(block_elementwise):
@@ -189,7 +202,6 @@ def test_elementwise_fallback_assigns_each_element_by_its_centroid(block_element
     res = block_elementwise
     rm = res.remeshed
     assert rm.materials == "element-wise (the interface as a boundary failed: forced for the test)"
-    assert res.summary["materials"]["mode"] == rm.materials
     for el in rm.mesh.Elements():
         yc = np.mean([rm.mesh[v].point[1] for v in el.vertices])
         assert el.mat == ("stiff" if yc >= 0.5 * H else "soft"), (yc, el.mat)
@@ -235,10 +247,11 @@ def test_mm_part_holds_both_materials(mm_run, mm_analysis):
     a = mm_analysis
     assert a["settings"]["E"] == {"soft": 3e8, "stiff": 3e9}
     assert a["settings"]["threshold2"] == 0.5
-    areas = a["areas"]["materials"]
+    areas = a["materials"]["remeshed"]
     assert set(areas) == {"soft", "stiff"} and min(areas.values()) > 0
-    assert sum(areas.values()) == pytest.approx(a["areas"]["remeshed"], rel=1e-10)
-    assert a["remesh"]["materials"] == "body-fitted" and a["remesh"]["interface_length"] > 0
+    assert sum(areas.values()) == pytest.approx(a["part"]["measures"]["remeshed"], rel=1e-10)
+    assert a["materials"]["mode"] == "body-fitted" and a["materials"]["interface_length"] > 0
+    assert a["materials"]["E"] == a["settings"]["E"]
     # the areas again from remeshed.vtu's cells and their material ids
     m = meshio.read(mm_run / "analysis" / "remeshed.vtu")
     ids = np.concatenate(m.cell_data["material"])
@@ -288,7 +301,7 @@ def test_mm_export_writes_the_whole_part(mm_run, mm_analysis):
     import meshio
     import pyvista as pv
 
-    areas = mm_analysis["areas"]["materials"]
+    areas = mm_analysis["materials"]["remeshed"]
     t = mm_analysis["settings"]["thickness"]
     stl = pv.read(mm_run / "export" / "design.stl")
     assert stl.extract_feature_edges(boundary_edges=True, feature_edges=False,

@@ -1,5 +1,4 @@
-"""The 3D part remeshed with Netgen tetrahedra and re-analysed (Neo-Hookean, fixed against
-follower boundary pressure).
+"""The 3D part remeshed with Netgen tetrahedra, its boundary faces named by position.
 
 :func:`remesh_part` writes the closed surface of :mod:`.part3d` as STL, meshes it with Netgen's
 STL geometry (``netgen.stl.STLGeometry(...).GenerateMesh(maxh=...)``: the surface is
@@ -13,7 +12,9 @@ remeshed, then the volume) and names the new mesh's boundary faces by position:
   ``wet_boundaries`` (the inlet: the fluid is beyond it), or a face inside the source domain
   where the run's final Darcy pressure, sampled one source element size outside the part
   along its outward normal, is at least ``wet_fraction`` P_in, is named ``pressure``;
-* the other faces are ``free``.
+* the other faces are ``free``;
+
+and the source's named points become the nearest vertices of the part.
 
 A two-material part (``stiff_at``, :mod:`.materials`): every tetrahedron of the remesh takes the
 material of the nodal ρ̄2 interpolated at its centroid, ``stiff`` (E2) where it reaches the
@@ -22,33 +23,22 @@ staircase of tetrahedron faces, at most one remeshed element from the iso-surfac
 ρ̄2 = threshold2 (``materials`` ``"element-wise"``; a body-fitted interface, as the 2D part's,
 would need Netgen to mesh a two-region surface: not done).
 
-:class:`Reanalysis3D` is :class:`~.reanalysis.Reanalysis` on tetrahedra: the full 3D
-Neo-Hookean energy (thickness 1), the pressure ``P`` on ``pressure``
-
-``fixed``
-    deformation independent: the residual gains ``∫ P N0 · v dA0``;
-``follower``
-    following the deformation, the nominal traction ``-P cof(F) N0 = -P J F⁻ᵀ N0``: the
-    residual gains ``∫ P cof(F̃) N0 · v dA0`` with ``F̃ = I + Grad(u).Trace()`` (the surface
-    gradient: ``F̃ T = F T`` on every tangent T and ``F̃ N0 = N0``, so
-    ``cof(F̃) N0 = (F T1) × (F T2) = cof(F) N0``, for tangents with ``T1 × T2 = N0``); its load
-    stiffness from ``AssembleLinearization`` (unsymmetric tangent),
-
-and its output ports on named faces: ``d·u`` is the mean over the port's face (as the 3D
-cases define their output), each port with its spring on the same face.
+The part is analysed by :class:`~.part_analysis.PartAnalysis`, as a 2D part is.
 """
 from __future__ import annotations
 
+import subprocess
+import sys
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy import sparse
+from scipy.sparse.csgraph import connected_components
 
-from ..physics.newton import NewtonSettings
 from .boundary import named_points
-from .materials import MATERIALS, modulus_cf
-from .reanalysis import Reanalysis, output_ports
+from .materials import MATERIALS
 
 PRESSURE, FREE = "pressure", "free"
 
@@ -114,9 +104,6 @@ _MESHER = ("import sys\n"
 def _netgen_stl(surface, maxh: float, timeout: float):
     """The Netgen tetrahedral mesh of the closed ``surface`` (its STL meshed in a child
     process, read back from a .vol file); ValueError when Netgen fails."""
-    import subprocess
-    import sys
-
     from netgen.meshing import Mesh as NGMesh
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -154,9 +141,6 @@ def _face_keys(cells, n: int) -> np.ndarray:
 def _clamped_components(tets, clamp_tris, n: int) -> np.ndarray:
     """Mask of the tetrahedra in a face-connected component that holds one of the boundary
     triangles ``clamp_tris`` (``n`` points)."""
-    from scipy import sparse
-    from scipy.sparse.csgraph import connected_components
-
     keys = _face_keys(tets, n)
     owner = np.repeat(np.arange(len(tets)), 4)
     order = np.argsort(keys, kind="stable")
@@ -169,25 +153,11 @@ def _clamped_components(tets, clamp_tris, n: int) -> np.ndarray:
     return np.isin(comp, comp[o[at[at < len(k)]]])
 
 
-def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), exclude=(),
-                wet_boundaries=(), pressure=None, p_in: float | None = None,
-                wet_fraction: float = 0.5, probe: float | None = None,
-                timeout: float = 300.0, stiff_at=None) -> Remeshed3D:
-    """Mesh the closed ``surface`` (pyvista PolyData) with Netgen tetrahedra of ``maxh`` and
-    name its boundary faces (see the module docstring; ``h_source`` is the source mesh's
-    element size: the wetting rule's probe distance by default, and 1e-4 of it the distance
-    within which a face lies on a source face).  Only the pieces joined through faces to a
-    face on ``clamp`` are kept.  ``stiff_at``: a two-material part's rule, points (n, 3) ->
-    whether the stiff material is there (the tetrahedra's centroids are asked; see the
-    module docstring).  ValueError when Netgen fails (or takes longer than ``timeout`` s) or
-    no face lies on the clamp."""
-    import ngsolve
-    from netgen.meshing import Element0D, FaceDescriptor, Mesh as NGMesh
-
-    gen = _netgen_stl(surface, maxh, timeout)
-    pts = np.asarray(gen.Coordinates(), dtype=float)
-    tris = np.asarray(gen.Elements2D().NumPy()["nodes"], dtype=np.int64)[:, :3] - 1
-    tets = np.asarray(gen.Elements3D().NumPy()["nodes"], dtype=np.int64)[:, :4] - 1
+def _face_names(pts, tris, tets, source, h_source, *, exclude, wet_boundaries, pressure,
+                p_in, wet_fraction, probe):
+    """``(label, area)`` of the boundary triangles ``tris`` of the tetrahedra ``tets``: each
+    the name of the source face it lies on (within 1e-4 ``h_source``), else ``free``, and
+    ``pressure`` where the wetting rule holds (the module docstring); and their areas."""
     # outward normals (a triangle against the fourth vertex of its tetrahedron)
     a, b, c = pts[tris[:, 0]], pts[tris[:, 1]], pts[tris[:, 2]]
     cen = (a + b + c) / 3.0
@@ -212,6 +182,31 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
         inner = dist > tol
         wet |= inner & (_sample(pressure, source, cen + step * nrm) >= wet_fraction * p_in)
     label[wet] = PRESSURE
+    return label, area
+
+
+def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), exclude=(),
+                wet_boundaries=(), pressure=None, p_in: float | None = None,
+                wet_fraction: float = 0.5, probe: float | None = None,
+                timeout: float = 300.0, stiff_at=None) -> Remeshed3D:
+    """Mesh the closed ``surface`` (pyvista PolyData) with Netgen tetrahedra of ``maxh`` and
+    name its boundary faces (see the module docstring; ``h_source`` is the source mesh's
+    element size: the wetting rule's probe distance by default, and 1e-4 of it the distance
+    within which a face lies on a source face).  Only the pieces joined through faces to a
+    face on ``clamp`` are kept.  ``stiff_at``: a two-material part's rule, points (n, 3) ->
+    whether the stiff material is there (the tetrahedra's centroids are asked; see the
+    module docstring).  ValueError when Netgen fails (or takes longer than ``timeout`` s) or
+    no face lies on the clamp."""
+    import ngsolve
+    from netgen.meshing import Element0D, FaceDescriptor, Mesh as NGMesh
+
+    gen = _netgen_stl(surface, maxh, timeout)
+    pts = np.asarray(gen.Coordinates(), dtype=float)
+    tris = np.asarray(gen.Elements2D().NumPy()["nodes"], dtype=np.int64)[:, :3] - 1
+    tets = np.asarray(gen.Elements3D().NumPy()["nodes"], dtype=np.int64)[:, :4] - 1
+    label, area = _face_names(pts, tris, tets, source, h_source, exclude=exclude,
+                              wet_boundaries=wet_boundaries, pressure=pressure, p_in=p_in,
+                              wet_fraction=wet_fraction, probe=probe)
     # pieces joined to the clamp through faces only (a piece hanging on a vertex or an edge
     # of another is a mechanism): the tetrahedra's face-connected components
     keep_tet = _clamped_components(tets, tris[np.isin(label, list(clamp))], len(pts))
@@ -262,96 +257,3 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
     mesh = ngsolve.Mesh(new)
     return Remeshed3D(mesh, float(ngsolve.Integrate(1.0, mesh)), areas, dropped,
                       None if stiff_at is None else "element-wise", ports)
-
-
-class Reanalysis3D(Reanalysis):
-    """One Neo-Hookean analysis of a remeshed 3D part (see the module docstring): ``kind``
-    ``fixed`` or ``follower``; ``output`` the ports on named faces of ``mesh``; ``E`` Young's
-    modulus, or ``{material: E}`` for a part of several materials (``{"soft": E1, "stiff":
-    E2}``)."""
-
-    def __init__(self, mesh, kind: str, *, E: float | dict, nu: float, supports, output,
-                 order: int = 2, boundary: str = PRESSURE,
-                 newton: NewtonSettings = NewtonSettings()):
-        from ngsolve import TET, VOL, Grad, IntegrationRule, Parameter
-
-        from ..physics.energy import declare
-        from ..physics.materials import jacobian, neohookean_energy
-        from ..physics.mechanics import Mechanics
-
-        if kind not in ("fixed", "follower"):
-            raise ValueError(f"3D re-analysis: kind must be fixed or follower, not {kind!r}")
-        if boundary not in mesh.GetBoundaries():
-            raise ValueError(f"the mesh has no '{boundary}' boundary to apply the pressure on")
-        self.mesh, self.kind, self.ports = mesh, kind, output_ports(output)
-        self.E = {k: float(v) for k, v in E.items()} if isinstance(E, dict) else float(E)
-        self.nu, self.thickness = float(nu), 1.0
-        modulus = modulus_cf(mesh, self.E)
-        self.P = Parameter(0.0)
-        faces = set(mesh.GetBoundaries())
-        for port in self.ports:
-            if port.region not in faces:
-                raise ValueError(f"the part has no face on the output '{port.region}'")
-        self._directions = np.array([port.direction for port in self.ports], dtype=float)
-        self._weights = np.array([port.weight for port in self.ports], dtype=float)
-        springs = tuple(sp for port in self.ports for sp in port.springs())
-        loads, terms = (), None
-        if kind == "fixed":
-            loads = (FixedPressure3D(boundary, self.P),)
-        else:
-            terms = follower_pressure_terms_3d(boundary, self.P)
-        energy = declare(lambda G, coeffs: neohookean_energy(G, modulus, self.nu),
-                         reads=(), stress_free=True)
-        self.mech = Mechanics(mesh, order=order, energy=energy, fields=(), supports=supports,
-                              loads=loads, springs=springs, thickness=1.0,
-                              guard=lambda G, coeffs: jacobian(G), newton=newton,
-                              residual_terms=terms)
-        self._pts = mesh.MapToAllElements(IntegrationRule(TET, 2 * order), VOL)
-        self._J = jacobian(Grad(self.mech.gfu))
-        c = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
-        self._vertices = mesh(c[:, 0].copy(), c[:, 1].copy(), c[:, 2].copy())
-        self._areas = {p.region: _face_area(mesh, p.region) for p in self.ports}
-
-    def _read(self, gfu):
-        from ngsolve import CF, Integrate
-
-        mesh = self.mesh
-        along = np.array([Integrate(CF(tuple(d)) * gfu, mesh, definedon=mesh.Boundaries(
-            p.region)) / self._areas[p.region] for p, d in zip(self.ports, self._directions)])
-        u_v = np.asarray(gfu(self._vertices)).reshape(-1, 3)
-        return along, float(np.max(np.linalg.norm(u_v, axis=1)))
-
-
-def _face_area(mesh, name):
-    from ngsolve import Integrate
-
-    return float(Integrate(1.0, mesh, definedon=mesh.Boundaries(name)))
-
-
-class FixedPressure3D:
-    """Boundary pressure ``P`` on ``boundary`` of a 3D mesh, deformation independent: work
-    ``-∫ P N0 · u dA0`` (NGSolve's normal points out of a boundary face's domain)."""
-
-    def __init__(self, boundary: str, pressure):
-        self.boundary, self.pressure = boundary, pressure
-
-    def work(self, mesh, u, scale=1.0):
-        from ngsolve import ds, specialcf
-
-        return (-scale * self.pressure * (specialcf.normal(3) * u)) * ds(self.boundary)
-
-
-def follower_pressure_terms_3d(boundary: str, pressure):
-    """Residual terms ``(u, v, load) -> s ∫ P cof(F̃) N0 · v dA0`` (module docstring)."""
-    from ngsolve import Cof, Grad, Id, ds, specialcf
-
-    def terms(u, v, load):
-        Ft = Id(3) + Grad(u).Trace()
-        return (load * pressure * ((Cof(Ft) * specialcf.normal(3)) * v)) * ds(boundary)
-
-    return terms
-
-
-def analyse3d(mesh, pressures, *, kinds=("fixed", "follower"), **kwargs) -> dict:
-    """Sweep ``pressures`` with every kind in ``kinds``; returns ``{kind: Sweep}``."""
-    return {k: Reanalysis3D(mesh, k, **kwargs).sweep(pressures) for k in kinds}

@@ -1,0 +1,99 @@
+"""``pacto analyse`` (post.analyse): one flow for 2D and 3D.
+
+Two small runs, their designs chosen (small_cases.run_with_design): a 2D chamber beam whose
+output is the mean over its right *edge* (tests/post/cases/edge_port.py: a port on a boundary,
+which the part must reach and which is read as the mean over the part's edge), and the 3D
+pneunet-3d member of test_3d_post.py.  Both analyses write the same files and an
+analysis.json of the same layout.
+"""
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pacto_ng.cli import main
+
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
+EDGE_CASE = Path(__file__).parent / "cases" / "edge_port.py"
+FILES = ("analysis.json", "analysis.csv", "analysis.png", "deformed.png", "report.md",
+         "part.stl", "remeshed.vtu", "deformed.vtu")
+
+
+@pytest.fixture(scope="module")
+def edge_run(tmp_path_factory):
+    """The chamber beam, solid in the band 5 mm < y < 40 mm (the cavity's walls, out to the
+    right edge), analysed at 1e3 and 1e4 Pa."""
+    from small_cases import run_with_design
+
+    out = run_with_design(tmp_path_factory.mktemp("edge") / "run",
+                          [str(EDGE_CASE), "--iterations", "1"],
+                          lambda c: (c[:, 1] > 0.005) & (c[:, 1] < 0.04))
+    assert main(["analyse", str(out), "--pressures", "1e3,1e4", "--quiet"]) == 0
+    return out, json.loads((out / "analysis" / "analysis.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def run3d(tmp_path_factory):
+    """pneunet-3d, solid below y = 0.03 m (test_3d_post.py's), analysed with the fixed
+    pressure at 1e3 and 1e4 Pa."""
+    from small_cases import run_with_design
+
+    out = run_with_design(tmp_path_factory.mktemp("an3d") / "pn",
+                          ["pneunet-3d", "--maxh", "0.006", "--iterations", "1", "--set",
+                           "filter_radius=0.004"], lambda c: c[:, 1] < 0.03)
+    assert main(["analyse", str(out), "--pressures", "1e3,1e4", "--kinds", "fixed",
+                 "--quiet"]) == 0
+    return out, json.loads((out / "analysis" / "analysis.json").read_text())
+
+
+def _keys(data):
+    """The layout: the top-level keys, and those of the run, settings, part, a row and a
+    kind's entry of a row."""
+    row = data["pressures"][0]
+    return {"top": set(data), "run": set(data["run"]), "settings": set(data["settings"]),
+            "part": set(data["part"]), "row": set(row) - {"darcy", "follower"},
+            "kind": set(row["fixed"])}
+
+
+def test_2d_and_3d_write_the_same_layout(edge_run, run3d):
+    (out2, d2), (out3, d3) = edge_run, run3d
+    assert d2["run"]["dim"] == 2 and d3["run"]["dim"] == 3
+    assert _keys(d2) == _keys(d3)
+    for out in (out2, out3):
+        for name in FILES:
+            assert (out / "analysis" / name).stat().st_size > 0, (out, name)
+        md = (out / "analysis" / "report.md").read_text()
+        for section in ("## The part", "## The seal", "## The analyses", "## The gap",
+                        "## Warnings", "## Pictures"):
+            assert section in md, (out, section)
+    # the default order: 2 in 2D, 1 in 3D; the run's own model
+    assert d2["settings"]["order"] == 2 and d3["settings"]["order"] == 1
+    assert d2["settings"]["model"] == d3["settings"]["model"] == "linear"
+    assert d2["settings"]["kinds"] == ["darcy", "fixed", "follower"]
+
+
+def test_a_port_on_an_edge_is_analysed(edge_run):
+    """The output is the mean of -u_y over the part's edge on ``tip``: the part reaches the
+    edge (about 0.035 m of it: the solid band), and Δ is that mean, read back here from
+    remeshed.vtu's u along the edge (the trapezoidal mean of the vertex values, to 1e-3:
+    the order-2 field between them)."""
+    import meshio
+
+    out, data = edge_run
+    assert data["settings"]["threshold_choice"]["boundary_ports"] == {"tip": True}
+    # (the band's edges are the nodal density's iso-lines: within an element of y = 5 and 40 mm)
+    assert data["part"]["boundaries"]["tip"] == pytest.approx(0.035, abs=0.004)
+    assert data["part"]["port_shifts"] == {}  # no named point to move
+    for row in data["pressures"]:
+        for kind in ("darcy", "fixed", "follower"):
+            assert row[kind]["converged"] and row[kind]["delta"] != 0
+    m = meshio.read(out / "analysis" / "remeshed.vtu")
+    on = np.abs(m.points[:, 0] - 0.1) < 1e-12
+    y, uy = m.points[on, 1], m.point_data["u"][on, 1]
+    order = np.argsort(y)
+    mean = -np.trapezoid(uy[order], y[order]) / (y.max() - y.min())
+    assert mean == pytest.approx(data["pressures"][-1]["follower"]["delta"], rel=1e-3)
+    vec = data["pressures"][-1]["follower"]["vectors"]["tip"]
+    assert -vec[1] == pytest.approx(data["pressures"][-1]["follower"]["delta"], rel=1e-12)
