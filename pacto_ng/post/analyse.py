@@ -143,10 +143,11 @@ def analysis_params(params: Parameters, model: str | None, order: int) -> Parame
 
 
 # -- the expected Δ ------------------------------------------------------------------------------
-def expected_sweep(problem, x, pressures, load) -> list[dict]:
-    """Δ of the density design ``x`` with the optimisation's own model at every pressure (load
-    factor P/load; Newton with load stepping, warm-started along the sweep; after a failure
-    the larger pressures are not attempted).  Leaves the problem at the last pressure."""
+def expected_sweep(problem, pressures, load, **design) -> list[dict]:
+    """Δ of the density design (``x=`` design variables, or ``rho_bar=`` physical densities)
+    with the optimisation's own model at every pressure (load factor P/load; Newton with load
+    stepping, warm-started along the sweep; after a failure the larger pressures are not
+    attempted).  Leaves the problem at the last pressure."""
     mech = problem.mech
     warm = mech.state
     mech.set_state(replace(warm, u=np.zeros_like(warm.u), converged=False))
@@ -158,7 +159,7 @@ def expected_sweep(problem, x, pressures, load) -> list[dict]:
                 continue
             mech.target = P / load
             try:
-                vals = problem.chain.forward(x=x)
+                vals = problem.chain.forward(**design)
                 rows.append(dict(pressure=P, delta=float(vals["delta"]),
                                  newton_iterations=int(mech.result.iterations), converged=True))
             except NewtonFailure as err:
@@ -224,7 +225,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
                 f"{est.kind}, {est.dofs:.3g} dofs; the analysis about {seconds:.3g} s, "
                 f"{est.memory / 1e9:.2g} GB")
     entry, p_final = _rebuilt_entry(run, problem, quiet)
-    expected = expected_sweep(problem, run.x, pressures, run.load)
+    expected = expected_sweep(problem, pressures, run.load, x=run.x)
     _say(quiet, "  expected Δ: " + ", ".join(
         f"{r['pressure']:.3g} -> {r['delta']:.4g}" if r["converged"] else
         f"{r['pressure']:.3g} -> failed" for r in expected))
@@ -235,9 +236,13 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
                 f"{part.measure:.4g} {'m²' if dim == 2 else 'm³'}"
                 + ("" if part.seal is None else
                    f", {'sealed' if part.sealed else 'NOT SEALED'}"))
+    darcy = _thresholded_darcy(problem, part)
+    rounded = rounded_sweep(problem, part, pressures, run.load)
+    if rounded is not None:
+        expected = [dict(e, rounded=r["delta"]) for e, r in zip(expected, rounded)]
     subject = Subject(run.case, params, setup, problem.mesh, part, run.path / "analysis",
-                      entry, float(problem.h), expected,
-                      (_thresholded_darcy(problem, part), run.load), part_measures(part))
+                      entry, float(problem.h), expected, (darcy, run.load),
+                      part_measures(part))
     subject.warnings += [w for w in (entry["load_path_note"], entry.get("failure")) if w]
     if part.sealed is False:
         subject.warnings.append("the part is not sealed: " + part.seal.message())
@@ -268,14 +273,33 @@ def _rebuilt_entry(run, problem, quiet):
     return entry, copy_gridfunction(problem.pressure_block.gfp)
 
 
-def _thresholded_darcy(problem, part: Part):
-    """The Darcy field of the thresholded design at P_in = the run's load: the run's Darcy
-    block on the element densities 1 where at least half of an element lies in the clipped
-    solid the part was made from, else 0 (2D :func:`~.runs.thresholded_elements`, 3D
-    :func:`~.post3d.solid_elements`)."""
+def rounded_density(problem, part: Part) -> np.ndarray:
+    """The part's solid as element densities of the design mesh: 1 where at least half of an
+    element lies in the clipped solid the part was made from, else 0 (2D
+    :func:`~.runs.thresholded_elements`, 3D :func:`~.post3d.solid_elements`)."""
     source = part.pieces[0]
-    rho = (thresholded_elements(source) if part.dim == 2 else
-           solid_elements(source.solid, problem.field.areas))
+    return (thresholded_elements(source) if part.dim == 2 else
+            solid_elements(source.solid, problem.field.areas))
+
+
+def rounded_sweep(problem, part: Part, pressures, load) -> list[dict] | None:
+    """:func:`expected_sweep` of the part's solid rounded onto the design mesh
+    (:func:`rounded_density`): the first step from the density design to the part, which
+    the gap's decomposition (:mod:`.report`, ``gap_parts``) takes apart from remeshing and
+    from the load on the walls.  None for two materials (one rounded field is not their
+    design)."""
+    if problem.n_design_fields != 1:
+        return None
+    rho = rounded_density(problem, part)
+    rho[problem.field.solid] = 1.0
+    rho[problem.field.void] = 0.0
+    return expected_sweep(problem, pressures, load, rho_bar=rho)
+
+
+def _thresholded_darcy(problem, part: Part):
+    """The Darcy field of the thresholded design (:func:`rounded_density`) at P_in = the
+    run's load."""
+    rho = rounded_density(problem, part)
     block = problem.pressure_block
     with compute():
         block.forward(rho)

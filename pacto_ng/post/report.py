@@ -16,12 +16,17 @@ and for a case as built: ``analysis.json`` (:func:`analysis_json`), ``analysis.c
 ``seal``                       the chambers (:class:`~.seal.Seal`): of the thresholded design,
                                or of the case's geometry as built
 ``materials``                  a part with a ``stiff`` region: each region's modulus and measure
-``pressures``                  per pressure: ``expected`` Δ (None as built) and per kind ``delta``,
+``pressures``                  per pressure: ``expected`` Δ (None as built), ``rounded`` Δ
+                               (the part's solid rounded onto the design mesh) and per kind ``delta``,
                                every port's ``d·u`` (``ports``) and displacement vector
                                (``vectors``), ``max_u``, ``min_J``, ``newton_iterations``,
                                ``converged``, ``load_reached``
 ``gap_at_largest_pressure``,   per kind (analysed − expected)/|expected| (None as built)
 ``gap_at_smallest_pressure``
+``gap_parts``                  per wall-pressure kind, at the largest pressure, the gap taken
+                               apart (:func:`gap_parts`): ``threshold`` + ``remesh`` +
+                               ``wall_pressure`` = ``total`` (None as built, for two
+                               materials, or without the ``darcy`` kind)
 ``deformed_state``             the kind and pressure shown in the pictures and VTUs
 ``warnings``                   what a user must know beyond the figures
 ``definitions``, ``wall_time_s``
@@ -63,7 +68,32 @@ DEFINITIONS = {
                         "with the fluid beyond it) are the wetted boundary",
     "gap": "(analysed - expected) / |expected|, at the largest and at the smallest pressure "
            "(there: the effect of thresholding and remeshing alone)",
+    "rounded": "the part's solid rounded onto the design mesh (element rho = 1 where at least "
+               "half of the element lies inside the thresholded solid, else 0) analysed as "
+               "'expected' is, with its own Darcy pressure",
+    "gap_parts": "the gap of each wall-pressure kind taken apart, in units of |expected|: "
+                 "threshold = (rounded - expected), the grey layer and the threshold level on "
+                 "the design mesh; remesh = (darcy - rounded), the body-fitted smoothed "
+                 "boundary and the part's mesh under the same Darcy load; wall_pressure = "
+                 "(kind - darcy), the pressure on the wetted walls instead of the Darcy body "
+                 "force; they add up to total = (kind - expected)",
 }
+
+
+def gap_parts(row, kinds) -> dict | None:
+    """The gap of each wall-pressure kind at one pressure ``row`` taken apart (the
+    ``gap_parts`` definition); None without the rounded design's or the darcy kind's Δ."""
+    e, r = row.get("expected"), row.get("rounded")
+    d = (row.get("darcy") or {}).get("delta")
+    if e in (None, 0.0) or r is None or d is None:
+        return None
+    out = {}
+    for k in kinds:
+        a = row[k]["delta"] if k in ("fixed", "follower") else None
+        if a is not None:
+            out[k] = {"threshold": (r - e) / abs(e), "remesh": (d - r) / abs(e),
+                      "wall_pressure": (a - d) / abs(e), "total": (a - e) / abs(e)}
+    return out or None
 
 
 def num(v):
@@ -109,13 +139,15 @@ def analysis_json(*, run: dict, settings: dict, part: dict, seal, materials, swe
     for i, P in enumerate(settings["pressures"]):
         ex = expected[i] if expected else {}
         row = {"pressure": float(P), "expected": num(ex.get("delta")),
+               "rounded": num(ex.get("rounded")),
                "expected_converged": ex.get("converged"),
                "expected_newton_iterations": ex.get("newton_iterations")}
         row.update({k: _point(sweeps[k].points[i], ports) for k in kinds})
         rows.append(row)
     built = bool(run.get("as_built"))
     definitions = {k: v for k, v in DEFINITIONS.items()
-                   if k not in (("expected", "darcy", "gap", "wetting") if built
+                   if k not in (("expected", "darcy", "gap", "wetting", "rounded", "gap_parts")
+                                if built
                                 else ("wetting_as_built",))}
     if built:
         definitions["wetting"] = definitions.pop("wetting_as_built")
@@ -123,6 +155,7 @@ def analysis_json(*, run: dict, settings: dict, part: dict, seal, materials, swe
             "materials": materials, "definitions": definitions, "pressures": rows,
             "gap_at_largest_pressure": _gaps(rows[-1], kinds) if expected else None,
             "gap_at_smallest_pressure": _gaps(rows[0], kinds) if expected else None,
+            "gap_parts": gap_parts(rows[-1], kinds) if expected else None,
             "deformed_state": deformed, "warnings": list(warnings), "wall_time_s": wall}
 
 
@@ -301,7 +334,23 @@ def _gap_section(d) -> list[str]:
                 f"{pct(d['gap_at_largest_pressure'])}; at {P[0]:.4g} "
                 f"{pct(d['gap_at_smallest_pressure'])} (at a small pressure the gap is what "
                 f"thresholding and remeshing change; its growth with the pressure is the "
-                f"nonlinearity the optimisation's model missed).", ""]
+                f"nonlinearity the optimisation's model missed).", ""] + _parts_table(d)
+
+
+def _parts_table(d) -> list[str]:
+    """Where the gap at the largest pressure comes from (analysis.json's ``gap_parts``)."""
+    parts = d.get("gap_parts")
+    if not parts:
+        return []
+    L = [f"Where it comes from, at {d['pressures'][-1]['pressure']:.4g} (in % of the expected "
+         f"Δ; the steps add up to the gap):", "",
+         "| kind | threshold (rounded on the design mesh) | remesh (body-fitted, same Darcy "
+         "load) | wall pressure (instead of the Darcy body force) | total |", "|---|---|---|---|---|"]
+    for k, g in parts.items():
+        L.append(f"| {k} | " + " | ".join(f"{100 * g[s]:+.1f}" for s in
+                                          ("threshold", "remesh", "wall_pressure", "total"))
+                 + " |")
+    return L + [""]
 
 
 def _warnings_section(d) -> list[str]:

@@ -97,3 +97,25 @@ def test_a_port_on_an_edge_is_analysed(edge_run):
     assert mean == pytest.approx(data["pressures"][-1]["follower"]["delta"], rel=1e-3)
     vec = data["pressures"][-1]["follower"]["vectors"]["tip"]
     assert -vec[1] == pytest.approx(data["pressures"][-1]["follower"]["delta"], rel=1e-12)
+
+
+def test_the_gap_taken_apart_adds_up(edge_run):
+    """analysis.json's ``gap_parts``: per wall-pressure kind, threshold (the part's solid
+    rounded onto the design mesh) + remesh (the part under the same Darcy load) + wall
+    pressure (instead of the Darcy body force) add up to the kind's gap; the rounded design's
+    Δ of this linear run scales with P; report.md tabulates the steps."""
+    out, d = edge_run
+    top = d["pressures"][-1]
+    lo = d["pressures"][0]
+    assert top["rounded"] / lo["rounded"] == pytest.approx(10.0, rel=1e-9)
+    e, r, dd = top["expected"], top["rounded"], top["darcy"]["delta"]
+    parts = d["gap_parts"]
+    assert set(parts) == {"fixed", "follower"}
+    for kind, g in parts.items():
+        assert g["threshold"] == pytest.approx((r - e) / abs(e), rel=1e-12)
+        assert g["remesh"] == pytest.approx((dd - r) / abs(e), rel=1e-12)
+        assert (g["threshold"] + g["remesh"] + g["wall_pressure"]
+                == pytest.approx(g["total"], rel=1e-12, abs=1e-15))
+        assert g["total"] == pytest.approx(d["gap_at_largest_pressure"][kind], rel=1e-12)
+    md = (out / "analysis" / "report.md").read_text()
+    assert "Where it comes from" in md and "| fixed |" in md
