@@ -7,13 +7,19 @@ import pytest
 sys.path.insert(0, os.path.dirname(__file__))
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 os.environ.setdefault("MPLBACKEND", "Agg")
+#: README's test command runs two pytest-xdist workers, one per core: each computes on one
+#: thread (two workers of two threads each would oversubscribe the two cores); a run without
+#: workers (``-p no:xdist`` or ``-n 0``) computes on two
+THREADS = 1 if os.environ.get("PYTEST_XDIST_WORKER") else 2
+if THREADS == 1:
+    os.environ.setdefault("PACTO_THREADS", "1")
 
 
 @pytest.fixture(autouse=True, scope="session")
 def _threads():
     from ngsolve import SetNumThreads
 
-    SetNumThreads(2)
+    SetNumThreads(THREADS)
     yield
 
 
@@ -26,7 +32,7 @@ def one_thread():
 
     SetNumThreads(1)
     yield
-    SetNumThreads(2)
+    SetNumThreads(THREADS)
 
 
 @pytest.fixture(scope="module")
