@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .case import derive_settings
+
 STRAIN_THRESHOLD = 0.01
 
 
@@ -190,6 +192,7 @@ def choose(case, params, comm=None, warnings: list | None = None):
     ranks of ``comm`` (an mpi4py communicator; None: serial).  Returns ``(params,
     model_choice, ramp_choice)``; a record is None where nothing was chosen.  ``warnings``,
     a list, receives :func:`scale_warnings` of that analysis (nothing where none was done)."""
+    params = derive_settings(case, params)  # the ramp ends with the derived continuation
     model_choice = ramp_choice = None
     first = None
     if params.model == "auto" or (params.load_ramp < 0 and params.model != "linear"):

@@ -264,8 +264,15 @@ def params_from_args(case, args) -> Parameters:
 def _show_parameters(case, params: Parameters):
     print(f"{case.name}: {case.summary}")
     units = {"load": case.load_unit}
+    derived = params.derived
     for name, val, unit, help_ in params.describe(units):
-        print(f"  {name:18s} {val!s:>12s} {unit:12s} {help_}")
+        how = f"  ({derived[name]})" if name in derived else ""
+        print(f"  {name:18s} {val!s:>12s} {unit:12s} {help_}{how}")
+    if not case.analysis_only:  # the set-up's objective scale, where derived
+        found = case.derived_objective_ref(params)
+        if found is not None:
+            print(f"  {'objective_ref':18s} {found[0]:>12.4g} {'':12s} the set-up's typical "
+                  f"objective, scaled to 10  ({found[1]})")
 
 
 def _default_out(args, case, params, suffix=""):

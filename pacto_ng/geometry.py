@@ -163,6 +163,103 @@ def extent(geometry) -> float | None:
     return None
 
 
+#: a derived mesh size (``maxh`` given neither by the case nor by the user): this many elements
+#: across the smallest side of the domain's bounding box, in 2D and in 3D ...
+ACROSS_2D = 30
+ACROSS_3D = 10
+#: ... coarsened where that would make more elements than this (Netgen's estimate,
+#: :mod:`pacto_ng.resources`): a run at defaults stays within minutes (2D: about 0.1 s per
+#: linear iteration at 10k triangles here; 3D: the 12-18k-tetrahedron built-in cases take
+#: 1-4 min for 150-300 iterations, docs/benchmarks.md)
+MAX_DERIVED_TRIANGLES = 40_000
+MAX_DERIVED_TETS = 20_000
+#: ... and at least this many elements across a filter radius the case gives (the built-in
+#: cases have 2.5-4: soft-finger 2.5, pa-inverter 3, pneunet-3d 4)
+ACROSS_FILTER = 2.5
+
+
+def bounding_sides(geometry) -> tuple[float, ...] | None:
+    """The sides of the bounding box of a geometry that Netgen meshes (two in 2D, three in
+    3D), None for a mesh or a mesh file."""
+    if isinstance(geometry, (str, os.PathLike)) and str(geometry).lower().endswith(CAD_SUFFIXES):
+        geometry = load_cad(geometry)
+    if isinstance(geometry, Layout):
+        return (float(geometry.width), float(geometry.height))
+    if isinstance(geometry, Box):
+        return tuple(float(v) for v in geometry.size)
+    if _is_occ_shape(geometry) and len(geometry.faces) > 0:
+        lo, hi = geometry.bounding_box
+        return tuple(float(hi[a] - lo[a]) for a in range(3 if _is_solid(geometry) else 2))
+    return None
+
+
+def _sizes(geometry):
+    """``(dim, smallest side, elements at maxh)`` of a geometry that Netgen meshes (a
+    netgen.occ shape, a CAD file, a Layout, a Box); None for a mesh or a mesh file."""
+    if isinstance(geometry, (str, os.PathLike)) and str(geometry).lower().endswith(CAD_SUFFIXES):
+        geometry = load_cad(geometry)
+    if isinstance(geometry, Layout):
+        area = geometry.width * geometry.height
+        return (2, min(geometry.width, geometry.height),
+                lambda h: resources.netgen_triangles(area, h))
+    if isinstance(geometry, Box):
+        volume = float(np.prod(geometry.size))
+        return 3, float(geometry.size.min()), lambda h: resources3d.netgen_tets(volume, h)
+    if _is_occ_shape(geometry) and len(geometry.faces) > 0:
+        if _is_solid(geometry):
+            return 3, _extent(geometry), lambda h: resources3d.shape_tets(geometry, h)
+        return 2, _extent(geometry), lambda h: resources.shape_triangles(geometry, h)
+    return None
+
+
+def derived_maxh(geometry, filter_radius: float = 0.0) -> tuple[float, str] | None:
+    """The mesh size of a case that gives none: ``(maxh, how)``, or None where ``maxh`` does
+    not apply (a mesh, a mesh file).
+
+    ``side / ACROSS_2D`` (2D) or ``side / ACROSS_3D`` (3D), ``side`` the smallest side of the
+    bounding box, or ``filter_radius / ACROSS_FILTER`` where a given filter radius asks for
+    finer elements; coarsened to about ``MAX_DERIVED_TRIANGLES`` triangles or
+    ``MAX_DERIVED_TETS`` tetrahedra where it would make more (but never coarser than a quarter
+    of ``side``), rounded to 3 significant digits."""
+    sizes = _sizes(geometry)
+    if sizes is None:
+        return None
+    dim, side, count = sizes
+    if not side > 0:
+        return None
+    across = ACROSS_2D if dim == 2 else ACROSS_3D
+    cap, kind = ((MAX_DERIVED_TRIANGLES, "triangles") if dim == 2 else
+                 (MAX_DERIVED_TETS, "tetrahedra"))
+    maxh = side / across
+    how = f"derived: {across} elements across {side:.3g} m"
+    if 0 < filter_radius < ACROSS_FILTER * maxh:
+        maxh = filter_radius / ACROSS_FILTER
+        how = f"derived: {ACROSS_FILTER:g} elements across the filter radius {filter_radius:.3g} m"
+    n = count(maxh)
+    if n > cap:  # the count scales as maxh^-dim
+        maxh = min(maxh * (n / cap) ** (1.0 / dim), side / 4.0)
+        how += f", coarsened to about {cap} {kind}"
+    return float(f"{maxh:.3g}"), how
+
+
+def element_size(geometry, *, maxh: float, nelx: int = 0, nely: int = 0,
+                 nelz: int = 0) -> float | None:
+    """The element size ``h`` that :func:`mesh_geometry` will give (:attr:`Meshed.h`) with
+    these mesh options, before meshing; None for a mesh or a mesh file (its mean element size
+    is known once it is read)."""
+    if isinstance(geometry, Box) and nelx > 0 and nelz > 0:
+        return float(min(geometry.size / np.array((nelx, nely, nelz))))
+    if isinstance(geometry, Layout) and nelx > 0:
+        return min(geometry.width / nelx, geometry.height / nely)
+    if nelx > 0:
+        return None  # refused by mesh_geometry
+    if isinstance(geometry, (Layout, Box)) or _is_occ_shape(geometry):
+        return maxh
+    if isinstance(geometry, (str, os.PathLike)) and str(geometry).lower().endswith(CAD_SUFFIXES):
+        return maxh
+    return None
+
+
 def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: int = 0,
                   order: int = 1, mesh_time_limit: float = resources.MESH_TIME_LIMIT,
                   solver: str | None = None, linear_solver: str = "auto") -> Meshed:

@@ -30,6 +30,15 @@ part              settings                                    defined in
 
 A case supplies its defaults; ``--set NAME=VALUE`` overrides any of them by its flat name.
 ``params.E1`` reads a setting by that name, ``params.darcy`` a whole part.
+
+Parameters remember which names were *given* (by the case's defaults, ``--set``, the command's
+options, ``pacto_ng.run(**settings)`` or a run's params.json): a setting nobody gave may be
+*derived* from the case instead of taking its declared default — the mesh size from the domain,
+the filter radius from the mesh size, the continuation when the case sets none.  The rules
+are :func:`pacto_ng.case.derive_settings` (the mesh size's in
+:func:`pacto_ng.geometry.derived_maxh`), applied by :meth:`pacto_ng.case.Case.resolve` through
+:meth:`Parameters.derive`; ``--show-parameters`` says how each derived value came about
+(:attr:`Parameters.derived`).
 """
 from __future__ import annotations
 
@@ -99,7 +108,7 @@ class Parameters:
     :meth:`replace` or :meth:`with_overrides` for a changed copy.
     """
 
-    __slots__ = ("_parts", "_index")
+    __slots__ = ("_parts", "_index", "_given", "_derived")
 
     def __init__(self, options=None, **values):
         index = {}
@@ -125,6 +134,15 @@ class Parameters:
                 options, **{k: v for k, v in values.items() if index[k] == "case"})
         object.__setattr__(self, "_parts", built)
         object.__setattr__(self, "_index", index)
+        object.__setattr__(self, "_given", frozenset(values))
+        # name -> (how it was derived, the names it was derived from)
+        object.__setattr__(self, "_derived", {})
+
+    def _marked(self, given, derived) -> "Parameters":
+        """This object with ``given`` and ``derived`` (see :meth:`derive`) recorded."""
+        object.__setattr__(self, "_given", frozenset(given))
+        object.__setattr__(self, "_derived", dict(derived))
+        return self
 
     # -- reading -----------------------------------------------------------------------------
     def __getattr__(self, name):
@@ -145,6 +163,36 @@ class Parameters:
     def options(self):
         """The case's own part (None if the case has no options)."""
         return self._parts.get("case")
+
+    @property
+    def given(self) -> frozenset:
+        """The names given explicitly: by the case's defaults, ``--set``, the command's options,
+        ``pacto_ng.run(**settings)`` or a run's params.json (the rest hold their declared
+        default, or a derived value)."""
+        return self._given
+
+    @property
+    def derived(self) -> dict[str, str]:
+        """The derived values' names, each with how it was derived (:meth:`derive`)."""
+        return {name: why for name, (why, _) in self._derived.items()}
+
+    def unset(self, *names: str) -> list[str]:
+        """Those of ``names`` neither given nor derived yet: the ones a derivation may set."""
+        return [n for n in names if n not in self._given and n not in self._derived]
+
+    def derive(self, values: dict, why: dict[str, str], inputs=()) -> "Parameters":
+        """A copy with ``values`` (flat names) set as derived values: ``why[name]`` says how
+        (``--show-parameters`` prints it), ``inputs`` names the settings they were derived
+        from.  A later :meth:`replace` of one of ``inputs`` returns them to their declared
+        defaults, to be derived again.  Only names that are :meth:`unset` may be derived."""
+        closed = [n for n in values if not self.unset(n)]
+        if closed:
+            raise ValueError(f"derive: '{closed[0]}' is given or derived already")
+        new = Parameters(self.options, **{**self.to_dict(), **values})
+        derived = dict(self._derived)
+        for name in values:
+            derived[name] = (why[name], frozenset(inputs))
+        return new._marked(self._given, derived)
 
     def keys(self) -> list[str]:
         """Every flat name, the case's options included."""
@@ -172,8 +220,24 @@ class Parameters:
 
     # -- changed copies ------------------------------------------------------------------------
     def replace(self, **changes) -> "Parameters":
-        """A copy with ``changes`` (flat names) applied and checked."""
-        return Parameters(self.options, **{**self.to_dict(), **changes})
+        """A copy with ``changes`` (flat names) applied and checked; the changed names count as
+        given.  A derived value whose inputs change returns to its declared default (to be
+        derived again by :meth:`~pacto_ng.case.Case.resolve`)."""
+        values = {**self.to_dict(), **changes}
+        derived = {}
+        for name, (why, inputs) in self._derived.items():
+            if name in changes:
+                continue
+            if inputs & changes.keys():
+                values[name] = self._declared_default(name)
+                continue
+            derived[name] = (why, inputs)
+        new = Parameters(self.options, **values)
+        return new._marked(self._given | changes.keys(), derived)
+
+    def _declared_default(self, name: str):
+        part = self._parts[self._index[name]]
+        return next(f.default for f in fields(part) if f.name == name)
 
     def with_overrides(self, overrides: dict[str, str]) -> "Parameters":
         """Apply ``NAME=VALUE`` strings, converting to each parameter's declared type."""
@@ -186,7 +250,7 @@ class Parameters:
 
     def with_options(self, options) -> "Parameters":
         """These parameters with the case's own part ``options`` (its defaults) added."""
-        return Parameters(options, **self.to_dict())
+        return Parameters(options, **self.to_dict())._marked(self._given, self._derived)
 
     def __eq__(self, other):
         return isinstance(other, Parameters) and self.to_dict() == other.to_dict() \
@@ -200,8 +264,11 @@ class Parameters:
         return "Parameters(" + ", ".join(f"{k}={v!r}" for k, v in changed.items()) + ")"
 
     def __reduce__(self):
-        return (_rebuild, (self.options, self.to_dict()))
+        return (_rebuild, (self.options, self.to_dict(), self._given, self._derived))
 
 
-def _rebuild(options, values):
-    return Parameters(options, **values)
+def _rebuild(options, values, given=None, derived=None):
+    params = Parameters(options, **values)
+    if given is None:  # pickled by a version that did not record them
+        return params
+    return params._marked(given, derived or {})

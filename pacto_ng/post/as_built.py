@@ -130,6 +130,7 @@ def analyse_as_built(case, params, *, pressures=None, kinds=None, order: int | N
         raise InputError("--kinds: darcy is the Darcy pressure of a design; a part as built "
                          "takes the pressure on its inlet walls (fixed, follower)")
     kinds = check_kinds(KINDS if kinds is None else kinds, KINDS)
+    params = case.resolve(params)  # a mesh size the case does not give: derived
     setup = case.make_setup(params)
     if setup.pressure is None:
         raise InputError(f"analyse: case '{case.name}' has no pressure load: as built, the "

@@ -1,0 +1,143 @@
+"""A case written as a user would (tests/cases/user_finger.py: geometry, supports, pressure,
+port, material and load only) gets numerical settings derived from the case; the built-in
+cases, which give theirs, resolve as before."""
+import pickle
+import time
+from pathlib import Path
+
+import pytest
+
+import pacto_ng as pn
+from pacto_ng.case import available_cases, load_case_file
+from pacto_ng.cases.pa_inverter import PA_DEFAULTS
+from pacto_ng.cli import main
+
+pytestmark = pytest.mark.usefixtures("pacto_one_thread")
+
+FINGER = Path(__file__).with_name("user_finger.py")
+HEIGHT, LENGTH, THICKNESS, PRESSURE = 0.016, 0.08, 0.015, 1e4  # as in user_finger.py
+PENALTY = ("penal_start", "penal_step", "move", "obj_tol", "iterations")  # as PA_DEFAULTS
+CONTINUATION = PENALTY + ("beta_max", "beta_every", "beta_settle")
+
+
+@pytest.fixture(scope="module")
+def finger():
+    return load_case_file(FINGER)
+
+
+def test_the_user_case_resolves_with_settings_derived_from_it(finger):
+    params = finger.resolve(finger.defaults)
+    assert set(params.derived) == {"maxh", "filter_radius", *CONTINUATION}
+    # 30 elements across the 16 mm height (3 significant digits)
+    assert params.maxh == pytest.approx(HEIGHT / 30, rel=5e-3)
+    assert params.filter_radius == pytest.approx(HEIGHT / 8, rel=5e-3)  # 1/8 of the height
+    # the penalty continuation, move limit, tolerance and iteration cap of the built-in
+    # pressure cases; β as theirs to twice their end, doubling early once the objective
+    # settles (the 3D cases' beta_settle)
+    for name in PENALTY:
+        assert getattr(params, name) == getattr(PA_DEFAULTS, name), name
+    assert params.beta_every == PA_DEFAULTS.beta_every
+    assert params.beta_max == 2 * PA_DEFAULTS.beta_max
+    assert params.beta_settle == pn.get_case("pneunet-3d").defaults.beta_settle
+    assert "30 elements across 0.016 m" in params.derived["maxh"]
+    # what the case gave is kept
+    assert params.load == PRESSURE and params.thickness == THICKNESS
+    assert params.material == "dragonskin-30"
+    assert finger.resolve(params) == params  # resolved once for all
+
+
+def test_the_objective_scale_is_derived_for_the_users_mechanism(finger):
+    params = finger.resolve(finger.defaults)
+    setup = finger.make_setup(params)
+    assert setup.objective_ref == pytest.approx(0.5 / (PRESSURE * LENGTH * THICKNESS), rel=1e-4)
+    assert "0.5 / (P_in L t)" in finger.derived_objective_ref(params)[1]
+
+
+def test_a_given_setting_is_never_derived(finger):
+    params = finger.resolve(finger.defaults.replace(maxh=0.002, beta=2.0))
+    assert params.maxh == 0.002 and "maxh" not in params.derived
+    assert params.filter_radius == pytest.approx(0.006)  # from the given maxh
+    # a projection setting given: no projection continuation derived, its other settings at
+    # their declared defaults; the penalty continuation (none given) is derived
+    assert params.beta == 2.0
+    assert not {"beta_max", "beta_every", "beta_settle"} & set(params.derived)
+    assert params.beta_max == pn.Parameters().beta_max
+    assert params.penal_start == PA_DEFAULTS.penal_start and "penal_start" in params.derived
+
+
+def test_no_continuation_is_derived_where_the_case_gives_both(finger):
+    given = finger.defaults.replace(penal=3.0, beta=1.0)
+    params = finger.resolve(given)
+    assert not set(CONTINUATION) & set(params.derived)
+    for name in CONTINUATION:
+        assert getattr(params, name) == getattr(pn.Parameters(), name), name
+
+
+def test_changing_an_input_derives_its_dependants_again(finger):
+    params = finger.resolve(finger.defaults)
+    finer = params.replace(maxh=0.0004)
+    assert "filter_radius" not in finer.derived
+    assert finer.filter_radius == pn.Parameters().filter_radius  # back to its declared default
+    assert finger.resolve(finer).filter_radius == pytest.approx(0.0012)
+    assert finer.beta_max == 64.0 and "beta_max" in finer.derived  # no input of it changed
+
+
+def test_a_given_filter_radius_refines_the_derived_mesh(finger):
+    params = finger.resolve(finger.defaults.replace(filter_radius=0.0008))
+    assert params.maxh == pytest.approx(0.0008 / 2.5, rel=5e-3)
+    assert "filter radius" in params.derived["maxh"]
+
+
+def test_given_and_derived_survive_pickling(finger):
+    params = finger.resolve(finger.defaults)
+    back = pickle.loads(pickle.dumps(params))
+    assert back == params and back.derived == params.derived and back.given == params.given
+
+
+def test_show_parameters_says_where_each_derived_value_came_from(capsys):
+    assert main(["run", str(FINGER), "--show-parameters"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    maxh = next(line for line in lines if line.split()[0] == "maxh")
+    assert "0.000533" in maxh and "(derived: 30 elements across 0.016 m)" in maxh
+    for name in ("filter_radius", "beta_max", "penal_start"):
+        assert "(derived: " in next(line for line in lines if line.split()[:1] == [name])
+    load = next(line for line in lines if line.split()[:1] == ["load"])
+    assert "derived" not in load
+    assert any(line.split()[:1] == ["objective_ref"] and "derived" in line for line in lines)
+
+
+def test_a_short_run_of_the_user_case(tmp_path):
+    t0 = time.perf_counter()
+    result = pn.run(str(FINGER), out=tmp_path / "run", iterations=3, maxh=0.002)
+    assert time.perf_counter() - t0 < 20
+    assert len(result.history) == 3
+    stored = result.summary["parameters"]
+    assert stored["maxh"] == 0.002 and stored["filter_radius"] == pytest.approx(0.006)
+    assert stored["beta_max"] == 64.0 and stored["iterations"] == 3
+
+
+@pytest.mark.parametrize("case", available_cases(), ids=lambda c: c.name)
+def test_a_built_in_case_resolves_as_before(case):
+    """Built-in cases give their settings: nothing is derived but the filter radius of the two
+    that leave it at 0, whose meaning (3 mesh sizes, pacto_ng.builders) it now records as a
+    length; their set-ups' objective scale is their own."""
+    params = case.resolve(case.defaults)
+    before = case.defaults.to_dict()  # the resolution before derivations: order only
+    if not before["order"] and before["model"] != "auto":
+        before["order"] = case.order_for(before["model"])
+    changed = {k for k, v in params.to_dict().items() if before[k] != v}
+    expected = {"filter_radius"} if case.name in ("cantilever", "inverter") else set()
+    assert changed == expected and set(params.derived) == expected
+    if expected:
+        assert params.filter_radius == pytest.approx(3.0 * params.maxh, rel=1e-12)
+    if not case.analysis_only:
+        assert case.make_setup(params).objective_ref == case.setup(params).objective_ref
+
+
+@pytest.mark.slow
+def test_the_user_case_at_its_derived_defaults_gives_a_working_part(tmp_path):
+    result = pn.run(str(FINGER), out=tmp_path / "full")
+    s = result.summary
+    assert s["greyness"] <= 0.02
+    assert s["sealed"] is True
+    assert abs(s["part"]["gap"]) <= 0.2
