@@ -101,7 +101,7 @@ def case_parameters(case: Case, settings: dict) -> Parameters:
 
 
 def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
-        quiet: bool = True, overwrite: bool = False, **settings) -> Result:
+        quiet: bool = True, overwrite: bool = False, part: bool = True, **settings) -> Result:
     """Optimise a case and return its :class:`Result`.
 
     Parameters
@@ -116,6 +116,9 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
     overwrite : bool
         Remove an earlier run's files in ``out`` first (default False: a folder that holds a
         run is refused with an InputError, as by ``pacto run``).
+    part : bool
+        End with the part made, checked and analysed (docs/guide.md, "The part"; default True);
+        False leaves it to :func:`pacto_ng.post.analyse.analyse_run` (``pacto analyse DIR``).
     **settings
         Any parameter by name, e.g. ``model="neohookean"``, ``load=1e5``, ``iterations=50``,
         ``maxh=0.002`` (default: the case's; ``iterations`` is 100 unless the case sets it).
@@ -145,7 +148,8 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
     params = case_parameters(case, settings)
     folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix=f"pacto-{case.name}-"))
     done = optimise_case(case, params, folder, quiet=quiet, overwrite=overwrite)
-    summary = finish_run(folder, done.problem, done.summary, quiet=quiet)
+    summary = (finish_run(folder, done.problem, done.summary, quiet=quiet) if part else
+               done.summary)
     return Result(folder, done.exit_code, summary, done.history, done.x, done.problem)
 
 

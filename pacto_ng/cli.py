@@ -92,6 +92,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="build the case's chain of blocks, print it and exit")
     r.add_argument("--overwrite", action="store_true", help="the --out folder may hold an earlier "
                    "run: remove that run's files first (by default such a folder is refused)")
+    r.add_argument("--no-part", action="store_true", help="end without making and analysing "
+                   "the part (pacto analyse DIR makes it later)")
     e = sub.add_parser("evaluate", help="analyse a given design (no optimisation)")
     _case_options(e)
     e.add_argument("--density", required=True, help="element densities ρ̄ (.npy, .csv, .txt: "
@@ -112,6 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--iterations", type=int, default=None,
                    help="raise the run's iteration cap (e.g. a run that stopped at the cap)")
     s.add_argument("--quiet", action="store_true")
+    s.add_argument("--no-part", action="store_true", help="as for run")
     w = sub.add_parser("sweep", help="run a case over a grid of loads and models (Dask)")
     w.add_argument("case", help="a built-in case's name or a case file's path")
     w.add_argument("--loads", required=True, help="comma-separated loads, e.g. 1e5,1e6,1e7")
@@ -378,12 +381,26 @@ def _run_with_part(case, params, out, args) -> int:
     """``pacto run``: the optimisation, then its part (:mod:`pacto_ng.post.part_stage`) made,
     checked and analysed by the rank that writes the folder."""
     from .parallel import leads
-    from .post.part_stage import finish_run
     from .runner import optimise_case
 
     done = optimise_case(case, params, out, quiet=args.quiet, overwrite=args.overwrite)
-    if leads():
+    if leads() and not args.no_part:
+        from .post.part_stage import finish_run  # after the run: a refusal stays quick
+
         finish_run(out, done.problem, done.summary, quiet=args.quiet)
+    return done.exit_code
+
+
+def _resume_with_part(args) -> int:
+    """``pacto resume``: the optimisation continued, then its part, as ``pacto run``."""
+    from .parallel import leads
+    from .runner import resume_run
+
+    done = resume_run(args.dir, quiet=args.quiet, iterations=args.iterations)
+    if leads() and not args.no_part:
+        from .post.part_stage import finish_run  # after the run: a refusal stays quick
+
+        finish_run(args.dir, done.problem, done.summary, quiet=args.quiet)
     return done.exit_code
 
 
@@ -411,9 +428,7 @@ def _main(argv) -> int:
     if args.command in ("analyse", "export", "compare"):
         return _post_command(args)
     if args.command == "resume":
-        from .runner import resume_run
-
-        return resume_run(args.dir, quiet=args.quiet, iterations=args.iterations)
+        return _resume_with_part(args)
     case = get_case(args.case)
     params = params_from_args(case, args)
     if args.command == "run":

@@ -440,7 +440,8 @@ def _write_params(path: Path, info: dict) -> None:
     atomic_write_text(path, text)
 
 
-def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int | None = None) -> int:
+def resume_run(out: str | os.PathLike, *, quiet: bool = False,
+               iterations: int | None = None) -> Finished:
     """Continue the run in ``out`` from its checkpoint (a run killed before its first
     checkpoint starts again from its params.json); ``iterations`` raises its cap."""
     path = Path(out)
@@ -454,4 +455,4 @@ def resume_run(out: str | os.PathLike, *, quiet: bool = False, iterations: int |
     with compute():
         return _run_case(case, params, path, quiet=quiet, resume=True,
                          model_choice=info.get("model_choice"),
-                         ramp_choice=info.get("load_ramp_choice")).exit_code
+                         ramp_choice=info.get("load_ramp_choice"))

@@ -131,6 +131,9 @@ def test_resume_after_kill_gives_the_same_design(tmp_path):
     b = json.loads((part / "summary.json").read_text())
     assert b["iterations"] == a["iterations"] == 24
     assert np.allclose(a["objective_history"], b["objective_history"], rtol=1e-9, atol=0)
+    # a resumed run ends with its part, as an uninterrupted one
+    assert b["part"]["made"] and (part / "part.stl").is_file()
+    assert b["part"]["threshold"] == a["part"]["threshold"]
     with np.load(full / "checkpoint.npz") as fa, np.load(part / "checkpoint.npz") as fb:
         assert np.max(np.abs(fa["x"] - fb["x"])) < 1e-9
 
