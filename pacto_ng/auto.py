@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .case import derive_settings
+from .derive import derive_settings
 
 STRAIN_THRESHOLD = 0.01
 

@@ -35,7 +35,7 @@ Parameters remember which names were *given* (by the case's defaults, ``--set``,
 options, ``pacto_ng.run(**settings)`` or a run's params.json): a setting nobody gave may be
 *derived* from the case instead of taking its declared default — the mesh size from the domain,
 the filter radius from the mesh size, the continuation when the case sets none.  The rules
-are :func:`pacto_ng.case.derive_settings` (the mesh size's in
+are :func:`pacto_ng.derive.derive_settings` (the mesh size's in
 :func:`pacto_ng.geometry.derived_maxh`), applied by :meth:`pacto_ng.case.Case.resolve` through
 :meth:`Parameters.derive`; ``--show-parameters`` says how each derived value came about
 (:attr:`Parameters.derived`).

@@ -9,7 +9,7 @@ os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 os.environ.setdefault("MPLBACKEND", "Agg")
 #: README's test command runs two pytest-xdist workers, one per core: each computes on one
 #: thread (two workers of two threads each would oversubscribe the two cores); a run without
-#: workers (``-p no:xdist`` or ``-n 0``) computes on two
+#: workers (``-n 0``) computes on two
 THREADS = 1 if os.environ.get("PYTEST_XDIST_WORKER") else 2
 if THREADS == 1:
     os.environ.setdefault("PACTO_THREADS", "1")

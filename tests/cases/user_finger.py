@@ -1,6 +1,6 @@
 """A straight silicone finger, written as a user would: geometry, supports, pressure, port,
 material, load and volume fraction only -- no mesh size, filter, schedule or optimiser
-setting.  The numerical settings are derived from the case (pacto_ng.case.derive_settings;
+setting.  The numerical settings are derived from the case (pacto_ng.derive.derive_settings;
 ``pacto run tests/cases/user_finger.py --show-parameters`` says how each came about).
 
 An 80 x 16 mm finger, 15 mm wide out of plane, cast in Dragon Skin 30, clamped at its base
