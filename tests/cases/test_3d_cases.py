@@ -68,7 +68,7 @@ def test_pa_gripper_3d_faces():
 @pytest.mark.parametrize("case", sorted(COARSE))
 def test_smoke_run(case, tmp_path):
     out = tmp_path / case
-    assert main(["run", case, *COARSE[case], "--iterations", "4", "--out", str(out),
+    assert main(["run", "--no-part", case, *COARSE[case], "--iterations", "4", "--out", str(out),
                  "--quiet"]) == 0
     for name in OUTPUTS + (("pressure.png",) if case != "cantilever-3d" else ()):
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
@@ -94,7 +94,7 @@ def test_iterative_route_recorded(tmp_path):
                          ("iterative_tight", ("--set", "newton_rtol=1e-10"))):
         out = tmp_path / route
         solver = route.split("_")[0]
-        assert main(["run", "pneunet-3d", "--maxh", "0.006", "--order", "2", "--set",
+        assert main(["run", "--no-part", "pneunet-3d", "--maxh", "0.006", "--order", "2", "--set",
                      f"solver={solver}", *extra, "--iterations", "1", "--out", str(out),
                      "--quiet"]) == 0
         summ = json.loads((out / "summary.json").read_text())

@@ -15,7 +15,7 @@ pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
 def _choice(tmp_path, load, model="auto", iterations=1):
     out = tmp_path / f"{model}-{load}"
-    assert main(["run", "cantilever", "--model", model, "--load", str(load), "--maxh", "0.03",
+    assert main(["run", "--no-part", "cantilever", "--model", model, "--load", str(load), "--maxh", "0.03",
                  "--iterations", str(iterations), "--out", str(out), "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
     return s
@@ -49,7 +49,7 @@ def test_auto_on_pa_inverter(tmp_path):
     chosen = {}
     for load in ("1e5", "1e7"):
         out = tmp_path / load
-        code = main(["run", "pa-inverter", "--model", "auto", "--load", load, "--maxh", "0.01",
+        code = main(["run", "--no-part", "pa-inverter", "--model", "auto", "--load", load, "--maxh", "0.01",
                      "--iterations", "0", "--out", str(out), "--quiet"])
         assert code in (0, 1)  # 1: the final nonlinear analysis may stop cleanly at 1e7 Pa
         chosen[load] = json.loads((out / "params.json").read_text())["model_choice"]["chosen"]

@@ -21,7 +21,7 @@ CAD_EXAMPLE = ROOT / "examples" / "cad_actuator"
 
 
 def _finite_run(args, out):
-    assert main(["run", *args, "--iterations", "3", "--out", str(out), "--quiet"]) == 0
+    assert main(["run", "--no-part", *args, "--iterations", "3", "--out", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["iterations"] == 3
     assert math.isfinite(summary["objective"])
@@ -67,6 +67,6 @@ def test_cad_example_gradients(cad_case, capsys):
 def test_cad_example_without_step_file_says_so(tmp_path, capsys):
     """Running the case file before make_step.py: one line naming the missing file."""
     shutil.copy(CAD_EXAMPLE / "cad_actuator.py", tmp_path / "cad_actuator.py")
-    assert main(["run", str(tmp_path / "cad_actuator.py"), "--iterations", "1",
+    assert main(["run", "--no-part", str(tmp_path / "cad_actuator.py"), "--iterations", "1",
                  "--out", str(tmp_path / "run"), "--quiet"]) == 2
     assert "make_step.py" in capsys.readouterr().err

@@ -29,7 +29,7 @@ ARGS = ["--model", "wang", "--load", str(PRESSURE), "--maxh", "0.008", "--iterat
 @pytest.mark.slow
 def test_pa_inverter_wang_high_pressure(tmp_path):
     out = tmp_path / "pa-inverter-wang"
-    assert main(["run", "pa-inverter", *ARGS, "--out", str(out), "--quiet"]) == 0
+    assert main(["run", "--no-part", "pa-inverter", *ARGS, "--out", str(out), "--quiet"]) == 0
     summ = json.loads((out / "summary.json").read_text())
     assert summ["stopped"] != "newton", summ["message"]
     assert summ["load_reached"] == pytest.approx(PRESSURE)  # the full pressure, not a cut one
@@ -56,7 +56,7 @@ def test_pa_inverter_5e7_pa_on_the_thesis_mesh(model, extra, tmp_path):
     from pacto_ng.post.cli_commands import analyse_run
 
     out = tmp_path / model
-    assert main(["run", "pa-inverter", "--model", model, "--order", "1", "--load", "5e7",
+    assert main(["run", "--no-part", "pa-inverter", "--model", model, "--order", "1", "--load", "5e7",
                  "--set", "load_ramp=100", "--set", "load_adapt=1.2", *extra, "--out", str(out),
                  "--quiet"]) == 0
     summ = json.loads((out / "summary.json").read_text())
@@ -80,8 +80,8 @@ def pneunet_1e6(tmp_path_factory):
     root = tmp_path_factory.mktemp("pneunet_1e6")
     lin, wang = root / "lin", root / "wang"
     mesh = ["--maxh", "0.003", "--load", "1e6", "--quiet"]
-    assert main(["run", "pneunet", "--model", "linear", *mesh, "--out", str(lin)]) == 0
-    assert main(["run", "pneunet", "--model", "wang", *mesh, "--set", f"init_design={lin}",
+    assert main(["run", "--no-part", "pneunet", "--model", "linear", *mesh, "--out", str(lin)]) == 0
+    assert main(["run", "--no-part", "pneunet", "--model", "wang", *mesh, "--set", f"init_design={lin}",
                  "--set", "load_ramp=30", "--set", "load_adapt=1.2", "--set", "penal_start=3",
                  "--set", "beta=8", "--out", str(wang)]) == 0
     return wang

@@ -34,7 +34,7 @@ def summary(path):
 @pytest.mark.parametrize("model", ["linear", "gnl", "neohookean", "wang"])
 def test_cantilever_smoke_two_iterations(model, tmp_path):
     out = tmp_path / model
-    rc = main(["run", "cantilever", "--model", model, "--load", "144e3", "--nelx", "16",
+    rc = main(["run", "--no-part", "cantilever", "--model", model, "--load", "144e3", "--nelx", "16",
                "--nely", "4", "--iterations", "2", "--out", str(out), "--quiet"])
     assert rc == 0
     s = summary(out)
@@ -59,7 +59,7 @@ def test_cantilever_144kN_converges_with_filter_and_projection(model, tmp_path):
     # converged at iteration 135 (Neo-Hookean, order 1) and 201 (Wang, order 2) on 2026-12-02;
     # the cap of 120 these runs had before did not reach the convergence test (also with the
     # code of 2026-12-01: the same objective to 1e-10)
-    rc = main(["run", "cantilever", "--model", model, "--load", "144e3", "--maxh", "0.04",
+    rc = main(["run", "--no-part", "cantilever", "--model", model, "--load", "144e3", "--maxh", "0.04",
                "--iterations", "250", "--set", "beta_every=6", "--out", str(out), "--quiet"])
     assert rc == 0
     s = summary(out)
@@ -78,7 +78,7 @@ def test_inverter_neohookean_04N_moves_against_input(tmp_path):
     out = tmp_path / "inv"
     # measured (docs/benchmarks.md): 4 iterations at β = 1 complete at 0.4 N; with β raised
     # to 4 by iteration 6 (--set beta_every=3) Newton fails at iteration 7
-    rc = main(["run", "inverter", "--model", "neohookean", "--load", "0.4", "--maxh", "3e-6",
+    rc = main(["run", "--no-part", "inverter", "--model", "neohookean", "--load", "0.4", "--maxh", "3e-6",
                "--iterations", "4", "--out", str(out), "--quiet"])
     assert rc == 0
     s = summary(out)
@@ -94,7 +94,7 @@ def test_too_high_load_ends_in_clean_newton_failure(tmp_path):
     # measured (docs/benchmarks.md): the thesis mesh at 300 kN fails at iteration 5 after
     # reaching load factor 0.427, so the failure comes after iterations with a history; the
     # stop at the failure is load_adapt=0 (the default goes on at the load reached)
-    r = run_cli("run", "cantilever", "--model", "neohookean", "--load", "300e3", "--maxh", "0.01",
+    r = run_cli("run", "--no-part", "cantilever", "--model", "neohookean", "--load", "300e3", "--maxh", "0.01",
                 "--iterations", "8", "--set", "beta_every=6", "--set", "load_adapt=0",
                 "--out", str(out), "--quiet", timeout=1200)
     assert r.returncode == 1, r.stdout + r.stderr
@@ -134,7 +134,7 @@ def test_design_vtu_holds_green_lagrange_strain_and_second_piola_kirchhoff_stres
     import numpy as np
 
     out = tmp_path / "nh"
-    assert main(["run", "cantilever", "--model", "neohookean", "--load", "3e5", "--maxh", "0.05",
+    assert main(["run", "--no-part", "cantilever", "--model", "neohookean", "--load", "3e5", "--maxh", "0.05",
                  "--iterations", "1", "--out", str(out), "--quiet"]) == 0
     m = meshio.read(out / "design.vtu")
     G, tri = _element_gradients(m)
@@ -162,7 +162,7 @@ def test_design_vtu_holds_the_wang_strains(tmp_path):
 
     out = tmp_path / "w"
     # order 1: the check reads one displacement gradient per triangle from design.vtu
-    assert main(["run", "cantilever", "--model", "wang", "--load", "3e5", "--maxh", "0.05",
+    assert main(["run", "--no-part", "cantilever", "--model", "wang", "--load", "3e5", "--maxh", "0.05",
                  "--order", "1", "--iterations", "1", "--out", str(out), "--quiet"]) == 0
     m = meshio.read(out / "design.vtu")
     G, tri = _element_gradients(m)

@@ -55,7 +55,7 @@ def _check_run(out, n_iterations):
 @pytest.mark.parametrize("case", ["pa-inverter", "pa-gripper", "pneunet", "mm-gripper"])
 def test_smoke_run(case, tmp_path):
     out = tmp_path / case
-    assert main(["run", case, *COARSE[case], "--iterations", "6", "--out", str(out),
+    assert main(["run", "--no-part", case, *COARSE[case], "--iterations", "6", "--out", str(out),
                  "--quiet"]) == 0
     summ = _check_run(out, 6)
     assert summ["load_unit"] == "Pa" and summ["objective_name"] == "objective"
@@ -73,7 +73,7 @@ def test_default_run_gives_a_working_mechanism(case, tmp_path):
     working way, the volume is met, the objective improved, the design is nearly black and
     white and the pressure stays in the cavity and its skin."""
     out = tmp_path / case
-    assert main(["run", case, "--out", str(out), "--quiet"]) == 0
+    assert main(["run", "--no-part", case, "--out", str(out), "--quiet"]) == 0
     summ = _check_run(out, 160)
     assert summ["output_displacement"] > 0.0
     assert summ["volume_fraction"] <= 0.2 + 0.002
@@ -90,12 +90,12 @@ def test_smoke_structured_and_unit_elements(tmp_path):
     """Structured quads on the physical domain, and the unit-element set-up of the MATLAB
     codes (1 x 1 elements, plane stress, E = 1, P_in = 1, Δs and k_out in element units)."""
     out = tmp_path / "quads"
-    assert main(["run", "pa-gripper", "--nelx", "40", "--nely", "20", "--iterations", "6",
+    assert main(["run", "--no-part", "pa-gripper", "--nelx", "40", "--nely", "20", "--iterations", "6",
                  "--out", str(out), "--quiet"]) == 0
     summ = _check_run(out, 6)
     assert summ["mesh"]["structured"] and summ["mesh"]["elements"] == 800
     out = tmp_path / "unit"
-    assert main(["run", "pa-inverter", "--nelx", "40", "--nely", "20", "--iterations", "6",
+    assert main(["run", "--no-part", "pa-inverter", "--nelx", "40", "--nely", "20", "--iterations", "6",
                  "--set", "unit_elements=1", "--set", "plane=stress", "--set", "E1=1",
                  "--set", "E0=1e-6", "--set", "load=1", "--set", "delta_s=1",
                  "--set", "filter_radius=2.5",

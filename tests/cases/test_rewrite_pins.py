@@ -32,7 +32,7 @@ PINS = {
 def test_objective_history_as_before_the_rewrite(key, tmp_path):
     args, elements, history = PINS[key]
     case = key.removesuffix("-q").removesuffix("-nh").removesuffix("-wang")
-    assert main(["run", case, *args, "--out", str(tmp_path), "--quiet"]) == 0
+    assert main(["run", "--no-part", case, *args, "--out", str(tmp_path), "--quiet"]) == 0
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["mesh"]["elements"] == elements
     got = np.array(s["objective_history"])
@@ -42,7 +42,7 @@ def test_objective_history_as_before_the_rewrite(key, tmp_path):
 
 
 def test_c_beam_as_before_the_rewrite(tmp_path):
-    assert main(["run", "c-beam", "--model", "wang", "--out", str(tmp_path), "--quiet"]) == 0
+    assert main(["run", "--no-part", "c-beam", "--model", "wang", "--out", str(tmp_path), "--quiet"]) == 0
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["load_factor_reached"] == 20.0
     tips = np.array(s["tip_displacements"]["f1"] + s["tip_displacements"]["f2"])

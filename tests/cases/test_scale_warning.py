@@ -24,7 +24,7 @@ def test_moduli_a_million_times_too_stiff_warn_once_and_the_run_goes_on(tmp_path
     """E1 = 1e14 Pa where the finger's 1e5 Pa load and E1 = 1e8 Pa move it by 5.6e-4 of its
     length: 5.6e-10 of it, below 1e-9 (--model auto chooses the linear model, whose run
     ends; the Wang model's Newton stalls at such a scale)."""
-    code, err = run_cli("run", _finger(tmp_path), "--model", "auto", "--set", "E1=1e14",
+    code, err = run_cli("run", "--no-part", _finger(tmp_path), "--model", "auto", "--set", "E1=1e14",
                         "--set", "E0=1e8", "--iterations", "1", "--maxh", "0.004", "--out",
                         tmp_path / "run", "--quiet")
     assert code == 0, err
@@ -52,7 +52,7 @@ def test_moduli_a_million_times_too_soft_warn_for_a_nonlinear_model(tmp_path):
 
 
 def test_the_template_finger_at_its_defaults_does_not_warn(tmp_path):
-    code, err = run_cli("run", _finger(tmp_path), "--model", "auto", "--iterations", "1",
+    code, err = run_cli("run", "--no-part", _finger(tmp_path), "--model", "auto", "--iterations", "1",
                         "--maxh", "0.004", "--out", tmp_path / "run", "--quiet")
     assert code == 0, err
     assert _warnings(err) == []

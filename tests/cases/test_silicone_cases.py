@@ -27,7 +27,7 @@ C10 = 153.6e3
 @pytest.mark.parametrize("case", CASES)
 def test_smoke_run(case, tmp_path):
     out = tmp_path / case
-    assert main(["run", case, *COARSE, "--iterations", "5", "--out", str(out), "--quiet"]) == 0
+    assert main(["run", "--no-part", case, *COARSE, "--iterations", "5", "--out", str(out), "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
     p = s["parameters"]
     assert p["material"] == "dragonskin-30" and p["nu"] == 0.45
@@ -57,7 +57,7 @@ def test_check_gradients(case, extra, capsys):
 @pytest.mark.parametrize("case", CASES)
 def test_default_run_converges_to_a_working_part(case, tmp_path):
     out = tmp_path / case
-    assert main(["run", case, "--out", str(out), "--quiet"]) == 0
+    assert main(["run", "--no-part", case, "--out", str(out), "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
     assert s["converged"] and s["load_factor_reached"] == 1.0
     assert s["output_displacement"] > 0.0

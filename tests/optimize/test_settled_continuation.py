@@ -23,8 +23,8 @@ def _history(folder):
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     root = tmp_path_factory.mktemp("settled")
-    assert main(["run", *MBB, "--iterations", "40", "--out", str(root / "whole")]) == 0
-    assert main(["run", *MBB, "--iterations", "24", "--out", str(root / "cut")]) == 0
+    assert main(["run", "--no-part", *MBB, "--iterations", "40", "--out", str(root / "whole")]) == 0
+    assert main(["run", "--no-part", *MBB, "--iterations", "24", "--out", str(root / "cut")]) == 0
     assert main(["resume", str(root / "cut"), "--iterations", "40", "--quiet"]) == 0
     return root
 

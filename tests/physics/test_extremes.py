@@ -115,7 +115,7 @@ def check_run(proc, out, n_iterations):
 ])
 def test_linear_extremes_work(name, sets, tmp_path, capsys):
     out = tmp_path / "run"
-    args = ["run", "pa-inverter", *COARSE, "--iterations", "2", "--out", str(out), "--quiet"]
+    args = ["run", "--no-part", "pa-inverter", *COARSE, "--iterations", "2", "--out", str(out), "--quiet"]
     for s in sets:
         args += ["--set", s]
     proc = run_cli(*args, capsys=capsys)
@@ -132,7 +132,7 @@ def test_neohookean_far_past_the_limit_stops_cleanly(tmp_path, capsys):
     one line, finite outputs.  A very coarse mesh and 5 Newton iterations per step keep the
     failure quick."""
     out = tmp_path / "run"
-    proc = run_cli("run", "pa-inverter", "--maxh", "0.02", "--model", "neohookean",
+    proc = run_cli("run", "--no-part", "pa-inverter", "--maxh", "0.02", "--model", "neohookean",
                    "--iterations", "2", "--set", "load=1e13", "--set", "newton_max_iter=5",
                    "--out", str(out), "--quiet", capsys=capsys)
     assert proc.returncode == 1, (proc.stdout[-1000:], proc.stderr[-2000:])
@@ -148,20 +148,20 @@ def test_neohookean_below_its_load_names_the_model_that_carries_it(tmp_path, cap
     the same run with ``--model wang`` exits 0 at the full load (docs/benchmarks.md, "Extreme
     pressures at defaults").  Slow: ~3 CPU minutes."""
     lin = tmp_path / "linear"
-    proc = run_cli("run", "pa-inverter", *COARSE, "--iterations", "80", "--out", str(lin),
+    proc = run_cli("run", "--no-part", "pa-inverter", *COARSE, "--iterations", "80", "--out", str(lin),
                    "--quiet", capsys=capsys)
     assert proc.returncode == 0, proc.stdout[-1000:]
     common = [*COARSE, "--load", "1e7", "--iterations", "1", "--set", "load_ramp=0",
               "--set", f"init_design={lin}", "--set", "penal_start=3", "--set", "beta=8",
               "--quiet"]
-    nh = run_cli("run", "pa-inverter", "--model", "neohookean", *common,
+    nh = run_cli("run", "--no-part", "pa-inverter", "--model", "neohookean", *common,
                  "--out", str(tmp_path / "nh"), capsys=capsys)
     assert nh.returncode == 1, nh.stdout[-1000:]
     last = [ln for ln in nh.stdout.splitlines() if ln.strip()][-1]
     assert last.startswith("run stopped:") and "--model wang carries such loads" in last, last
     summ = check_run(nh, tmp_path / "nh", 1)
     assert 0.0 < summ["load_factor_reached"] < 1.0
-    wang = run_cli("run", "pa-inverter", "--model", "wang", *common,
+    wang = run_cli("run", "--no-part", "pa-inverter", "--model", "wang", *common,
                    "--out", str(tmp_path / "wang"), capsys=capsys)
     assert wang.returncode == 0, wang.stdout[-1000:]
     assert check_run(wang, tmp_path / "wang", 1)["load_factor_reached"] == 1.0
@@ -175,7 +175,7 @@ def test_neohookean_below_its_load_names_the_model_that_carries_it(tmp_path, cap
 ])
 def test_neohookean_extremes_work_or_stop_cleanly(sets, tmp_path):
     out = tmp_path / "run"
-    args = ["run", "pa-inverter", *COARSE, "--model", "neohookean", "--iterations", "5",
+    args = ["run", "--no-part", "pa-inverter", *COARSE, "--model", "neohookean", "--iterations", "5",
             "--out", str(out), "--quiet"]
     for s in sets:
         args += ["--set", s]
@@ -186,7 +186,7 @@ def test_neohookean_extremes_work_or_stop_cleanly(sets, tmp_path):
 @pytest.mark.parametrize("model", ["gnl", "wang"])
 def test_other_models_at_extreme_void_work_or_stop_cleanly(model, tmp_path):
     out = tmp_path / "run"
-    check_run(run_cli("run", "pa-inverter", *COARSE, "--model", model, "--iterations", "5",
+    check_run(run_cli("run", "--no-part", "pa-inverter", *COARSE, "--model", model, "--iterations", "5",
                       "--set", "E0=3", "--set", "load=1e7", "--out", str(out), "--quiet"),
               out, 5)
 
@@ -202,7 +202,7 @@ def test_adaptive_load_continuation_goes_on_past_a_newton_failure(iterations, co
     summary.json); after 4 it does not, and the run exits 1 with the last analysed design
     reported at the load it carried.  Every file finite either way."""
     out = tmp_path / "run"
-    args = ["run", "pa-inverter", "--maxh", "0.02", "--model", "neohookean",
+    args = ["run", "--no-part", "pa-inverter", "--maxh", "0.02", "--model", "neohookean",
             "--iterations", str(iterations), "--set", "load=1e9", "--set", "newton_max_iter=8",
             "--set", "newton_min_increment=0.0625", "--set", "load_ramp=0", "--out", str(out),
             "--quiet"]
@@ -222,7 +222,7 @@ def test_adaptive_load_continuation_is_the_default(tmp_path, capsys):
     """The same 1e9 Pa run without ``load_adapt``: adaptive continuation is on by default
     (1.2), so the run finishes its iterations at the load factors Newton reached; with
     ``load_adapt=0`` it stops at iteration 0 with exit code 1 and the one-line message."""
-    args = ["run", "pa-inverter", "--maxh", "0.02", "--model", "neohookean", "--iterations",
+    args = ["run", "--no-part", "pa-inverter", "--maxh", "0.02", "--model", "neohookean", "--iterations",
             "2", "--set", "load=1e9", "--set", "newton_max_iter=8",
             "--set", "newton_min_increment=0.0625", "--quiet"]
     out = tmp_path / "default"
@@ -246,7 +246,7 @@ def test_pneunet_part_at_1e6_pa(tmp_path, capsys):
     a sealed chamber, and its part's follower analysis converges at every pressure and moves
     the tip the intended way (Δ > 0).  Slow: ~7 CPU minutes."""
     out = tmp_path / "pn"
-    proc = run_cli("run", "pneunet", "--model", "wang", "--load", "1e6", "--set",
+    proc = run_cli("run", "--no-part", "pneunet", "--model", "wang", "--load", "1e6", "--set",
                    "load_type=follower", "--set", "leak_max=1e-3", "--out", str(out),
                    "--quiet", capsys=capsys)
     assert proc.returncode == 0, proc.stdout[-1000:]

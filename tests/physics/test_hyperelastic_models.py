@@ -585,7 +585,7 @@ def test_pacto_run_with_a_material(tmp_path, model):
     case.write_text(textwrap.dedent(CASE_FILE))
     out = tmp_path / model
     try:
-        assert main(["run", str(case), "--nelx", "20", "--nely", "10", "--iterations", "1",
+        assert main(["run", "--no-part", str(case), "--nelx", "20", "--nely", "10", "--iterations", "1",
                      "--model", model, "--load", "0.5", "--set", "material=test-rubber",
                      "--out", str(out), "--quiet"]) == 0
     finally:
@@ -598,7 +598,7 @@ def test_pacto_run_with_a_material(tmp_path, model):
 def test_unknown_material_is_one_line_exit_2(capsys):
     from pacto_ng.cli import main
 
-    assert main(["run", "mbb", "--set", "material=no-such-silicone"]) == 2
+    assert main(["run", "--no-part", "mbb", "--set", "material=no-such-silicone"]) == 2
     err = capsys.readouterr().err
     lines = [ln for ln in err.strip().splitlines() if ln.strip()]
     assert len(lines) == 1 and "material: unknown preset 'no-such-silicone'" in lines[0], lines

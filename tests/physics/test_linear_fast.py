@@ -142,7 +142,10 @@ def test_pressure_case_finite_differences_at_the_round_off_floor(seed):
     from pacto_ng.gradcheck import check_case
 
     case = get_case("pneunet")
-    params = case.defaults.with_overrides({"load_sensitivity": "1"})
+    # at β = 32, where the floor above was measured: the check runs at the case's final β, and
+    # the case's 128 steepens the projection so that the five-point differences' own error
+    # reaches 1.3e-7 (seed 1)
+    params = case.defaults.with_overrides({"load_sensitivity": "1", "beta_max": "32"})
     assert check_case(case, params, seed=seed, quiet=True) <= 1e-7
 
 

@@ -123,7 +123,7 @@ def test_a_run_reports_its_leak(tmp_path):
     from pacto_ng.cli import main
 
     out = tmp_path / "run"
-    assert main(["run", "pneunet", "--maxh", "0.006", "--iterations", "3", "--set",
+    assert main(["run", "--no-part", "pneunet", "--maxh", "0.006", "--iterations", "3", "--set",
                  "leak_max=0.01", "--out", str(out), "--quiet"]) == 0
     rows = list(csv.DictReader(open(out / "history.csv")))
     assert len(rows) == 3 and all(float(r["leak"]) > 0 for r in rows)

@@ -61,7 +61,7 @@ def test_a_run_without_leak_max_reports_leak_and_its_picture_quotes_it(tmp_path,
 
     monkeypatch.setattr(matplotlib.axes.Axes, "set_title", record)
     out = tmp_path / "run"
-    assert main(["run", "pneunet", "--maxh", "0.006", "--iterations", "2", "--out", str(out),
+    assert main(["run", "--no-part", "pneunet", "--maxh", "0.006", "--iterations", "2", "--out", str(out),
                  "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
     assert s["parameters"]["leak_max"] == 0

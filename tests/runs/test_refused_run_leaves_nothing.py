@@ -24,7 +24,7 @@ def _bad_case(folder):
 
 
 def _run(case, out, capsys):
-    code = main(["run", str(case), "--iterations", "1", "--maxh", "0.004", "--out", str(out),
+    code = main(["run", "--no-part", str(case), "--iterations", "1", "--maxh", "0.004", "--out", str(out),
                  "--quiet"])
     err = capsys.readouterr().err
     assert code == 2 and "no_such_chamber" in err and err.strip().count("\n") == 0, err

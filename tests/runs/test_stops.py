@@ -30,7 +30,7 @@ def no_temporaries(folder):
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
 def test_a_signal_mid_run_keeps_the_checkpoint_and_says_so(tmp_path, sig):
     out = tmp_path / "run"
-    proc = pacto("run", "mbb", "--nelx", "30", "--nely", "10", "--iterations", "500",
+    proc = pacto("run", "--no-part", "mbb", "--nelx", "30", "--nely", "10", "--iterations", "500",
                  "--out", str(out))
     for line in proc.stdout:
         if line.startswith("it    2/"):
@@ -51,7 +51,7 @@ def test_a_signal_mid_run_keeps_the_checkpoint_and_says_so(tmp_path, sig):
 def test_an_interrupt_before_the_first_checkpoint_says_there_is_none(tmp_path):
     """Ctrl-C while the first iteration runs: no checkpoint claimed; resume starts again."""
     out = tmp_path / "run"
-    proc = pacto("run", "pa-inverter", "--nelx", "60", "--nely", "40", "--iterations", "2",
+    proc = pacto("run", "--no-part", "pa-inverter", "--nelx", "60", "--nely", "40", "--iterations", "2",
                  "--out", str(out), "--quiet")
     while not (out / "params.json").exists():
         assert proc.poll() is None, proc.stderr.read()
@@ -74,7 +74,7 @@ def test_an_interrupt_while_the_problem_is_built_leaves_nothing_to_resume(tmp_pa
     is taken before): params.json is written only once the problem is built, so nothing is
     there, and the line says to run the command again, not to resume."""
     out = tmp_path / "run"
-    proc = pacto("run", "cantilever", "--maxh", "0.004", "--iterations", "1", "--out",
+    proc = pacto("run", "--no-part", "cantilever", "--maxh", "0.004", "--iterations", "1", "--out",
                  str(out), "--quiet")
     while not (out / ".pacto.lock").exists():
         assert proc.poll() is None, proc.stderr.read()
@@ -105,7 +105,7 @@ def test_a_full_disk_in_the_final_writes_keeps_the_checkpoint(tmp_path):
     line, exit 2, the checkpoint of the last iteration intact, no summary claiming a finished
     run, no temporary left; resume (with room again) writes the results."""
     out = tmp_path / "run"
-    proc = pacto("run", *MBB, "--out", str(out), "--quiet", preexec_fn=_file_limit(100_000))
+    proc = pacto("run", "--no-part", *MBB, "--out", str(out), "--quiet", preexec_fn=_file_limit(100_000))
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 2 and len(err.strip().splitlines()) == 1, err
     assert err.strip() == (
@@ -124,7 +124,7 @@ def test_a_full_disk_in_the_final_writes_keeps_the_checkpoint(tmp_path):
 
 def test_a_full_disk_at_the_first_checkpoint(tmp_path):
     out = tmp_path / "run"
-    proc = pacto("run", *MBB, "--out", str(out), "--quiet", preexec_fn=_file_limit(20_000))
+    proc = pacto("run", "--no-part", *MBB, "--out", str(out), "--quiet", preexec_fn=_file_limit(20_000))
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 2 and len(err.strip().splitlines()) == 1, err
     assert re.fullmatch(
@@ -157,7 +157,7 @@ def test_an_interrupt_while_resume_starts_names_the_checkpoint_there(tmp_path, m
     from pacto_ng.cli import main
 
     out = tmp_path / "run"
-    assert main(["run", *MBB, "--out", str(out), "--quiet"]) == 0
+    assert main(["run", "--no-part", *MBB, "--out", str(out), "--quiet"]) == 0
     before = (out / "checkpoint.npz").read_bytes()
 
     def interrupted(*args, **kw):

@@ -31,7 +31,7 @@ def test_an_energy_run_reports_the_compliance_and_the_displacement_under_the_loa
     """MBB, objective strain energy: the unit load pulls the top-left corner (0, nely) down, so
     compliance f·u and the output displacement (at the load, along it) are both -u_y there."""
     out = tmp_path / "mbb"
-    assert main(["run", "mbb", "--nelx", "12", "--nely", "4", "--iterations", "2", "--set",
+    assert main(["run", "--no-part", "mbb", "--nelx", "12", "--nely", "4", "--iterations", "2", "--set",
                  "objective=energy", "--out", str(out), "--quiet"]) == 0
     s = _summary(out)
     assert s["objective_name"] == "se" and s["load"] == 1.0
@@ -49,7 +49,7 @@ def test_the_cantilever_reports_the_mean_tip_deflection_under_its_load(tmp_path)
     on quads: u is linear between the nodes along the edge, so the trapezoidal mean of the
     nodes' values is exact."""
     out = tmp_path / "cant"
-    assert main(["run", "cantilever", "--nelx", "24", "--nely", "8", "--iterations", "2",
+    assert main(["run", "--no-part", "cantilever", "--nelx", "24", "--nely", "8", "--iterations", "2",
                  "--set", "order=1", "--out", str(out), "--quiet"]) == 0
     s = _summary(out)
     h = 0.25 / 8
@@ -86,7 +86,7 @@ def test_a_pressure_case_reports_the_compliance_of_its_darcy_load(one_thread):
 
 def test_a_follower_load_has_no_compliance(tmp_path):
     out = tmp_path / "paf"
-    assert main(["run", "pa-inverter", "--nelx", "12", "--nely", "8", "--iterations", "1",
+    assert main(["run", "--no-part", "pa-inverter", "--nelx", "12", "--nely", "8", "--iterations", "1",
                  "--set", "load_type=follower", "--out", str(out), "--quiet"]) == 0
     s = _summary(out)
     assert s["compliance"] is None

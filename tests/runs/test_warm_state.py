@@ -16,7 +16,7 @@ ARGS = ["pa-inverter", "--model", "neohookean", "--nelx", "20", "--nely", "10"]
 @pytest.fixture(scope="module")
 def nh_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("warm") / "nh"
-    assert main(["run", *ARGS, "--iterations", "2", "--out", str(out), "--quiet"]) == 0
+    assert main(["run", "--no-part", *ARGS, "--iterations", "2", "--out", str(out), "--quiet"]) == 0
     return out
 
 
@@ -64,8 +64,8 @@ def test_a_robust_run_resumes_from_every_realisations_equilibrium(tmp_path):
     args = ["pa-inverter", "--model", "wang", "--nelx", "20", "--nely", "10", "--load", "3e5",
             "--set", "robust=2"]
     full, part = tmp_path / "full", tmp_path / "part"
-    assert main(["run", *args, "--iterations", "4", "--out", str(full), "--quiet"]) == 0
-    assert main(["run", *args, "--iterations", "2", "--out", str(part), "--quiet"]) == 0
+    assert main(["run", "--no-part", *args, "--iterations", "4", "--out", str(full), "--quiet"]) == 0
+    assert main(["run", "--no-part", *args, "--iterations", "2", "--out", str(part), "--quiet"]) == 0
     with np.load(part / "checkpoint.npz") as ck:
         u1, warm1 = ck["u_1"].copy(), bool(ck["warm_1"])
     assert warm1 and np.abs(u1).max() > 0

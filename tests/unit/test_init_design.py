@@ -6,7 +6,7 @@ from pacto_ng.cli import main
 
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
-BASE = ["run", "mbb", "--nelx", "12", "--nely", "4", "--quiet"]
+BASE = ["run", "--no-part", "mbb", "--nelx", "12", "--nely", "4", "--quiet"]
 
 
 def test_a_run_starts_from_the_design_of_another(tmp_path):
@@ -31,7 +31,7 @@ def test_init_design_errors_name_the_field(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("pacto: error: init_design:") and "nowhere" in err[0]
     other = tmp_path / "other"
-    assert main(["run", "mbb", "--nelx", "8", "--nely", "4", "--quiet", "--iterations", "1",
+    assert main(["run", "--no-part", "mbb", "--nelx", "8", "--nely", "4", "--quiet", "--iterations", "1",
                  "--out", str(other)]) == 0
     capsys.readouterr()
     assert main(BASE + ["--set", f"init_design={other}", "--out", str(tmp_path / "b")]) != 0

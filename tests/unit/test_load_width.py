@@ -27,7 +27,7 @@ def test_load_width_fixes_the_loaded_segment(case, segment, default_width):
 
 
 def test_negative_load_width_is_a_one_line_error(tmp_path, capsys):
-    code = main(["run", "cantilever", "--set", "load_width=-1", "--out", str(tmp_path / "o")])
+    code = main(["run", "--no-part", "cantilever", "--set", "load_width=-1", "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert code != 0 and "load_width" in err and "Traceback" not in err
 

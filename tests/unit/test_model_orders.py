@@ -45,7 +45,7 @@ def test_summary_records_the_resolved_order(tmp_path):
     import json
 
     out = tmp_path / "run"
-    assert main(["run", "cantilever", "--maxh", "0.05", "--iterations", "1", "--quiet",
+    assert main(["run", "--no-part", "cantilever", "--maxh", "0.05", "--iterations", "1", "--quiet",
                  "--out", str(out)]) == 0
     s = json.loads((out / "summary.json").read_text())
     p = json.loads((out / "params.json").read_text())

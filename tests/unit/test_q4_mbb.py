@@ -65,7 +65,7 @@ def test_mbb_optimisation_against_the_88_line_code(tmp_path):
 
     _, c88, _, _ = top88(60, 20, 0.5, 3.0, 1.5, ft=1)
     out = tmp_path / "mbb"
-    assert main(["run", "mbb", "--out", str(out), "--quiet"]) == 0
+    assert main(["run", "--no-part", "mbb", "--out", str(out), "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
     assert s["converged"]
     assert abs(s["volume_fraction"] - 0.5) < 1e-3

@@ -44,7 +44,7 @@ def no_meshing(monkeypatch):
 def _refused(args, tmp_path, capsys) -> tuple[str, float]:
     """Run ``pacto ARGS`` in this process: exit code 2, one line on stderr; (line, seconds)."""
     argv = [*args, "--out", str(tmp_path / "out")]
-    main(["run", "mbb", "--show-parameters"])  # imports done: the timing is the check's
+    main(["run", "--no-part", "mbb", "--show-parameters"])  # imports done: the timing is the check's
     capsys.readouterr()
     t = time.perf_counter()
     code = main(argv)
@@ -59,11 +59,11 @@ def _refused(args, tmp_path, capsys) -> tuple[str, float]:
 # -- the issue's three commands: refused fast, before meshing --------------------------------
 @pytest.mark.parametrize("args, words", [
     # the issue's 74.5 GiB: nelx = nely = 100000 (a 1e10 array of region numbers)
-    (["run", "pa-inverter", "--nelx", "100000", "--nely", "100000"],
+    (["run", "--no-part", "pa-inverter", "--nelx", "100000", "--nely", "100000"],
      ("nelx x nely = 100000 x 100000", "quads", "memory", "mesh_time_limit")),
-    (["run", "mbb", "--order", "3", "--nelx", "5000", "--nely", "5000"],
+    (["run", "--no-part", "mbb", "--order", "3", "--nelx", "5000", "--nely", "5000"],
      ("order 3", "memory", "smaller nelx, nely or order")),
-    (["run", "pa-inverter", "--maxh", "1e-5"],
+    (["run", "--no-part", "pa-inverter", "--maxh", "1e-5"],
      ("maxh = 1e-05", "triangles", "memory", "Netgen", "larger maxh")),
 ])
 def test_refused_before_meshing(args, words, tmp_path, capsys, no_meshing):
@@ -74,9 +74,9 @@ def test_refused_before_meshing(args, words, tmp_path, capsys, no_meshing):
 
 
 @pytest.mark.parametrize("args, words", [
-    (["run", "c-beam", "--maxh", "1e-6"],
+    (["run", "--no-part", "c-beam", "--maxh", "1e-6"],
      ("maxh = 1e-06", "triangles", "memory", "Netgen", "larger maxh")),
-    (["run", "c-beam", "--nelx", "100000"],
+    (["run", "--no-part", "c-beam", "--nelx", "100000"],
      ("nelx = 100000 (100000 x 100000 quads)", "memory", "mesh_time_limit", "smaller nelx")),
 ])
 def test_the_c_beam_analysis_is_refused_before_meshing(args, words, tmp_path, capsys,
@@ -92,9 +92,9 @@ def test_the_c_beam_analysis_is_refused_before_meshing(args, words, tmp_path, ca
 
 def test_the_c_beam_defaults_pass_the_check(tmp_path, no_meshing):
     with pytest.raises(MeshingStarted):
-        main(["run", "c-beam", "--out", str(tmp_path / "out")])
+        main(["run", "--no-part", "c-beam", "--out", str(tmp_path / "out")])
     with pytest.raises(MeshingStarted):
-        main(["run", "c-beam", "--maxh", "0.5", "--out", str(tmp_path / "trig")])
+        main(["run", "--no-part", "c-beam", "--maxh", "0.5", "--out", str(tmp_path / "trig")])
 
 
 def test_order_3_grid_of_the_issue_refused_where_it_does_not_fit(tmp_path, capsys, no_meshing,
@@ -105,7 +105,7 @@ def test_order_3_grid_of_the_issue_refused_where_it_does_not_fit(tmp_path, capsy
     assert est.dofs == 2 * (3 * 400 + 1) * (3 * 300 + 1)
     assert 6.0e9 < est.memory < 8.0e9  # measured 6.72 GB above the process's start
     monkeypatch.setattr(resources, "memory_limit", lambda: (4e9, "a 4 GB test limit"))
-    line, seconds = _refused(["run", "mbb", "--order", "3", "--nelx", "400", "--nely", "300"],
+    line, seconds = _refused(["run", "--no-part", "mbb", "--order", "3", "--nelx", "400", "--nely", "300"],
                              tmp_path, capsys)
     assert "2,164,202 displacement dofs at order 3" in line and "4 GB" in line, line
     assert seconds < 1.0
@@ -114,7 +114,7 @@ def test_order_3_grid_of_the_issue_refused_where_it_does_not_fit(tmp_path, capsy
 def test_mesh_time_limit_is_the_override(tmp_path, capsys, no_meshing):
     """Beyond mesh_time_limit alone (memory fits): refused, and a larger mesh_time_limit lets
     the mesh be made (here: reaches the mesher)."""
-    args = ["run", "pa-inverter", "--maxh", "0.0001"]  # ~4.6e6 triangles, ~15 min of Netgen
+    args = ["run", "--no-part", "pa-inverter", "--maxh", "0.0001"]  # ~4.6e6 triangles, ~15 min of Netgen
     line, _ = _refused(args, tmp_path, capsys)
     assert "Netgen" in line and "mesh_time_limit = 300 s" in line and "memory" not in line
     with pytest.raises(MeshingStarted):
@@ -243,7 +243,7 @@ def test_too_many_threads_one_line_exit_2(value, tmp_path):
 def test_bad_thread_counts_one_line_exit_2(value, tmp_path, capsys, monkeypatch):
     """Refused before NGSolve's thread count is set (so in this process)."""
     monkeypatch.setenv("PACTO_THREADS", value)
-    assert main(["run", "mbb", "--out", str(tmp_path / "out"), "--set", "iterations=2"]) == 2
+    assert main(["run", "--no-part", "mbb", "--out", str(tmp_path / "out"), "--set", "iterations=2"]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and "PACTO_THREADS" in lines[0]
 
