@@ -23,6 +23,7 @@ from .materials import material_areas
 from .part2d import PartMesh, part_fields, part_mesh, write_part_stl, write_part_vtu
 from .post3d import export_run_3d, is_3d
 from .runs import export_destination, load_run, part_of_run
+from .seal import design_seal, warn_if_open
 
 
 # ------------------------------------------------------------------------------------------
@@ -160,6 +161,8 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
     threshold_value = 0.5 if threshold_value is None else threshold_value
     threshold2 = 0.5 if threshold2 is None else threshold2
     th, rm, problem = part_of_run(run, threshold_value, maxh, threshold2)
+    warn_if_open(design_seal(problem, run.case.make_setup(run.params), th.threshold,
+                             exclude=th.excluded))
     two = rm.materials is not None
     # the whole mechanism: the symmetry line of the run's own mesh (the part may not reach it)
     line = symmetry_line(problem.mesh) if mirror else None

@@ -37,7 +37,7 @@ from .post3d import RHO2, split_materials, stiff_sampler
 from .remesh3d import PRESSURE, remesh_part
 from .remesh import remesh
 from .runs import design_density, domain_of, materials_of
-from .seal import Seal, check_seal
+from .seal import Seal, design_seal, inlet_names
 from .threshold import threshold as threshold_2d
 from .threshold_choice import choose_threshold
 
@@ -135,16 +135,6 @@ def present_supports(supports: Supports, mesh) -> Supports:
     return Supports(**{k: keep(v) for k, v in dataclasses.asdict(supports).items()})
 
 
-def inlet_names(problem, setup) -> tuple[str, ...]:
-    """The pressure inlets of a run: ``--set inlet`` if given, else the set-up's (none without
-    a pressure load)."""
-    if setup.pressure is None:
-        return ()
-    if problem.params.inlet:
-        return tuple(problem.params.inlet.split("|"))
-    return tuple(setup.pressure.inlet)
-
-
 def make_part(problem, setup, *, threshold=0.5, maxh: float | None = None,
               threshold2: float = 0.5, connect: bool = True, pressure=None,
               p_in: float | None = None, mesh_time_limit: float = 300.0) -> Part:
@@ -188,9 +178,8 @@ def make_part(problem, setup, *, threshold=0.5, maxh: float | None = None,
     if setup.pressure is not None:
         # a part with no wetted wall is a part (its Darcy analysis still applies; the wall
         # pressure analyses refuse it, PartAnalysis)
-        part.seal = check_seal(problem.mesh, rho, part.threshold,
-                               inlet=inlet_names(problem, setup),
-                               zero=setup.pressure.zero, exclude=part.choice.get("exclude", ()))
+        part.seal = design_seal(problem, setup, part.threshold,
+                                exclude=part.choice.get("exclude", ()))
     return part
 
 

@@ -35,6 +35,7 @@ from .materials import MATERIALS, SOFT, STIFF
 from .mirror3d import is_symmetry_name, mirror_solid, mirror_surface, symmetry_planes
 from .part3d import closed_checks, part3d, void_regions, write_part_stl
 from .runs import design_density, export_destination, rebuild
+from .seal import design_seal, warn_if_open
 
 EXPORT_FORMATS_3D = ("stl", "vtk", "vtu")
 
@@ -229,8 +230,9 @@ def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
         except (ValueError, KeyError, TypeError):
             threshold_value = None
     threshold2 = 0.5 if threshold2 is None else float(threshold2)
-    part, problem, setup, _ = part_of_run_3d(
+    part, problem, setup, exclude = part_of_run_3d(
         run, 0.5 if threshold_value is None else threshold_value, threshold2)
+    warn_if_open(design_seal(problem, setup, part.threshold, exclude=exclude))
     planes = symmetry_planes(problem.mesh) if mirror else []
     surface = mirror_surface(part.surface, planes) if planes else part.surface
     whole = f"mirrored about {_plural(len(planes), 'plane')}"

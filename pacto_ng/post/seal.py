@@ -37,12 +37,15 @@ covered by solid, no passive void behind it) there is no chamber: sealed.  Two m
 """
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
+
+from .runs import design_density
 
 _TIE = 1e-9  # nodal values this close to the threshold count as solid
 _FACETS = {(2, 3): ((0, 1), (1, 2), (2, 0)), (2, 4): ((0, 1), (1, 2), (2, 3), (3, 0)),
@@ -345,3 +348,31 @@ def _chambers(labels, seeds, zeros, excl_mats, nv):
     names = [f[0] for f in found]
     return tuple(Chamber(f"{n} #{names[:i + 1].count(n)}" if names.count(n) > 1 else n, *rest)
                  for i, (n, *rest) in enumerate(found))
+
+
+def inlet_names(problem, setup) -> tuple[str, ...]:
+    """The pressure inlets of a run: ``--set inlet`` if given, else the set-up's (none without
+    a pressure load)."""
+    if setup.pressure is None:
+        return ()
+    if problem.params.inlet:
+        return tuple(problem.params.inlet.split("|"))
+    return tuple(setup.pressure.inlet)
+
+
+def design_seal(problem, setup, threshold: float, exclude=()) -> Seal | None:
+    """The seal of the part {ρ ≥ ``threshold``} of the design ``problem`` holds (its final
+    ρ̄; two materials ρ̄1), ``exclude`` the passive void materials; None without a pressure
+    load."""
+    if setup.pressure is None:
+        return None
+    return check_seal(problem.mesh, design_density(problem), threshold,
+                      inlet=inlet_names(problem, setup), zero=setup.pressure.zero,
+                      exclude=exclude)
+
+
+def warn_if_open(seal: Seal | None) -> None:
+    """A chamber open to the outside: one warning line on stderr (even with ``--quiet``)."""
+    if seal is not None and not seal.sealed:
+        print(f"pacto: warning: NOT SEALED: {seal.message()}", file=sys.stderr, flush=True)
+

@@ -94,3 +94,25 @@ def test_a_run_s_last_line_says_its_chamber_is_open(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["sealed"] is False
     assert "NOT SEALED" in printed.strip().splitlines()[-1]
+    # the export of that run's part says it too (on stderr, even with --quiet); a sealed
+    # part's export says nothing of the kind
+    assert main(["export", str(out), "--format", "stl", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "NOT SEALED" in err and "chamber 'chamber'" in err and "zero_pressure" in err
+
+
+def test_a_sealed_part_s_export_warns_of_nothing(tmp_path, capsys):
+    """The same run from the closed member (no channel): its export says nothing of a seal."""
+    case = get_case("pneunet")
+    with compute():
+        problem = build_problem(case, case.resolve(case.defaults.replace(**COARSE)))
+    start = tmp_path / "start"
+    start.mkdir()
+    np.savez(start / "checkpoint.npz", x=_design(problem, False))
+    out = tmp_path / "run"
+    assert main(["run", "pneunet", "--maxh", "0.004", "--iterations", "1", "--quiet",
+                 "--no-part", "--set", f"init_design={start}", "--set", "beta=32", "--set",
+                 "penal_start=3", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["export", str(out), "--format", "stl", "--quiet"]) == 0
+    assert "NOT SEALED" not in capsys.readouterr().err
