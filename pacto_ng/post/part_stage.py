@@ -47,6 +47,10 @@ from .runs import copy_gridfunction
 #: a part whose output moves further than this from the design's (relative) is not "as
 #: designed" (the issue's figure: ±20 %)
 GAP_LIMIT = 0.2
+#: a linear analysis whose largest displacement passes this share of the part's size (its
+#: bounding box's largest side) is beyond small strains and rotations (measured at defaults:
+#: the built-in cases' parts at most 0.040, pneunet's; tests/cases/user_finger.py's 1.57)
+LINEAR_LIMIT = 0.1
 #: the part's element size and displacement order, by dimension
 PART_MAXH = {2: 0.5, 3: 1.0}  # times the design's element size
 #: order 2 in 3D too: on pa-inverter-3d's part order-1 tetrahedra were 12 points stiffer
@@ -116,6 +120,8 @@ def _analyse(path, part: Part, problem, summary) -> dict:
     entry["gap"] = (None if not point.converged or not design else
                     (point.delta - design) / abs(design))
     entry["warnings"] = _warnings(part, problem, ports, point)
+    if point.converged and ana.model == "linear":
+        entry["warnings"] += beyond_linear(part.mesh, point.max_u)
     if point.converged:
         title = (f"{problem.case.name} part, {load:.3g} {problem.case.load_unit} {kind}, "
                  f"{ana.model} (true scale)")
@@ -130,6 +136,18 @@ def _analyse(path, part: Part, problem, summary) -> dict:
 
 def _num(v):
     return None if v is None or not np.isfinite(v) else float(v)
+
+
+def beyond_linear(mesh, max_u: float) -> list[str]:
+    """A linear analysis whose motion is not small against the part: its figures do not hold
+    (the design's neither: it was made with the same model)."""
+    box = np.array([[v.point[i] for v in mesh.vertices] for i in range(mesh.dim)])
+    size = float(np.max(box.max(axis=1) - box.min(axis=1)))
+    if not max_u > LINEAR_LIMIT * size:
+        return []
+    return [f"the part moves up to {max_u:.3g} m, {max_u / size:.0%} of its size "
+            f"({size:.3g} m): beyond small strains and rotations, where the linear model's "
+            f"figures do not hold (run the case with --model neohookean, or --model auto)"]
 
 
 def _warnings(part: Part, problem, ports, point) -> list[str]:

@@ -4,10 +4,12 @@ import json
 
 import numpy as np
 import pytest
+from netgen.occ import OCCGeometry, Rectangle
+from ngsolve import Mesh
 
 from pacto_ng.case import build_problem, get_case
 from pacto_ng.cli import main
-from pacto_ng.post.part_stage import finish_run
+from pacto_ng.post.part_stage import beyond_linear, finish_run
 from pacto_ng.threads import compute
 
 #: the PneuNet member (chamber x 0.02-0.08, y 0.01-0.02 in a 0.1 x 0.05 domain), coarse
@@ -116,3 +118,13 @@ def test_a_sealed_part_s_export_warns_of_nothing(tmp_path, capsys):
     capsys.readouterr()
     assert main(["export", str(out), "--format", "stl", "--quiet"]) == 0
     assert "NOT SEALED" not in capsys.readouterr().err
+
+
+def test_a_linear_part_that_moves_far_is_told_its_figures_do_not_hold():
+    """A part 2 m x 1 m (size 2 m): a linear analysis that moves it 0.1 m (5 %) is kept quiet,
+    one that moves it 0.3 m (15 %, above LINEAR_LIMIT = 10 %) is told to use a large-strain
+    model."""
+    mesh = Mesh(OCCGeometry(Rectangle(2.0, 1.0).Face(), dim=2).GenerateMesh(maxh=0.5))
+    assert beyond_linear(mesh, 0.1) == []
+    (line,) = beyond_linear(mesh, 0.3)
+    assert "15% of its size (2 m)" in line and "--model neohookean" in line
