@@ -226,9 +226,9 @@ class Case:
         output, and MMA then drops the volume constraint)."""
         if setup is None:
             setup = self._user_call(self.setup, params)
-        objective = params.objective or getattr(setup, "objective", "")
-        if (not isinstance(setup, Setup) or setup.objective_ref > 0 or setup.pressure is None
-                or objective != "mechanism"):
+        if not isinstance(setup, Setup) or setup.objective_ref > 0 or setup.pressure is None:
+            return None
+        if (params.objective or setup.objective) != "mechanism":
             return None
         sides = bounding_sides(self.make_geometry(params))
         if sides is None or not min(sides) > 0 or params.load == 0:

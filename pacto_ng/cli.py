@@ -380,27 +380,29 @@ def main(argv=None) -> int:
 def _run_with_part(case, params, out, args) -> int:
     """``pacto run``: the optimisation, then its part (:mod:`pacto_ng.post.part_stage`) made,
     checked and analysed by the rank that writes the folder."""
-    from .parallel import leads
     from .runner import optimise_case
 
     done = optimise_case(case, params, out, quiet=args.quiet, overwrite=args.overwrite)
-    if leads() and not args.no_part:
-        from .post.part_stage import finish_run  # after the run: a refusal stays quick
-
-        finish_run(out, done.problem, done.summary, quiet=args.quiet)
-    return done.exit_code
+    return _with_part(done, out, args)
 
 
 def _resume_with_part(args) -> int:
     """``pacto resume``: the optimisation continued, then its part, as ``pacto run``."""
-    from .parallel import leads
     from .runner import resume_run
 
     done = resume_run(args.dir, quiet=args.quiet, iterations=args.iterations)
+    return _with_part(done, args.dir, args)
+
+
+def _with_part(done, out, args) -> int:
+    """A finished optimisation's part made, checked and analysed (unless ``--no-part``);
+    the run's exit code."""
+    from .parallel import leads
+
     if leads() and not args.no_part:
         from .post.part_stage import finish_run  # after the run: a refusal stays quick
 
-        finish_run(args.dir, done.problem, done.summary, quiet=args.quiet)
+        finish_run(out, done.problem, done.summary, quiet=args.quiet)
     return done.exit_code
 
 

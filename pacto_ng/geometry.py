@@ -143,24 +143,10 @@ def _is_solid(shape) -> bool:
     return len(shape.solids) > 0
 
 
-def _extent(shape) -> float:
-    """The smallest side of the shape's bounding box (x, y; and z for a 3D shape)."""
-    lo, hi = shape.bounding_box
-    axes = 3 if _is_solid(shape) else 2
-    return float(min(hi[a] - lo[a] for a in range(axes)))
-
-
 def extent(geometry) -> float | None:
     """The smallest side of the geometry's bounding box (None for a mesh or a mesh file)."""
-    if isinstance(geometry, Layout):
-        return min(geometry.width, geometry.height)
-    if isinstance(geometry, Box):
-        return float(geometry.size.min())
-    if isinstance(geometry, (str, os.PathLike)) and str(geometry).lower().endswith(CAD_SUFFIXES):
-        geometry = load_cad(geometry)
-    if _is_occ_shape(geometry):
-        return _extent(geometry)
-    return None
+    sides = bounding_sides(geometry)
+    return None if sides is None else min(sides)
 
 
 #: a derived mesh size (``maxh`` given neither by the case nor by the user): this many elements
@@ -187,28 +173,23 @@ def bounding_sides(geometry) -> tuple[float, ...] | None:
         return (float(geometry.width), float(geometry.height))
     if isinstance(geometry, Box):
         return tuple(float(v) for v in geometry.size)
-    if _is_occ_shape(geometry) and len(geometry.faces) > 0:
+    if _is_occ_shape(geometry):
         lo, hi = geometry.bounding_box
         return tuple(float(hi[a] - lo[a]) for a in range(3 if _is_solid(geometry) else 2))
     return None
 
 
-def _sizes(geometry):
-    """``(dim, smallest side, elements at maxh)`` of a geometry that Netgen meshes (a
-    netgen.occ shape, a CAD file, a Layout, a Box); None for a mesh or a mesh file."""
-    if isinstance(geometry, (str, os.PathLike)) and str(geometry).lower().endswith(CAD_SUFFIXES):
-        geometry = load_cad(geometry)
+def _element_count(geometry):
+    """Netgen's element count at a mesh size, as a function of it, for a geometry that Netgen
+    meshes (:mod:`pacto_ng.resources`); None for one it cannot (a shape without faces)."""
     if isinstance(geometry, Layout):
-        area = geometry.width * geometry.height
-        return (2, min(geometry.width, geometry.height),
-                lambda h: resources.netgen_triangles(area, h))
+        return lambda h: resources.netgen_triangles(geometry.width * geometry.height, h)
     if isinstance(geometry, Box):
-        volume = float(np.prod(geometry.size))
-        return 3, float(geometry.size.min()), lambda h: resources3d.netgen_tets(volume, h)
+        return lambda h: resources3d.netgen_tets(float(np.prod(geometry.size)), h)
     if _is_occ_shape(geometry) and len(geometry.faces) > 0:
         if _is_solid(geometry):
-            return 3, _extent(geometry), lambda h: resources3d.shape_tets(geometry, h)
-        return 2, _extent(geometry), lambda h: resources.shape_triangles(geometry, h)
+            return lambda h: resources3d.shape_tets(geometry, h)
+        return lambda h: resources.shape_triangles(geometry, h)
     return None
 
 
@@ -221,12 +202,12 @@ def derived_maxh(geometry, filter_radius: float = 0.0) -> tuple[float, str] | No
     finer elements; coarsened to about ``MAX_DERIVED_TRIANGLES`` triangles or
     ``MAX_DERIVED_TETS`` tetrahedra where it would make more (but never coarser than a quarter
     of ``side``), rounded to 3 significant digits."""
-    sizes = _sizes(geometry)
-    if sizes is None:
+    if isinstance(geometry, (str, os.PathLike)) and str(geometry).lower().endswith(CAD_SUFFIXES):
+        geometry = load_cad(geometry)
+    sides, count = bounding_sides(geometry), _element_count(geometry)
+    if sides is None or count is None or not min(sides) > 0:
         return None
-    dim, side, count = sizes
-    if not side > 0:
-        return None
+    dim, side = len(sides), min(sides)
     across = ACROSS_2D if dim == 2 else ACROSS_3D
     cap, kind = ((MAX_DERIVED_TRIANGLES, "triangles") if dim == 2 else
                  (MAX_DERIVED_TETS, "tetrahedra"))
@@ -326,7 +307,7 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
         solid = _is_solid(geometry)
         if len(geometry.faces) == 0:
             raise InputError("geometry: the shape has no face to mesh")
-        _check_maxh(maxh, _extent(geometry))
+        _check_maxh(maxh, extent(geometry))
         if solid:
             estimate = resources3d.estimate_tets(resources3d.shape_tets(geometry, maxh), order,
                                                  solver=solver, linear_solver=linear_solver)

@@ -141,8 +141,8 @@ def _num(v):
 def beyond_linear(mesh, max_u: float) -> list[str]:
     """A linear analysis whose motion is not small against the part: its figures do not hold
     (the design's neither: it was made with the same model)."""
-    box = np.array([[v.point[i] for v in mesh.vertices] for i in range(mesh.dim)])
-    size = float(np.max(box.max(axis=1) - box.min(axis=1)))
+    points = np.array(mesh.ngmesh.Coordinates())[:, :mesh.dim]
+    size = float(np.max(points.max(axis=0) - points.min(axis=0)))
     if not max_u > LINEAR_LIMIT * size:
         return []
     return [f"the part moves up to {max_u:.3g} m, {max_u / size:.0%} of its size "

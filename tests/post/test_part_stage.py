@@ -78,19 +78,26 @@ def test_an_open_chamber_is_reported_in_the_summary_and_the_last_line(pneunet, t
     assert "NOT SEALED" in line and "will not hold pressure" in line
 
 
-def test_a_run_s_last_line_says_its_chamber_is_open(tmp_path, capsys):
-    """``pacto run`` from a design with an open chamber (init_design), one iteration: the
-    optimiser's move limit cannot close the channel, and the run says so."""
+def _run_from(tmp_path, *, channel: bool, extra=()):
+    """``pacto run pneunet`` for one iteration from the member with (or without) an open
+    channel (init_design): ``(run folder, exit code)``."""
     case = get_case("pneunet")
     with compute():
         problem = build_problem(case, case.resolve(case.defaults.replace(**COARSE)))
     start = tmp_path / "start"
     start.mkdir()
-    np.savez(start / "checkpoint.npz", x=_design(problem, True))
+    np.savez(start / "checkpoint.npz", x=_design(problem, channel))
     out = tmp_path / "run"
-    code = main(["run", "pneunet", "--maxh", "0.004", "--iterations", "1", "--quiet",
+    code = main(["run", "pneunet", "--maxh", "0.004", "--iterations", "1", "--quiet", *extra,
                  "--set", f"init_design={start}", "--set", "beta=32", "--set", "penal_start=3",
                  "--out", str(out)])
+    return out, code
+
+
+def test_a_run_s_last_line_says_its_chamber_is_open(tmp_path, capsys):
+    """``pacto run`` from a design with an open chamber (init_design), one iteration: the
+    optimiser's move limit cannot close the channel, and the run says so."""
+    out, code = _run_from(tmp_path, channel=True)
     printed = capsys.readouterr().out
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
@@ -105,16 +112,8 @@ def test_a_run_s_last_line_says_its_chamber_is_open(tmp_path, capsys):
 
 def test_a_sealed_part_s_export_warns_of_nothing(tmp_path, capsys):
     """The same run from the closed member (no channel): its export says nothing of a seal."""
-    case = get_case("pneunet")
-    with compute():
-        problem = build_problem(case, case.resolve(case.defaults.replace(**COARSE)))
-    start = tmp_path / "start"
-    start.mkdir()
-    np.savez(start / "checkpoint.npz", x=_design(problem, False))
-    out = tmp_path / "run"
-    assert main(["run", "pneunet", "--maxh", "0.004", "--iterations", "1", "--quiet",
-                 "--no-part", "--set", f"init_design={start}", "--set", "beta=32", "--set",
-                 "penal_start=3", "--out", str(out)]) == 0
+    out, code = _run_from(tmp_path, channel=False, extra=("--no-part",))
+    assert code == 0
     capsys.readouterr()
     assert main(["export", str(out), "--format", "stl", "--quiet"]) == 0
     assert "NOT SEALED" not in capsys.readouterr().err
