@@ -443,6 +443,11 @@ class Problem:
         return [self.mech] + list(self.extra_mechanics)
 
     # -- schedules ----------------------------------------------------------------------------
+    def schedule_now(self) -> tuple[float, float, float]:
+        """The penalty, β and load factor applied now (:meth:`apply_schedule`'s arguments)."""
+        beta = self.projections[0].beta if self.projections else 1.0
+        return self.penal.Get(), float(beta), float(self.mech.target)
+
     def apply_schedule(self, penal: float, beta: float, load: float) -> None:
         self.penal.Set(penal)
         for pr in self.projections:
@@ -573,12 +578,14 @@ def mesh_for(case: Case, params: Parameters):
                          linear_solver=params.solver)
 
 
-def build_problem(case: Case, params: Parameters, comm=None) -> Problem:
+def build_problem(case: Case, params: Parameters, comm=None, meshed=None) -> Problem:
     """The case's problem: its set-up and mesh, checked against each other, then its chain
     (``case.chain``, :mod:`pacto_ng.builders`).  With an mpi4py communicator ``comm`` of
     several ranks, rank 0 meshes and checks, then the mesh is distributed
     (:func:`pacto_ng.parallel.distribute`) and every rank builds the chain on its part; every
-    rank must call this."""
+    rank must call this.  ``meshed`` (serial only): the case's domain meshed already
+    (:class:`~pacto_ng.geometry.Meshed`, e.g. a run's, to analyse its design at another
+    order on the same elements)."""
     from .geometry import check_inlet_touches_design, check_setup_names, check_vectors
 
     if case.analysis_only:
@@ -595,7 +602,7 @@ def build_problem(case: Case, params: Parameters, comm=None) -> Problem:
     meshed, failure = None, None
     if not parallel or comm.rank == 0:
         try:
-            meshed = mesh_for(case, params)
+            meshed = meshed or mesh_for(case, params)
             check_setup_names(meshed.mesh, setup)
             check_vectors(meshed.mesh, setup)
             if setup.pressure is not None:

@@ -4,7 +4,9 @@
 
 1. the run is loaded and rebuilt (its final design analysed at its load, as summary.json
    reports it); the **expected** Δ at every pressure P of the sweep is the density design
-   with the run's own model at load factor P/load (:func:`expected_sweep`);
+   with the run's own model at load factor P/load (:func:`expected_sweep`), on the run's
+   mesh at the part's displacement order (:func:`~.runs.at_order`: the run's order-1
+   elements are stiffer, and the gap is to measure making the part, not the order);
 2. its **part** is made (:func:`~.part.make_part`: threshold chosen so that the part reaches
    every output, body-fitted remesh, the wetted walls named ``pressure`` by the run's final
    Darcy field at P_in = the run's load, the chambers' seal checked); only this step differs
@@ -63,7 +65,7 @@ from .plots3d import deformed_picture
 from .post3d import solid_elements
 from .report import (analysis_csv, analysis_json, jsonable, materials_entry, part_entry,
                      part_measures, part_warnings, ports_json, report_md, short_table)
-from .runs import copy_gridfunction, load_run, rebuild, thresholded_elements
+from .runs import at_order, copy_gridfunction, design_delta, load_run, rebuild, thresholded_elements
 
 #: the kinds of a run's part (``darcy`` needs the run's Darcy field), in this order
 KINDS = ("darcy", "fixed", "follower")
@@ -225,7 +227,8 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
                 f"{est.kind}, {est.dofs:.3g} dofs; the analysis about {seconds:.3g} s, "
                 f"{est.memory / 1e9:.2g} GB")
     entry, p_final = _rebuilt_entry(run, problem, quiet)
-    expected = expected_sweep(problem, pressures, run.load, x=run.x)
+    design = _at_part_order(problem, params.order, entry, quiet)
+    expected = expected_sweep(design, pressures, run.load, x=run.x)
     _say(quiet, "  expected Δ: " + ", ".join(
         f"{r['pressure']:.3g} -> {r['delta']:.4g}" if r["converged"] else
         f"{r['pressure']:.3g} -> failed" for r in expected))
@@ -237,7 +240,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
                 + ("" if part.seal is None else
                    f", {'sealed' if part.sealed else 'NOT SEALED'}"))
     darcy = _thresholded_darcy(problem, part)
-    rounded = rounded_sweep(problem, part, pressures, run.load)
+    rounded = rounded_sweep(design, part, pressures, run.load)
     if rounded is not None:
         expected = [dict(e, rounded=r["delta"]) for e, r in zip(expected, rounded)]
     subject = Subject(run.case, params, setup, problem.mesh, part, run.path / "analysis",
@@ -271,6 +274,29 @@ def _rebuilt_entry(run, problem, quiet):
                             f"({problem.failure}); the expected Δ is recorded where it "
                             f"converges")
     return entry, copy_gridfunction(problem.pressure_block.gfp)
+
+
+def _at_part_order(problem, order, entry, quiet):
+    """The run's problem at the part's ``order`` (:func:`~.runs.at_order`), its Δ at the
+    run's load into the 'run' ``entry``; the run's problem where that has no equilibrium."""
+    entry["expected_order"] = int(order)
+    if problem.failure or int(problem.params.order) == int(order):
+        entry["expected_order"] = int(problem.params.order)
+        entry["output_displacement_at_order"] = entry["output_displacement_rebuilt"]
+        return problem
+    try:
+        with compute():
+            design = at_order(problem, order)
+    except NewtonFailure as err:
+        entry["expected_order"] = int(problem.params.order)
+        entry["output_displacement_at_order"] = entry["output_displacement_rebuilt"]
+        entry["order_note"] = (f"the design has no equilibrium at order {order} ({err}); the "
+                               f"expected Δ is at the run's order")
+        return problem
+    entry["output_displacement_at_order"] = design_delta(design)
+    _say(quiet, f"  the design at order {order}: Δ = "
+                f"{entry['output_displacement_at_order']:.6g} m")
+    return design
 
 
 def rounded_density(problem, part: Part) -> np.ndarray:

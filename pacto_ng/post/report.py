@@ -6,7 +6,9 @@ and for a case as built: ``analysis.json`` (:func:`analysis_json`), ``analysis.c
 
 =============================  ==============================================================
 ``run``                        the run (case, model, load, design used, Δ from summary.json and
-                               rebuilt) or, ``as_built``, the case and its parameters' source
+                               rebuilt, and at the part's order: ``expected_order``,
+                               ``output_displacement_at_order``) or, ``as_built``, the case
+                               and its parameters' source
 ``settings``                   the analysis: model, material preset, E (per region), ν, t,
                                plane, order, formulation, kinds, pressures, the threshold used
                                and its choice, threshold2, maxh, supports, output ports
@@ -52,8 +54,9 @@ DEFINITIONS = {
               "its displacement vector",
     "expected": "the optimised density design (final x, last penalty and beta) re-analysed "
                 "with the optimisation's own model, Darcy load and output spring at inlet "
-                "pressure P (load factor P/load, warm-started along the sweep); for a linear "
-                "model the run's output displacement scaled linearly with P",
+                "pressure P (load factor P/load, warm-started along the sweep), on the run's "
+                "mesh at the part's displacement order (run: expected_order); for a linear "
+                "model its output displacement at the run's load scaled linearly with P",
     "darcy": "the Darcy pressure of the thresholded design (element rho = 1 where at least "
              "half of the element lies inside the thresholded solid, else 0; the run's Darcy "
              "parameters, P_in = the run's load) as the deformation-independent body force "
@@ -214,7 +217,14 @@ def _head(d) -> list[str]:
          f"Run folder `{run['dir']}`; design `{run['design']}` after {run['iterations']} "
          f"iterations (stopped: {run['stopped']}).  Rebuilt output displacement "
          f"Δ = {fmt_value(run['output_displacement_rebuilt'], '.6g')} m "
-         f"(summary.json: {fmt_value(run['output_displacement_summary'], '.6g')} m).", ""]
+         f"(summary.json: {fmt_value(run['output_displacement_summary'], '.6g')} m)"
+         + ("." if run.get("expected_order") is None or
+            run["output_displacement_at_order"] == run["output_displacement_rebuilt"] else
+            f"; at order {run['expected_order']}, the part's, on the same mesh: "
+            f"{fmt_value(run['output_displacement_at_order'], '.6g')} m, the expected Δ "
+            f"below."), ""]
+    if run.get("order_note"):
+        L += [f"**Note**: {run['order_note']}.", ""]
     if run.get("load_path_note"):
         L += [f"**Warning**: {run['load_path_note']}.", ""]
     if run["dim"] == 2:

@@ -10,7 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ..case import build_problem
+from ..geometry import Meshed
+from ..outputs import output_displacement
 from ..params import InputError, Parameters
+from ..physics.equilibrium import NewtonFailure
 from ..threads import compute
 
 
@@ -82,9 +86,6 @@ def export_destination(run: Run, out, fmt: str) -> Path:
 def rebuild(run: Run):
     """The run's problem with its final design analysed at the run's load (as ``run.py`` does
     for summary.json).  Returns the problem; ``problem.values`` hold ρ̄, p and Δ."""
-    from ..case import build_problem
-    from ..physics.equilibrium import NewtonFailure
-
     problem = build_problem(run.case, run.params)
     if run.x.size != problem.field.n * problem.n_design_fields:
         raise InputError(f"the design in '{run.path}' has {run.x.size} values, the rebuilt "
@@ -102,6 +103,29 @@ def rebuild(run: Run):
             raise InputError(f"the final design of '{run.path}' cannot be analysed ({err})") \
                 from None
     return problem
+
+
+def at_order(problem, order: int):
+    """``problem``'s design analysed at displacement order ``order`` on the same elements, with
+    the same penalty, β and load: a second problem of the same case (its chain run forward on
+    ``problem``'s design variables), or ``problem`` itself when it has that order.  The part
+    is analysed at order 2 while runs optimise at order 1, whose elements are stiffer: the
+    design's figure the part is compared with must be of the part's order.  Raises
+    NewtonFailure when the design has no equilibrium at that order."""
+    if int(problem.params.order) == int(order):
+        return problem
+    meshed = Meshed(problem.mesh, float(problem.h), problem.shape)
+    twin = build_problem(problem.case, problem.params.replace(order=int(order)), meshed=meshed)
+    twin.apply_schedule(*problem.schedule_now())
+    with compute():
+        twin.chain.forward(x=problem.values["x"])
+    return twin
+
+
+def design_delta(problem) -> float | None:
+    """The output displacement Δ of the design ``problem`` last analysed (None: no port)."""
+    vals = problem.values
+    return float(vals["delta"]) if "delta" in vals else output_displacement(problem)
 
 
 def domain_of(problem, setup):

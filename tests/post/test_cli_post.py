@@ -107,9 +107,15 @@ def test_expected_is_the_run_rescaled_for_a_linear_design(pa_run, analysed):
     _, data = analysed
     summary = json.loads((pa_run / "summary.json").read_text())
     rows = data["pressures"]
-    # at the run's load the expected Δ is the run's own output displacement
+    # the run's design rebuilt is the run's own output displacement; the expected Δ is that
+    # design at the part's order (2) on the run's order-1 mesh: softer
+    run = data["run"]
+    assert run["output_displacement_rebuilt"] == pytest.approx(
+        summary["output_displacement"], rel=1e-8)
+    assert (run["expected_order"], summary["parameters"]["order"]) == (2, 1)
     assert rows[-1]["pressure"] == summary["load"]
-    assert rows[-1]["expected"] == pytest.approx(summary["output_displacement"], rel=1e-8)
+    assert rows[-1]["expected"] == pytest.approx(run["output_displacement_at_order"], rel=1e-12)
+    assert rows[-1]["expected"] > 1.01 * summary["output_displacement"]
     # linear model: the re-analysis at every pressure is the linear scaling
     ratio = [r["expected"] / r["pressure"] for r in rows]
     np.testing.assert_allclose(ratio, ratio[-1], rtol=1e-8)

@@ -59,7 +59,21 @@ def test_a_solid_member_is_sealed_and_its_part_is_analysed(pneunet, tmp_path, ca
     assert part["analysed"] and part["converged"] and part["kind"] == "fixed"
     # all solid: the part is the whole member, whose area is the domain's less the chamber's
     assert part["measure"] == pytest.approx(0.1 * 0.05 - 0.06 * 0.01, rel=1e-3)
-    assert part["gap"] is not None
+    # the design's Δ the part is compared with: at the part's order 2 on the run's mesh, as
+    # a problem of that order built and meshed on its own gives it
+    case, params = pneunet.case, pneunet.params
+    with compute():
+        second = build_problem(case, params.replace(order=2))
+        second.apply_schedule(*pneunet.schedule_now())
+        second.evaluate(_design(pneunet, False), gradients=False)
+    assert (part["order"], part["design_order"], part["run_order"]) == (2, 2, 1)
+    assert part["output_displacement_design"] == pytest.approx(second.values["delta"],
+                                                               rel=1e-9)
+    assert part["output_displacement_run"] == pytest.approx(pneunet.values["delta"], rel=1e-12)
+    d, e, r = (part[k] for k in ("output_displacement", "output_displacement_design",
+                                 "output_displacement_run"))
+    assert part["gap"] == pytest.approx((d - e) / e) and part["gap_to_run"] == pytest.approx(
+        (d - r) / r)
     assert (tmp_path / "part.stl").stat().st_size > 84 and (tmp_path / "part.png").exists()
     assert json.loads((tmp_path / "summary.json").read_text())["part"]["sealed"] is True
     assert "sealed" in line and "NOT SEALED" not in line

@@ -288,11 +288,15 @@ def test_mm_delta_is_read_from_the_displacement_field(mm_run, mm_analysis):
     assert row["follower"]["delta"] == pytest.approx(delta, rel=1e-9)
     for kind in ("darcy", "fixed", "follower"):
         assert all(r[kind]["converged"] for r in mm_analysis["pressures"])
-    # a linear run's expected Δ scales with the pressure: summary.json's Δ at the run's load
+    # a linear run's expected Δ scales with the pressure: the design's Δ at the run's load
+    # and the part's order (summary.json's at the run's order 1 when rebuilt)
     summary = json.loads((mm_run / "summary.json").read_text())
+    run = mm_analysis["run"]
+    assert run["output_displacement_rebuilt"] == pytest.approx(
+        summary["output_displacement"], rel=1e-8)
     for r in mm_analysis["pressures"]:
         assert r["expected"] == pytest.approx(
-            summary["output_displacement"] * r["pressure"] / params.load, rel=1e-8)
+            run["output_displacement_at_order"] * r["pressure"] / params.load, rel=1e-8)
 
 
 def test_mm_export_writes_the_whole_part(mm_run, mm_analysis):

@@ -95,9 +95,13 @@ def test_delta_is_the_weighted_sum_read_from_the_displacement_field(jaw_run, ana
 def test_small_pressures_are_linear_and_expected_is_the_run_rescaled(jaw_run, analysis):
     summary = json.loads((jaw_run / "summary.json").read_text())
     rows = analysis["pressures"]
+    run = analysis["run"]  # the run's design, and the same at the part's order (2)
+    assert run["output_displacement_rebuilt"] == pytest.approx(
+        summary["output_displacement"], rel=1e-8)
+    assert run["expected_order"] == 2 and summary["parameters"]["order"] == 1
     for row in rows:  # a linear run: its two-port Δ scaled with the pressure
         assert row["expected"] == pytest.approx(
-            summary["output_displacement"] * row["pressure"] / summary["load"], rel=1e-8)
+            run["output_displacement_at_order"] * row["pressure"] / summary["load"], rel=1e-8)
     # the part's analyses with the run's linear law at 1e2 and 1e3 Pa: the deformation-
     # independent ones exactly linear, the follower to within 1 % (Δ is a difference of the
     # two jaws' values, so its nonlinear part is relatively larger than theirs)
