@@ -455,6 +455,15 @@ class Problem:
         for mech in self.mechanics:
             mech.target = load
 
+    def expect_many_designs(self) -> None:
+        """An optimisation follows: every block that assembles per design (mechanics, Darcy
+        pressure; the robust realisations' too) takes the optimisation's route from the
+        process's first design on, so a resumed run repeats the uninterrupted one bit for
+        bit."""
+        for block in self.chain.blocks:
+            if callable(getattr(block, "expect_many_designs", None)):
+                block.expect_many_designs()
+
     @property
     def warm(self) -> list:
         """Where every mechanics block's next forward pass starts (:attr:`mech`, then

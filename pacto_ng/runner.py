@@ -336,9 +336,7 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     problem.load_ramp_choice = ramp_choice
     # an optimisation: every design assembled one way, from the process's first on (a resumed
     # run would otherwise take the single-analysis way for its first design)
-    problem.mech.expect_many_designs()
-    if problem.pressure_block is not None:
-        problem.pressure_block.expect_many_designs()
+    problem.expect_many_designs()
     ckpt = path / "checkpoint.npz"
     resumed = resume and ckpt.exists()
     if resumed:

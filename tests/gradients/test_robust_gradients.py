@@ -1,6 +1,7 @@
 """Finite-difference checks of the robust chains (``--set robust=1`` and ``2``,
 :mod:`pacto_ng.robust`) on a small pa-inverter: every realisation's objective, the worst case
-and every constraint, for the linear and the Neo-Hookean model, fixed and follower Darcy load.
+and every constraint, for the linear, Neo-Hookean and Wang models, fixed and follower Darcy
+load.
 
 The check's design is a random field at β = 2 (not β_max = 32): at β = 32 the eroded design
 (η + Δη = 0.6) of a random field ρ̃ ≈ 0.5 is nearly void everywhere, and the Neo-Hookean
@@ -27,7 +28,7 @@ def _problem(robust, model, load_type):
 
 
 @pytest.mark.parametrize("load_type", ["fixed", "follower"])
-@pytest.mark.parametrize("model", ["linear", "neohookean"])
+@pytest.mark.parametrize("model", ["linear", "neohookean", "wang"])
 @pytest.mark.parametrize("robust", [1, 2])
 def test_robust_chain_gradients(robust, model, load_type):
     problem = _problem(robust, model, load_type)

@@ -132,7 +132,7 @@ def test_neohookean_far_past_the_limit_stops_cleanly(tmp_path, capsys):
     one line, finite outputs.  A very coarse mesh and 5 Newton iterations per step keep the
     failure quick."""
     out = tmp_path / "run"
-    proc = run_cli("run", "--no-part", "pa-inverter", "--maxh", "0.02", "--model", "neohookean",
+    proc = run_cli("run", "--no-part", "pa-inverter", "--maxh", "0.02", "--set", "robust=0", "--model", "neohookean",
                    "--iterations", "2", "--set", "load=1e13", "--set", "newton_max_iter=5",
                    "--out", str(out), "--quiet", capsys=capsys)
     assert proc.returncode == 1, (proc.stdout[-1000:], proc.stderr[-2000:])
@@ -202,7 +202,7 @@ def test_adaptive_load_continuation_goes_on_past_a_newton_failure(iterations, co
     summary.json); after 4 it does not, and the run exits 1 with the last analysed design
     reported at the load it carried.  Every file finite either way."""
     out = tmp_path / "run"
-    args = ["run", "--no-part", "pa-inverter", "--maxh", "0.02", "--model", "neohookean",
+    args = ["run", "--no-part", "pa-inverter", "--maxh", "0.02", "--set", "robust=0", "--model", "neohookean",
             "--iterations", str(iterations), "--set", "load=1e9", "--set", "newton_max_iter=8",
             "--set", "newton_min_increment=0.0625", "--set", "load_ramp=0", "--out", str(out),
             "--quiet"]
@@ -222,7 +222,7 @@ def test_adaptive_load_continuation_is_the_default(tmp_path, capsys):
     """The same 1e9 Pa run without ``load_adapt``: adaptive continuation is on by default
     (1.2), so the run finishes its iterations at the load factors Newton reached; with
     ``load_adapt=0`` it stops at iteration 0 with exit code 1 and the one-line message."""
-    args = ["run", "--no-part", "pa-inverter", "--maxh", "0.02", "--model", "neohookean", "--iterations",
+    args = ["run", "--no-part", "pa-inverter", "--maxh", "0.02", "--set", "robust=0", "--model", "neohookean", "--iterations",
             "2", "--set", "load=1e9", "--set", "newton_max_iter=8",
             "--set", "newton_min_increment=0.0625", "--quiet"]
     out = tmp_path / "default"

@@ -28,7 +28,7 @@ def half_run(tmp_path_factory):
         mp.setenv("PACTO_THREADS", "1")
         rc = main(["run", "pa-inverter", "--load", "1e5", "--maxh", "0.01", "--iterations",
                    "15", "--set", "filter_radius=0.03", "--set", "penal_start=0", "--set",
-                   "move=0.2", "--out", str(out), "--quiet"])
+                   "move=0.2", "--set", "robust=0", "--out", str(out), "--quiet"])
     assert rc == 0
     assert json.loads((out / "summary.json").read_text())["symmetric_half_domain"] is True
     return out
