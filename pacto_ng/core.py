@@ -108,14 +108,6 @@ class Chain:
             return np.zeros_like(np.asarray(self.values[wrt], dtype=float))
         return grads[wrt]
 
-    def dependents(self, name: str) -> set[str]:
-        """Names of all values that depend on ``name``."""
-        dep = {name}
-        for b in self.blocks:
-            if any(n in dep for n in b.inputs):
-                dep.add(b.output)
-        return dep - {name}
-
 
 # ----------------------------------------------------------------------------------------
 # Gradient checks

@@ -125,11 +125,6 @@ def atomic_write_text(path: str | os.PathLike, text: str, encoding: str = "utf-8
     atomic_write_bytes(path, text.encode(encoding))
 
 
-def atomic_write_json(path: str | os.PathLike, data, indent: int = 1) -> None:
-    """``json.dumps(data, indent=indent)`` written atomically."""
-    atomic_write_text(path, json.dumps(data, indent=indent))
-
-
 def check_tail(path: str | os.PathLike, ending: bytes, target: str | os.PathLike) -> None:
     """Raise :class:`WriteError` (naming ``target``, the file ``path`` is written for) unless
     ``path`` ends with ``ending`` (and white space): for writers that do not report a failed

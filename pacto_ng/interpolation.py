@@ -2,9 +2,10 @@
 
 * smoothed Heaviside ``H(ρ; η, β) = (tanh(βη) + tanh(β(ρ-η))) / (tanh(βη) + tanh(β(1-η)))``
   (docs/theory.md §1 projection, §2 flow/drainage, §3 Wang γ);
-* SIMP ``E(ρ) = E0 + ρ^p (E1 - E0)`` (thesis eq. A.23) and the two-material law (thesis eq. 6.1);
-* Darcy flow coefficient ``K(ρ) = Kv - (Kv - Ks) H(ρ; ηk, βk)`` and drainage
-  ``D(ρ) = (ln r / Δs)^2 Ks H(ρ; ηh, βh)`` (thesis eqs 3.2–3.4).
+* SIMP ``E(ρ) = E0 + ρ^p (E1 - E0)`` (thesis eq. A.23) and the two-material law (thesis eq. 6.1).
+
+The Darcy flow coefficient and drainage built on the Heaviside are in
+:mod:`pacto_ng.physics.darcy`.
 """
 from __future__ import annotations
 
@@ -97,13 +98,3 @@ def simp2_cf(rho1, rho2, E0, E1, E2, penal):
     a = power_cf(rho1, penal)
     b = power_cf(rho2, penal)
     return (1.0 - a) * E0 + a * ((1.0 - b) * E1 + b * E2)
-
-
-def flow_coefficient_cf(rho, Kv, Ks, eta_k, beta_k):
-    """Darcy flow coefficient ``K(ρ) = Kv - (Kv - Ks) H(ρ; ηk, βk)`` (thesis eq. 3.2)."""
-    return Kv - (Kv - Ks) * heaviside_cf(rho, eta_k, beta_k)
-
-
-def drainage_cf(rho, Ks, r, delta_s, eta_h, beta_h):
-    """Drainage coefficient ``D(ρ) = (ln r / Δs)^2 Ks H(ρ; ηh, βh)`` (thesis eqs 3.3–3.4)."""
-    return (np.log(r) / delta_s) ** 2 * Ks * heaviside_cf(rho, eta_h, beta_h)

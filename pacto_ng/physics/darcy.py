@@ -352,7 +352,3 @@ class DarcyPressure:
     def field(self) -> Field:
         """The :class:`~pacto_ng.physics.mechanics.Field` through which ``p`` enters Mechanics."""
         return Field(self.output, self.fes)
-
-    def decay_rate(self) -> float:
-        """``|ln r| / Δs``: the exponential decay rate of the pressure in solid (1/m)."""
-        return abs(np.log(self.r)) / self.delta_s

@@ -1,9 +1,9 @@
 """Design-independent loads and springs, written as potential terms ``Π_ext(u)``.
 
 Forces are *totals* in newtons (they are not multiplied by the thickness): a
-:class:`PointLoad` acts at every mesh vertex of a named point region, an :class:`EdgeLoad` is
-spread uniformly over a named boundary (so that a "point" load does not invert the elements
-under it), a :class:`Spring` resists the displacement component along ``direction`` at a named
+:class:`PointLoad` acts at every mesh vertex of a named point region or is spread uniformly
+over a named boundary (so that a "point" load does not invert the elements under it), a
+:class:`Spring` resists the displacement component along ``direction`` at a named
 point (``k/2 (d·u)²``) or, on a named boundary, its mean over that boundary.  The
 Darcy pressure loads live in :mod:`pacto_ng.physics.darcy_load`.
 
@@ -81,9 +81,6 @@ class PointLoad:
         force = _vector(mesh, self.force, "force", self.region)
         meas, w = _measure(mesh, self.region)
         return (scale * w * (force * u)) * meas
-
-
-EdgeLoad = PointLoad
 
 
 @dataclass(frozen=True)

@@ -5,9 +5,16 @@ import json
 from pathlib import Path
 
 import numpy as np
+from matplotlib.collections import LineCollection
+from matplotlib.tri import Triangulation
+from netgen.meshing import NgException
+from netgen.occ import OCCException
 
+from ..case import mesh_for
 from ..files import atomic_path
 from ..params import InputError
+from .domain import symmetry_line
+from .export import figure
 from .report import fmt_value
 from .runs import load_run
 
@@ -59,16 +66,13 @@ def _boundary_segments(vtu):
 def run_symmetry(run):
     """The symmetry line of a run's mesh (:func:`~pacto_ng.post.domain.symmetry_line`), from
     the case's mesh rebuilt; None when it has none or cannot be rebuilt."""
-    from .domain import symmetry_line
-
     try:
-        from ..case import mesh_for
-
-        meshed = mesh_for(run.case, run.params)
-        mesh = meshed.mesh if hasattr(meshed, "mesh") else meshed[0]
-        return symmetry_line(mesh)
-    except Exception:  # noqa: BLE001 - a picture without its mirror image, not an error
+        mesh = mesh_for(run.case, run.params).mesh
+    except (ValueError, NgException, OCCException, RuntimeError):
+        # the case's geometry or mesh refused (InputError), or Netgen / OCC failed: a picture
+        # without its mirror image, not an error
         return None
+    return symmetry_line(mesh)
 
 
 def _mirrored_design(pts, tri, rho, line):
@@ -92,11 +96,6 @@ def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True)
     (thesis Fig. 6.7) and, where ``analysis/analysis.json`` exists, their analysis curves in
     one picture (thesis Figs 6.10/6.12).  A run solved on a symmetric half is drawn whole
     (mirrored about its mesh's straight ``symmetry`` boundary) unless ``mirror`` is False."""
-    from matplotlib.collections import LineCollection
-    from matplotlib.tri import Triangulation
-
-    from .export import _figure
-
     if len(folders) < 1:
         raise InputError("compare: give at least one run folder")
     runs = []
@@ -129,7 +128,7 @@ def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True)
     nrow = -(-n // ncol)
     top_h = nrow * (4.2 * aspect + 0.7)
     bottom_h = 4.6
-    fig = _figure((12.0, top_h + bottom_h))
+    fig = figure((12.0, top_h + bottom_h))
     top, bottom = fig.subfigures(2, 1, height_ratios=[top_h, bottom_h])
     for i, ((run, ana), (pts, tri, rho)) in enumerate(zip(runs, designs)):
         ax = top.add_subplot(nrow, ncol, i + 1)

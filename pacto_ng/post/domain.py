@@ -24,10 +24,6 @@ SYMMETRY = "symmetry"
 
 
 # ---------------------------------------------------------------------------------------
-def face_names(shape) -> list:
-    return [f.name for f in shape.faces]
-
-
 def material_domain(shape, void=()):
     """The region of ``shape`` that can be solid: its faces not named in ``void``, fused.
 

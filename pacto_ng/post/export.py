@@ -51,7 +51,7 @@ def _elements(mesh):
     return nodes, np.count_nonzero(nodes >= 0, axis=1)
 
 
-def _mesh_arrays(mesh):
+def mesh_arrays(mesh):
     """Vertex coordinates (nv, dim) and meshio cell blocks of a 2D or 3D NGSolve mesh (one
     block per element type, in the order of :func:`_block_order`)."""
     pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
@@ -186,7 +186,7 @@ def write_vtu(path, mesh, u=None, *, phi=None, plane: str = "strain", E=None,
     """
     import meshio
 
-    pts, blocks = _mesh_arrays(mesh)
+    pts, blocks = mesh_arrays(mesh)
     pts = np.c_[pts, np.zeros((len(pts), 3 - mesh.dim))]
     pdata, cdata = dict(point_data or {}), {}
     order = _block_order(mesh)
@@ -239,7 +239,7 @@ def material_ids(mesh) -> tuple[np.ndarray, dict]:
 
 
 def _block_order(mesh):
-    """Element indices of each block of :func:`_mesh_arrays` (meshio's cell order)."""
+    """Element indices of each block of :func:`mesh_arrays` (meshio's cell order)."""
     _, counts = _elements(mesh)
     return [np.flatnonzero(counts == n) for n in sorted(set(counts.tolist()))]
 
@@ -300,7 +300,8 @@ def convert(src, dst):
 
 
 # ---------------------------------------------------------------------------------------
-def _figure(figsize):
+def figure(figsize):
+    """A matplotlib figure of ``figsize`` (inches), constrained layout, on an Agg canvas."""
     fig = Figure(figsize=figsize, layout="constrained")
     FigureCanvasAgg(fig)
     return fig
@@ -309,7 +310,7 @@ def _figure(figsize):
 def _framed(lo, hi):
     """A figure and axes sized to the box ``[lo, hi]`` (m), equal aspect, a 3 % margin."""
     aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
-    fig = _figure((7.0, float(np.clip(5.6 * aspect + 1.4, 3.0, 9.0))))
+    fig = figure((7.0, float(np.clip(5.6 * aspect + 1.4, 3.0, 9.0))))
     ax = fig.add_subplot()
     ax.set_aspect("equal")
     pad = 0.03 * (hi - lo).max()
@@ -330,7 +331,7 @@ def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mi
     """
     from ngsolve import BND
 
-    pts, blocks = _mesh_arrays(mesh)
+    pts, blocks = mesh_arrays(mesh)
     uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy()))).reshape(-1, 2)
     tris = [b for t, b in blocks if t == "triangle"]
     for t, b in blocks:
@@ -383,7 +384,7 @@ def plot_sweeps(path, sweeps, *, expected=None, title: str | None = None, dpi: i
     log : bool
         Logarithmic pressure axis, and logarithmic Δ axis when every plotted Δ is positive.
     """
-    fig = _figure((6.5, 4.5))
+    fig = figure((6.5, 4.5))
     ax = fig.add_subplot()
     if expected is not None:
         pe, de = (np.asarray(a, dtype=float) for a in expected)
@@ -418,7 +419,7 @@ def plot_materials(path, mesh, *, title: str | None = None, dpi: int = 150, mirr
     the ``interface`` between the materials in red; mirrored like :func:`plot_deformed`."""
     from ngsolve import BND
 
-    pts, _ = _mesh_arrays(mesh)
+    pts, _ = mesh_arrays(mesh)
     ids, names = material_ids(mesh)
     name_of = {int(v[0]): k for k, v in names.items()}
     polys = [pts[[v.nr - 1 for v in el.vertices]] for el in mesh.ngmesh.Elements2D()]

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..files import atomic_path
-from .export import UNITS, _mesh_arrays, extrude_solid, material_ids, write_binary_stl
+from .export import UNITS, extrude_solid, material_ids, mesh_arrays, write_binary_stl
 
 
 @dataclass
@@ -93,7 +93,7 @@ def part_mesh(mesh, line=None, rtol: float = 1e-9) -> PartMesh:
     """
     from ngsolve import BND
 
-    pts, _ = _mesh_arrays(mesh)
+    pts, _ = mesh_arrays(mesh)
     pts = pts[:, :2].copy()
     elements = [[v.nr - 1 for v in el.vertices] for el in mesh.ngmesh.Elements2D()]
     ids, groups = material_ids(mesh)
