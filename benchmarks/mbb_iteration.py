@@ -24,7 +24,7 @@ def short_optimisation(case_name: str, nelx: int, nely: int, iterations: int):
     iterations (no convergence stop).  Call inside a TaskManager.  Returns (problem, state)."""
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
-    from pacto_ng.runner import initial_design
+    from pacto_ng.initial import initial_design
 
     case = get_case(case_name)
     params = case.defaults.with_overrides({"nelx": str(nelx), "nely": str(nely),

@@ -24,7 +24,7 @@ def measure(model: str, maxh: float, order: int, load: float = 144e3, iterations
 
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
-    from pacto_ng.runner import initial_design
+    from pacto_ng.initial import initial_design
 
     if iterations < 4:
         raise ValueError("need >= 4 iterations (medians over >= 3 iterations after the first)")

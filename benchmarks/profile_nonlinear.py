@@ -70,7 +70,7 @@ def profile(case_name="pa-inverter", model="neohookean", load=1e6, iterations=2,
 
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
-    from pacto_ng.runner import initial_design
+    from pacto_ng.initial import initial_design
 
     case = get_case(case_name)
     total = warmup + iterations
@@ -215,7 +215,7 @@ def _evaluated(overrides_list, threads):
     from pacto_ng.threads import compute
 
     from pacto_ng.case import build_problem, get_case
-    from pacto_ng.runner import initial_design
+    from pacto_ng.initial import initial_design
 
     case = get_case("pa-inverter")
     for label, over in overrides_list:

@@ -31,13 +31,16 @@ def _source_subpackages():
 _source_subpackages()
 
 # -- the public API: what a case file, a script or a notebook uses ------------------------------
-from .params import InputError, Parameters  # noqa: E402
+from .errors import InputError  # noqa: E402
+from .params import Parameters  # noqa: E402
 from .settings import Settings, setting  # noqa: E402
 from .physics.loads import Outputs, PointLoad, Port, Spring  # noqa: E402
 from .physics.mechanics import Supports  # noqa: E402
 from .mesh import Layout, Region, Segment  # noqa: E402
 from .box import Block, Box, Patch  # noqa: E402
-from .case import Case, Pressure, Problem, Setup, domain_size, get_case, load_case_file  # noqa: E402
+from .setup import Pressure, Setup  # noqa: E402
+from .problem import Problem  # noqa: E402
+from .case import Case, domain_size, get_case, load_case_file  # noqa: E402
 from .builders import Builder, Responses, standard_chain  # noqa: E402
 from .responses import StrainEnergy, output_displacement  # noqa: E402
 from .geometry import load_cad, load_mesh, mesh_geometry  # noqa: E402

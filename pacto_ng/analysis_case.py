@@ -7,8 +7,8 @@ import time
 
 import numpy as np
 
+from .errors import InputError
 from .files import atomic_path, atomic_write_text, claim_folder
-from .params import InputError
 
 
 def deformed_png(path, mesh, gfu, title: str):

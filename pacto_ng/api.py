@@ -23,8 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .case import Case, Problem, get_case
-from .params import InputError, Parameters
+from .case import Case, get_case
+from .errors import InputError
+from .params import Parameters
+from .problem import Problem
 
 
 @dataclass

@@ -26,7 +26,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from .case import build_problem
 from .derive import derive_settings
+from .initial import initial_design
+from .parallel import largest as rank_max
+from .parallel import total, union
+from .physics.materials import green_lagrange
 
 STRAIN_THRESHOLD = 0.01
 
@@ -34,8 +39,6 @@ STRAIN_THRESHOLD = 0.01
 def strain_field(mech):
     """The Frobenius norm of the Green–Lagrange strain of ``mech.gfu`` (a CoefficientFunction)."""
     from ngsolve import Grad, InnerProduct, sqrt
-
-    from .physics.materials import green_lagrange
 
     E = green_lagrange(Grad(mech.gfu))
     return sqrt(InnerProduct(E, E))
@@ -47,9 +50,6 @@ def material_strain(mech, q: float = 0.99) -> tuple[float, float]:
     largest strain at a point with ρ̄ >= 0.5 (0 if there is none).  On a distributed mesh
     over every rank's part (:mod:`pacto_ng.parallel`)."""
     from ngsolve import VOL, IfPos, Integrate, Parameter
-
-    from .parallel import largest as rank_max
-    from .parallel import total, union
 
     mesh = mech.mesh
     eps, rho = strain_field(mech), mech.fields[0].gf
@@ -114,8 +114,6 @@ def displacement_ratio(mech) -> float:
     distributed mesh over every rank's part."""
     from ngsolve import VOL
 
-    from .parallel import largest as rank_max
-
     mesh = mech.mesh
     u = np.asarray(mech.gfu(mesh.MapToAllElements(mech.rules, VOL))).reshape(-1, mesh.dim)
     u_max = max(rank_max(mesh, np.linalg.norm(u, axis=1)), 0.0)
@@ -130,9 +128,6 @@ def first_linear_analysis(case, params, comm=None) -> dict:
     """One linear analysis of the initial design at the full load (on the ranks of ``comm``,
     an mpi4py communicator, as the run itself): ``strain`` and ``largest``
     (:func:`material_strain`) and ``displacement_ratio`` (:func:`displacement_ratio`)."""
-    from .case import build_problem
-    from .runner import initial_design
-
     lin = params.replace(model="linear", load_ramp=0, formulation="displacement")
     problem = build_problem(case, lin, comm=comm)
     problem.apply_schedule(*lin.schedule.schedule().values(0))

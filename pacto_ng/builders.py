@@ -23,11 +23,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .params import InputError
+from . import responses as R
+from .core import Chain
+from .design import DesignField, Embed, FixPassive
+from .errors import InputError
+from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
+from .parallel import bounding_box
+from .physics import darcy_load
+from .physics.darcy_leakage import Outflow
+from .physics.energy import make_energy
+from .physics.loads import PointLoad
+from .physics.mechanics import Mechanics
+from .physics.mixed import formulation_for, has_simplices
+from .problem import Problem
 from .settings import Settings, setting
-
-#: the objectives a case's set-up may name; :func:`responses` builds each one's blocks
-OBJECTIVES = ("compliance", "energy", "output", "mechanism", "output_se")
+from .setup import OBJECTIVES, Pressure
 
 
 @dataclass(frozen=True)
@@ -122,7 +132,7 @@ class Model:
 
 class Builder:
     """What a case's chain is built from: the case, its parameters, the meshed geometry
-    (:class:`~pacto_ng.geometry.Meshed`: ``mesh``, ``h``, ``shape``) and the set-up; its
+    (:class:`~pacto_ng.mesh.Meshed`: ``mesh``, ``h``, ``shape``) and the set-up; its
     methods are the builders, called in order by the case's ``chain``."""
 
     def __init__(self, case, params, meshed, setup):
@@ -137,10 +147,6 @@ class Builder:
         """Embed, filter (Helmholtz, cone or none), project and fix the passive elements, for
         one or two design fields (``setup.materials``)."""
         from ngsolve import Parameter
-
-        from .design import DesignField, Embed, FixPassive
-        from .parallel import bounding_box
-        from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
 
         mesh, setup, params = self.mesh, self.setup, self.params
         try:
@@ -181,8 +187,6 @@ class Builder:
     def energy(self, design: DesignChain) -> Model:
         """The energy of ``--model`` (:mod:`pacto_ng.physics.energy`) with SIMP on the
         design's densities."""
-        from .physics.energy import make_energy
-
         return Model(*make_energy(self.params, design.penal, design.names))
 
     def pressure(self, model: Model, design: DesignChain, suffix: str = "") -> PressureLoad:
@@ -190,8 +194,6 @@ class Builder:
         fixed (a body force) or follower (a residual density, docs/theory.md §4); empty for a
         set-up without pressure.  ``suffix`` names its output ``p`` + suffix (several
         realisations of the design in one chain, :mod:`pacto_ng.robust`)."""
-        from .case import Pressure
-
         params, setup, name = self.params, self.setup, self.case.name
         if params.load_type == "follower" and setup.pressure is None:
             raise InputError(f"load_type: case '{name}' has no pressure load to follow the "
@@ -200,8 +202,6 @@ class Builder:
             raise InputError(f"inlet: case '{name}' has no pressure load")
         if setup.pressure is None:
             return PressureLoad()
-        from .physics import darcy_load
-
         h = self.meshed.h
         if params.delta_s < 0.1 * h:
             raise InputError(f"delta_s: {params.delta_s:g} is below a tenth of the element size "
@@ -232,9 +232,6 @@ class Builder:
                   suffix: str = ""):
         """The mechanics block ``(ρ̄, [p]) -> u`` (``u`` + ``suffix``) with the set-up's
         supports, loads and springs."""
-        from .physics.loads import PointLoad
-        from .physics.mechanics import Mechanics
-
         params, setup = self.params, self.setup
         fields = list(design.names) + ([pressure.field] if pressure.field is not None else [])
         loads = tuple(PointLoad(ld.region, tuple(params.load * np.asarray(ld.force)))
@@ -255,8 +252,6 @@ class Builder:
     def formulation(self) -> str:
         """``displacement`` or ``mixed`` (``--set formulation``, :mod:`pacto_ng.physics.mixed`)
         for this model, material, plane, order and mesh."""
-        from .physics.mixed import formulation_for, has_simplices
-
         params, mesh = self.params, self.mesh
         return formulation_for(params.formulation, model=params.model, nu=params.nu,
                                plane=params.plane, dim=mesh.dim, order=params.order,
@@ -272,8 +267,6 @@ class Builder:
         if self.params.leak_max > 0:
             if pressure.block is None:
                 raise InputError(f"leak_max: case '{self.case.name}' has no pressure load")
-            from .physics.darcy_leakage import Outflow
-
             try:
                 outflow = Outflow(pressure.block, output="leak" + suffix)
             except ValueError as err:
@@ -285,8 +278,6 @@ class Builder:
         return resp
 
     def _objective(self, mech, pressure: PressureLoad, suffix: str) -> Responses:
-        from . import responses as R
-
         params, setup = self.params, self.setup
         obj = params.objective or setup.objective
         if obj not in OBJECTIVES:
@@ -298,8 +289,6 @@ class Builder:
                                  "load vector depends on u); use energy, mechanism, output or "
                                  "output_se")
             if pressure.body is not None:
-                from .physics import darcy_load
-
                 return Responses([darcy_load.Compliance(mech, pressure.block,
                                                         output=n["compliance"])], n["compliance"])
             return Responses([R.compliance(mech, output=n["compliance"])], n["compliance"])
@@ -334,8 +323,6 @@ class Builder:
     def volume(self, design: DesignChain) -> Responses:
         """``V(ρ̄)/V* - 1 <= 0`` on the (total) solid, and on the stiff material where
         ``volfrac2`` > 0 (two materials)."""
-        from . import responses as R
-
         blocks, names = [], []
         for i, out in enumerate(design.names):
             vf = self.params.volfrac if i == 0 else self.params.volfrac2
@@ -347,11 +334,8 @@ class Builder:
 
     def problem(self, design: DesignChain, pressure: PressureLoad, mech, response: Responses,
                 volume: Responses):
-        """The :class:`~pacto_ng.case.Problem`: the chain of the blocks in this order, the
+        """The :class:`~pacto_ng.problem.Problem`: the chain of the blocks in this order, the
         response's objective, the volume's and the response's constraints."""
-        from .case import Problem
-        from .core import Chain
-
         chain = Chain(design.blocks + pressure.blocks + [mech] + response.blocks
                       + volume.blocks, inputs=("x",))
         return Problem(self.case, self.params, self.mesh, design.field, chain,

@@ -23,15 +23,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
-
-from .builders import OBJECTIVES, Builder, standard_chain
-from .core import Chain
+from .builders import Builder, standard_chain
 from .derive import MECHANISM_RATIO, derive_settings
-from .geometry import bounding_sides
-from .params import InputError, Parameters
-from .physics.loads import Outputs, PointLoad, Port, Spring
-from .physics.mechanics import Supports
+from .errors import InputError
+from .geometry import (bounding_sides, check_inlet_touches_design, check_setup_names,
+                       check_vectors, mesh_geometry)
+from .parallel import DesignNumbering, distribute
+from .params import Parameters
+from .problem import Problem
+from .robust import robust_chain
+from .setup import Pressure, Setup  # noqa: F401 - Pressure: pacto_ng.case.Pressure for scripts
 
 CASE_MODULES = {
     "mbb": "pacto_ng.cases.mbb",
@@ -54,68 +55,6 @@ CASE_MODULES = {
     "gripper-silicone": "pacto_ng.cases.gripper_silicone",
     "pneunet-silicone": "pacto_ng.cases.pneunet_silicone",
 }
-
-
-@dataclass(frozen=True)
-class Pressure:
-    """Darcy pressure set-up: inlet and zero-pressure boundaries by name."""
-
-    inlet: tuple[str, ...]
-    zero: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class Setup:
-    """What a case puts on its mesh (all region names refer to the layout's names)."""
-
-    supports: Supports
-    loads: tuple[PointLoad, ...] = ()
-    springs: tuple[Spring, ...] = ()
-    #: the output displacement Δ = d·u: a Port, or several (Δ = Σ weight d·u)
-    port: Port | tuple[Port, ...] | None = None
-    solid: tuple[str, ...] = ()  # passive solid materials
-    void: tuple[str, ...] = ()  # passive void materials
-    objective: str = "compliance"
-    pressure: Pressure | None = None
-    materials: int = 1
-    se_max: float = 0.0  # strain-energy limit (J) of objective "output_se" unless --set se_max
-    # typical magnitude of the objective; the run scales it to 10/objective_ref.  0: derived
-    # for a pressure-driven mechanism (Case.derived_objective_ref), else the driver's
-    # 10/|f0(x0)|, which fails for mechanisms whose initial design barely moves the output
-    # (f0(x0) ≈ 0: the scaled objective then grows by 100x and MMA drops the volume
-    # constraint for it)
-    objective_ref: float = 0.0
-
-    def __post_init__(self):
-        if self.objective not in OBJECTIVES:
-            raise InputError(f"objective: must be one of {', '.join(OBJECTIVES)} (got '{self.objective}')")
-        if self.objective in ("output", "mechanism", "output_se") and not self.ports:
-            raise InputError(f"objective '{self.objective}' needs an output port")
-        for name in ("loads", "springs", "solid", "void"):
-            if not isinstance(getattr(self, name), tuple):
-                raise InputError(f"setup: {name} must be a tuple (got "
-                                 f"{type(getattr(self, name)).__name__})")
-        if not isinstance(self.supports, Supports):
-            raise InputError(f"setup: supports must be a Supports (got "
-                             f"{type(self.supports).__name__})")
-
-    @property
-    def ports(self) -> tuple[Port, ...]:
-        """The output ports (none, one or several)."""
-        if self.port is None:
-            return ()
-        return self.port if isinstance(self.port, tuple) else (self.port,)
-
-    @property
-    def output(self):
-        """What the output displacement reads: the port, or :class:`Outputs` of several."""
-        ports = self.ports
-        return ports[0] if len(ports) == 1 else Outputs(ports)
-
-    @property
-    def all_springs(self) -> tuple[Spring, ...]:
-        """The springs, and those the ports carry."""
-        return self.springs + tuple(sp for port in self.ports for sp in port.springs())
 
 
 @dataclass(frozen=True)
@@ -398,172 +337,6 @@ def available_cases() -> list[Case]:
     return out
 
 
-# ------------------------------------------------------------------------------------------
-@dataclass
-class Problem:
-    """A built optimisation problem: mesh, design field, chain and response names."""
-
-    case: Case
-    params: Parameters
-    mesh: object
-    field: object
-    chain: Chain
-    objective: str
-    constraints: list[str]
-    mech: object
-    projections: list
-    penal: object  # ngsolve Parameter
-    setup: Setup
-    h: float
-    reports: list[str] = field(default_factory=list)  # scalar values to log each iteration
-    pressure_block: object = None
-    n_design_fields: int = 1
-    model_choice: dict | None = None  # what --model auto decided, and why
-    load_ramp_choice: dict | None = None  # what load_ramp=-1 decided, and why
-    #: the netgen.occ shape the mesh was made from (None: a mesh file or structured quads)
-    shape: object = None
-    #: a worst-case objective (:mod:`pacto_ng.robust`): the names of the terms whose maximum
-    #: is the objective (the optimiser takes them one by one); empty: the objective itself
-    objective_terms: tuple = ()
-    #: further mechanics blocks of the chain (the robust realisations), under the same load
-    extra_mechanics: list = field(default_factory=list)
-    #: ``f(k, history)`` called at the start of iteration k (the robust formulation's volume
-    #: target), or None
-    before_iteration: Callable | None = None
-    #: on a distributed mesh (:func:`pacto_ng.parallel.distribute`) where the local elements
-    #: sit in the serial order; None on a serial mesh
-    numbering: object = None
-    #: and where its design variables sit in the serial design vector
-    #: (:class:`pacto_ng.parallel.DesignNumbering`); None on a serial mesh
-    design_numbering: object = None
-
-    @property
-    def mechanics(self) -> list:
-        """Every mechanics block: :attr:`mech`, then :attr:`extra_mechanics`."""
-        return [self.mech] + list(self.extra_mechanics)
-
-    # -- schedules ----------------------------------------------------------------------------
-    def schedule_now(self) -> tuple[float, float, float]:
-        """The penalty, β and load factor applied now (:meth:`apply_schedule`'s arguments)."""
-        beta = self.projections[0].beta if self.projections else 1.0
-        return self.penal.Get(), float(beta), float(self.mech.target)
-
-    def apply_schedule(self, penal: float, beta: float, load: float) -> None:
-        self.penal.Set(penal)
-        for pr in self.projections:
-            pr.beta = beta
-        for mech in self.mechanics:
-            mech.target = load
-
-    def expect_many_designs(self) -> None:
-        """An optimisation follows: every block that assembles per design (mechanics, Darcy
-        pressure; the robust realisations' too) takes the optimisation's route from the
-        process's first design on, so a resumed run repeats the uninterrupted one bit for
-        bit."""
-        for block in self.chain.blocks:
-            if callable(getattr(block, "expect_many_designs", None)):
-                block.expect_many_designs()
-
-    @property
-    def warm(self) -> list:
-        """Where every mechanics block's next forward pass starts (:attr:`mech`, then
-        :attr:`extra_mechanics`): their warm states and Newton results, for :meth:`set_warm`."""
-        return [(m.state, m.result) for m in self.mechanics]
-
-    def set_warm(self, warm: list) -> None:
-        """Start the next forward passes from ``warm`` (:attr:`warm` of earlier)."""
-        for m, (state, result) in zip(self.mechanics, warm):
-            m.set_state(state, result=result)
-
-    def start_iteration(self, k: int, history: list) -> None:
-        """What changes with the iteration besides the schedules (:attr:`before_iteration`)."""
-        if self.before_iteration is not None:
-            self.before_iteration(k, history)
-
-    def describe(self) -> list[str]:
-        """The chain as text: one line per block (its kind, what it reads and makes), then the
-        objective, the constraints and the values reported each iteration."""
-        lines = [f"  {type(b).__name__:20s} {', '.join(b.inputs)} -> {b.output}"
-                 for b in self.chain.blocks]
-        lines.append(f"objective: {self.objective}; constraints (<= 0): "
-                     f"{', '.join(self.constraints)}; reported: {', '.join(self.reports) or '-'}")
-        return lines
-
-    # -- evaluation -------------------------------------------------------------------------------
-    @property
-    def n_design(self) -> int:
-        """Design variables per material: of the whole mesh, also on a distributed one."""
-        return self.field.n if self.design_numbering is None else self.design_numbering.n
-
-    def _forward(self, x):
-        """The chain at the design ``x`` (the serial design vector; on a distributed mesh this
-        rank's part of rank 0's)."""
-        if self.design_numbering is not None:
-            x = self.design_numbering.local(x)
-        return self.chain.forward(x=x)
-
-    def _gradient(self, name) -> np.ndarray:
-        g = np.asarray(self.chain.gradient(name))
-        if self.design_numbering is not None:
-            g = self.design_numbering.whole(g, self.n_design_fields)
-        return g
-
-    def evaluate(self, x: np.ndarray, gradients: bool = True):
-        """Return ``f0, fvals`` and, with ``gradients``, ``df0, dfvals`` (shape (m, n))."""
-        vals = self._forward(x)
-        f0 = float(vals[self.objective])
-        f = np.array([vals[c] for c in self.constraints], dtype=float)
-        if not gradients:
-            return f0, f
-        df0 = self._gradient(self.objective)
-        df = np.array([self._gradient(c) for c in self.constraints])
-        return f0, f, df0, df
-
-    def evaluate_terms(self, x: np.ndarray, gradients: bool = True):
-        """Like :meth:`evaluate`, with the objective as its terms: ``F0`` (K values, whose
-        maximum is the objective; K = 1 without :attr:`objective_terms`), ``f`` and, with
-        ``gradients``, ``dF0`` (shape (K, n)) and ``df`` (shape (m, n))."""
-        names = self.objective_terms or (self.objective,)
-        vals = self._forward(x)
-        F0 = np.array([vals[t] for t in names], dtype=float)
-        f = np.array([vals[c] for c in self.constraints], dtype=float)
-        if not gradients:
-            return F0, f
-        dF0 = np.array([self._gradient(t) for t in names])
-        df = np.array([self._gradient(c) for c in self.constraints])
-        return F0, f, dF0, df
-
-    @property
-    def values(self) -> dict:
-        return self.chain.values
-
-    def design_density(self) -> np.ndarray:
-        """The element densities that show the design: ρ̄, or with two materials ρ̄1 (1 + ρ̄2)
-        / 2 (void 0, the soft material 1/2, the stiff material 1)."""
-        vals = self.values
-        if "rho_bar" in vals:
-            return np.asarray(vals["rho_bar"])
-        return np.asarray(vals["rho_bar1"]) * (1 + np.asarray(vals["rho_bar2"])) / 2.0
-
-    def _volume_block(self):
-        return next(b for b in self.chain.blocks if b.output == "volume")
-
-    def volume_fraction(self) -> float:
-        vol = self._volume_block()
-        return vol.fraction(self.values[vol.inputs[0]])
-
-    def greyness(self) -> float:
-        """Sigmund's (2007) measure of non-discreteness of the reported design: 4 ρ̄ (1 - ρ̄)
-        averaged by area over the design domain (ρ̄1, the material-or-void density, with two
-        materials): 0 for a solid-void design, 1 where every element sits at 0.5."""
-        vol = self._volume_block()
-        rho = np.clip(np.asarray(self.values.get("rho_bar", self.values.get("rho_bar1"))),
-                      0.0, 1.0)
-        from .parallel import total
-
-        return total(self.mesh, vol.w @ (4.0 * rho * (1.0 - rho))) / vol.total
-
-
 def domain_size(params: Parameters, width: float, height: float) -> tuple[float, float]:
     """``(width, height)``, or ``(nelx, nely)`` with ``unit_elements`` (1 x 1 elements, the
     set-up of the classic MATLAB codes)."""
@@ -573,11 +346,9 @@ def domain_size(params: Parameters, width: float, height: float) -> tuple[float,
 
 
 def mesh_for(case: Case, params: Parameters):
-    """The case's meshed domain (:class:`~pacto_ng.geometry.Meshed`): Netgen triangles or
+    """The case's meshed domain (:class:`~pacto_ng.mesh.Meshed`): Netgen triangles or
     tetrahedra of size maxh, or structured quads (hexahedra) if nelx > 0 (a Layout; a Box with
     nelz)."""
-    from .geometry import mesh_geometry
-
     # the resources check (pacto_ng.resources) before meshing: a follower load makes the
     # tangent unsymmetric (umfpack), otherwise it is symmetric (sparsecholesky)
     return mesh_geometry(case.make_geometry(params), maxh=params.maxh, nelx=params.nelx,
@@ -593,10 +364,8 @@ def build_problem(case: Case, params: Parameters, comm=None, meshed=None) -> Pro
     several ranks, rank 0 meshes and checks, then the mesh is distributed
     (:func:`pacto_ng.parallel.distribute`) and every rank builds the chain on its part; every
     rank must call this.  ``meshed`` (serial only): the case's domain meshed already
-    (:class:`~pacto_ng.geometry.Meshed`, e.g. a run's, to analyse its design at another
+    (:class:`~pacto_ng.mesh.Meshed`, e.g. a run's, to analyse its design at another
     order on the same elements)."""
-    from .geometry import check_inlet_touches_design, check_setup_names, check_vectors
-
     if case.analysis_only:
         raise InputError(f"case '{case.name}' is an analysis, not an optimisation")
     params = case.resolve(params)
@@ -608,7 +377,7 @@ def build_problem(case: Case, params: Parameters, comm=None, meshed=None) -> Pro
         raise InputError(f"volfrac2: case '{case.name}' has one material (volfrac2 limits the "
                          "stiff material of a two-material case)")
     parallel = comm is not None and comm.size > 1
-    meshed, failure = None, None
+    failure = None
     if not parallel or comm.rank == 0:
         try:
             meshed = meshed or mesh_for(case, params)
@@ -625,8 +394,6 @@ def build_problem(case: Case, params: Parameters, comm=None, meshed=None) -> Pro
         failure = comm.bcast(failure, root=0)
         if failure is not None:
             raise InputError(failure)
-        from .parallel import distribute
-
         meshed, numbering = distribute(meshed, comm)
 
     builder = Builder(case, params, meshed, setup)
@@ -634,14 +401,10 @@ def build_problem(case: Case, params: Parameters, comm=None, meshed=None) -> Pro
         if case.chain is not standard_chain:
             raise InputError(f"robust: case '{case.name}' builds its own chain; the robust "
                              "formulation replaces the standard chain only")
-        from .robust import robust_chain
-
         problem = robust_chain(builder)
     else:
         problem = case.make_problem(builder)
     if numbering is not None:
-        from .parallel import DesignNumbering
-
         problem.numbering = numbering
         problem.design_numbering = DesignNumbering(numbering, problem.field)
     return problem

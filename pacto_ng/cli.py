@@ -30,7 +30,8 @@ import math
 import os
 import sys
 
-from .params import InputError, Parameters
+from .errors import InputError
+from .params import Parameters
 
 
 class _Parser(argparse.ArgumentParser):
@@ -156,9 +157,10 @@ def _post_parsers(sub):
     a.add_argument("--model", help="the part's material law (default: the run's, or the "
                    "case's as built), e.g. neohookean for a linear run")
     a.add_argument("--order", type=int, help="displacement order of the part's analysis "
-                   "(default 2 in 2D, 1 in 3D)")
-    a.add_argument("--maxh", type=float, help="element size of the part (default: half the "
-                   "run's; as built: the case's mesh size)")
+                   "(default: a run's part 2, as the run's own part; as built 2 in 2D, 1 in 3D)")
+    a.add_argument("--maxh", type=float, help="element size of the part (default: the run's own "
+                   "part's, half the run's in 2D, the run's in 3D; as built: the case's mesh "
+                   "size)")
     a.add_argument("--threshold", default="0.5", help="density threshold in (0, 1), or 'volume': "
                    "the threshold at which the part has the design's material volume (2D)")
     a.add_argument("--keep-threshold", action="store_true", help="do not lower the threshold "

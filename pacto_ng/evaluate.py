@@ -10,11 +10,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .case import Case, Problem, build_problem
+from .case import Case, build_problem
+from .errors import InputError
 from .files import RUN_FILES, atomic_write_text, claim_folder
 from .outputs import summary_dict, write_vtu
-from .params import InputError, Parameters
+from .params import Parameters
 from .physics.equilibrium import NewtonFailure
+from .problem import Problem
 from .runner import prepare_output
 
 

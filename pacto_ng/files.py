@@ -33,7 +33,7 @@ import os
 import re
 from pathlib import Path
 
-from .params import InputError
+from .errors import InputError
 
 #: the files a run (``pacto run``, ``pacto evaluate``, an analysis case) writes into its folder
 RUN_FILES = ("params.json", "checkpoint.npz", "summary.json", "history.csv", "design.vtu",

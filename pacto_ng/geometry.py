@@ -20,8 +20,9 @@ The dimension comes from the geometry.  A case's ``geometry(params)`` returns on
 * a **mesh file** (Gmsh ``.msh`` with physical groups as names, or Netgen ``.vol``; 2D or 3D),
   or an ``ngsolve.Mesh``: used as it is (``maxh`` does not apply).
 
-:func:`mesh_geometry` turns any of these into a :class:`Meshed` domain; the case's set-up then
-refers to the names, and :func:`check_setup_names` says which name is missing and which exist.
+:func:`mesh_geometry` turns any of these into a :class:`~pacto_ng.mesh.Meshed` domain; the
+case's set-up then refers to the names, and :func:`check_setup_names` says which name is missing
+and which exist.
 """
 from __future__ import annotations
 
@@ -33,8 +34,8 @@ import numpy as np
 
 from . import resources, resources3d
 from .box import Box, box_shape, netgen_box_mesh, structured_box
-from .mesh import Layout, layout_shape, netgen_mesh, structured_mesh
-from .params import InputError
+from .errors import InputError
+from .mesh import Layout, Meshed, layout_shape, netgen_mesh, structured_mesh
 from .settings import Settings, setting
 
 CAD_SUFFIXES = (".step", ".stp", ".brep", ".iges", ".igs")
@@ -67,20 +68,6 @@ class MeshSettings(Settings):
             raise InputError("nelz: needs nelx and nely (a structured hexahedral mesh)")
         if self.unit_elements and self.nelx == 0:
             raise InputError("unit_elements: needs a structured mesh (give --nelx and --nely)")
-
-
-@dataclass
-class Meshed:
-    """A meshed domain: the ``ngsolve.Mesh``, its element size ``h``, and the netgen.occ
-    ``shape`` it was meshed from (``None`` for a mesh file or a structured grid)."""
-
-    mesh: object
-    h: float
-    shape: object = None
-
-    @property
-    def dim(self) -> int:
-        return self.mesh.dim
 
 
 def load_cad(path: str | os.PathLike):
@@ -225,9 +212,9 @@ def derived_maxh(geometry, filter_radius: float = 0.0) -> tuple[float, str] | No
 
 def element_size(geometry, *, maxh: float, nelx: int = 0, nely: int = 0,
                  nelz: int = 0) -> float | None:
-    """The element size ``h`` that :func:`mesh_geometry` will give (:attr:`Meshed.h`) with
-    these mesh options, before meshing; None for a mesh or a mesh file (its mean element size
-    is known once it is read)."""
+    """The element size ``h`` that :func:`mesh_geometry` will give
+    (:attr:`~pacto_ng.mesh.Meshed.h`) with these mesh options, before meshing; None for a mesh
+    or a mesh file (its mean element size is known once it is read)."""
     if isinstance(geometry, Box) and nelx > 0 and nelz > 0:
         return float(min(geometry.size / np.array((nelx, nely, nelz))))
     if isinstance(geometry, Layout) and nelx > 0:

@@ -11,6 +11,9 @@ names in both:
 * boundaries: the segment names, ``free`` for the rest of the outer boundary, and for a
   rectangle with ``boundary=NAME`` (a cavity) its edges inside the domain get that name;
 * points (co-dimension 2): the port names.
+
+Every geometry, a Layout or another (:func:`pacto_ng.geometry.mesh_geometry`), is meshed into a
+:class:`Meshed` domain: the mesh, its element size and the shape it was made from.
 """
 from __future__ import annotations
 
@@ -20,6 +23,20 @@ from dataclasses import dataclass
 import numpy as np
 
 _TOL = 1e-9
+
+
+@dataclass
+class Meshed:
+    """A meshed domain: the ``ngsolve.Mesh``, its element size ``h``, and the netgen.occ
+    ``shape`` it was meshed from (``None`` for a mesh file or a structured grid)."""
+
+    mesh: object
+    h: float
+    shape: object = None
+
+    @property
+    def dim(self) -> int:
+        return self.mesh.dim
 
 
 @dataclass(frozen=True)

@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .case import Problem
 from .files import atomic_path, atomic_write_text, check_tail
+from .problem import Problem
 
 #: the columns of history.csv (one row per iteration), then the case's reported responses
 HISTORY_COLUMNS = ("iteration", "objective", "volume", "constraint", "change", "penal", "beta",

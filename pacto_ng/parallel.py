@@ -19,6 +19,9 @@ import os
 
 import numpy as np
 
+from .errors import InputError
+from .mesh import Meshed
+
 
 def world():
     """mpi4py's ``COMM_WORLD`` when this process is one of several ranks started by
@@ -29,8 +32,6 @@ def world():
     try:
         from mpi4py import MPI
     except ImportError:
-        from .params import InputError
-
         raise InputError(f"started by mpirun with {size} ranks, but mpi4py is not installed: "
                          "python3 -m pip install '.[mpi]' (README, \"MPI\")") from None
     return MPI.COMM_WORLD
@@ -152,13 +153,11 @@ class Numbering:
 
 
 def distribute(meshed, comm):
-    """A meshed domain (:class:`~pacto_ng.geometry.Meshed`) distributed over ``comm``
+    """A meshed domain (:class:`~pacto_ng.mesh.Meshed`) distributed over ``comm``
     (mpi4py): rank 0 passes the serial one, the others ``None``; each rank gets its part
     (rank 0 none: netgen's convention) and the :class:`Numbering` of its elements."""
     import ngsolve
     from netgen.meshing import Mesh as NGMesh
-
-    from .geometry import Meshed
 
     points = cells = None
     if comm.rank == 0:

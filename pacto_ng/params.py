@@ -45,35 +45,25 @@ from __future__ import annotations
 import math
 from dataclasses import fields
 
+from .builders import DesignSettings, ObjectiveSettings
+from .errors import InputError
+from .geometry import MeshSettings
+from .optimize.driver import OptimizerSettings
+from .optimize.schedules import ScheduleSettings
+from .physics.darcy import DarcySettings
+from .physics.energy import MaterialSettings
+from .physics.loads import LoadSettings
+from .physics.mixed import FormulationSettings
+from .physics.newton import NewtonParameters
+from .robust import RobustSettings
 
-class InputError(ValueError):
-    """Bad user input: the CLI prints the one-line message and exits with code 2."""
-
-
-_PARTS = None
-
-
-def parts() -> tuple:
-    """``(part name, Settings class)`` of every part of the configuration but the case's."""
-    global _PARTS
-    if _PARTS is None:
-        from .builders import DesignSettings, ObjectiveSettings
-        from .geometry import MeshSettings
-        from .optimize.driver import OptimizerSettings
-        from .optimize.schedules import ScheduleSettings
-        from .physics.darcy import DarcySettings
-        from .physics.energy import MaterialSettings
-        from .physics.loads import LoadSettings
-        from .physics.mixed import FormulationSettings
-        from .physics.newton import NewtonParameters
-        from .robust import RobustSettings
-
-        _PARTS = (("mesh", MeshSettings), ("mechanics", MaterialSettings),
-                  ("design", DesignSettings), ("schedule", ScheduleSettings),
-                  ("loads", LoadSettings), ("darcy", DarcySettings),
-                  ("responses", ObjectiveSettings), ("newton", NewtonParameters), ("elements", FormulationSettings),
-                  ("optimization", OptimizerSettings), ("robustness", RobustSettings))
-    return _PARTS
+#: ``(part name, Settings class)`` of every part of the configuration but the case's
+PARTS = (("mesh", MeshSettings), ("mechanics", MaterialSettings),
+         ("design", DesignSettings), ("schedule", ScheduleSettings),
+         ("loads", LoadSettings), ("darcy", DarcySettings),
+         ("responses", ObjectiveSettings), ("newton", NewtonParameters),
+         ("elements", FormulationSettings),
+         ("optimization", OptimizerSettings), ("robustness", RobustSettings))
 
 
 def _convert(name: str, text: str, default):
@@ -112,7 +102,7 @@ class Parameters:
 
     def __init__(self, options=None, **values):
         index = {}
-        for part, cls in parts():
+        for part, cls in PARTS:
             for f in fields(cls):
                 index[f.name] = part
         if options is not None:
@@ -125,7 +115,7 @@ class Parameters:
         if unknown:
             raise InputError(f"{unknown[0]}: unknown parameter (see --show-parameters)")
         built = {}
-        for part, cls in parts():
+        for part, cls in PARTS:
             built[part] = cls(**{k: v for k, v in values.items() if index[k] == part})
         if options is not None:
             import dataclasses
@@ -201,7 +191,7 @@ class Parameters:
     @classmethod
     def names(cls) -> list[str]:
         """The flat names of the toolkit's parameters (without any case's options)."""
-        return [f.name for _, part in parts() for f in fields(part)]
+        return [f.name for _, part in PARTS for f in fields(part)]
 
     def to_dict(self) -> dict:
         """Every parameter by flat name (params.json, summary.json)."""

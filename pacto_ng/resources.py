@@ -78,7 +78,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .params import InputError
+from .errors import InputError
 
 # the displacement system's memory fit (see the module docstring): (a, b, quad, per order)
 _FIT = {"sparsecholesky": (447.2, 1.0735, 1.168, 1.1697),

@@ -29,7 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .params import InputError
+from .builders import DesignChain, Responses
+from .design import FixPassive
+from .errors import InputError
+from .filters import HeavisideProjection
 from .responses import Volume
 from .settings import Settings, setting
 
@@ -119,10 +122,6 @@ def robust_chain(b):
     """The chain of ``--set robust=1`` or ``2`` for a case whose chain is the standard one:
     the realisations of the design, each with its pressure, mechanics and responses, their
     worst case as the objective (module docstring)."""
-    from .builders import DesignChain, Responses
-    from .design import FixPassive
-    from .filters import HeavisideProjection
-
     params, mode = b.params, b.params.robust
     if b.setup.materials != 1:
         raise InputError(f"robust: case '{b.case.name}' has two design fields; the robust "

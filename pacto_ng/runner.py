@@ -23,13 +23,20 @@ from pathlib import Path
 
 import numpy as np
 
-from .case import Case, Problem, build_problem, read_run_params
+from .auto import choose
+from .case import Case, build_problem, read_run_params
+from .errors import InputError
 from .files import WriteError, atomic_path, atomic_write_text, claim_folder, folder_outputs
-from .optimize.driver import LoopResult, LoopState, optimize
-from .params import InputError, Parameters
+from .initial import initial_design
+from .optimize.driver import LoopResult, LoopState, best_iterate, optimize
+from .parallel import leads, world
+from .parallel_outputs import write_distributed_outputs
+from .params import Parameters
 from .physics.energy import WHEN_NEWTON_FAILS
 from .physics.equilibrium import NewtonFailure, WarmState
 from .outputs import write_outputs
+from .problem import Problem
+from .threads import compute
 
 
 def missing_folders(out: str | os.PathLike) -> list[Path]:
@@ -63,36 +70,6 @@ def prepare_output(out: str | os.PathLike) -> Path:
     except OSError as err:
         raise InputError(f"--out: output folder '{path}' is not writable ({err.strerror})") from None
     return path
-
-
-def initial_design(problem: Problem) -> np.ndarray:
-    p = problem.params
-    if p.init_design:
-        return design_of_run(p.init_design, problem)
-    x0 = p.seed_density if p.seed_density > 0 else p.volfrac
-    x = np.full(problem.n_design, x0)
-    if problem.n_design_fields == 2:
-        x = np.concatenate([x, np.full(problem.n_design, 0.5)])
-    return x
-
-
-def design_of_run(folder: str | os.PathLike, problem: Problem) -> np.ndarray:
-    """The design variables x of a run folder's checkpoint, for a run on the same mesh."""
-    ckpt = Path(folder) / "checkpoint.npz"
-    try:
-        with np.load(ckpt, allow_pickle=False) as data:
-            x = np.asarray(data["x"], dtype=float)
-    except FileNotFoundError:
-        raise InputError(f"init_design: no checkpoint.npz in '{folder}'") from None
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as err:
-        raise InputError(f"init_design: cannot read '{ckpt}' ({err})") from None
-    n = problem.n_design * problem.n_design_fields
-    if x.shape != (n,):
-        raise InputError(f"init_design: '{ckpt}' holds {x.size} design variables, this run has {n} "
-                         "(another case or mesh)")
-    if not np.all(np.isfinite(x)):
-        raise InputError(f"init_design: '{ckpt}' holds non-finite design variables")
-    return np.clip(x, 0.0, 1.0)
 
 
 def _progress(row: dict, total: int) -> str:
@@ -244,8 +221,6 @@ def optimise_case(case: Case, params: Parameters, out: str | os.PathLike, *,
                   quiet: bool = False, resume: bool = False, overwrite: bool = False) -> Finished:
     """:func:`run_case`, returning the :class:`Finished` run.  Runs inside NGSolve's task
     manager (:func:`pacto_ng.threads.compute`)."""
-    from .threads import compute
-
     with compute():
         return _run_case(case, params, out, quiet=quiet, resume=resume, overwrite=overwrite)
 
@@ -263,8 +238,6 @@ class _Progress:
 def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: bool = False,
               resume: bool = False, overwrite: bool = False,
               model_choice: dict | None = None, ramp_choice: dict | None = None) -> Finished:
-    from .parallel import leads
-
     if not leads():  # another rank of an MPI run: rank 0 owns the folder
         return _optimise(case, params, Path(out), _Progress(Path(out), params.iterations),
                          quiet=True, resume=resume, model_choice=model_choice,
@@ -314,9 +287,6 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
         except (ValueError, KeyError, TypeError):
             pass
     if params.model == "auto" or params.load_ramp < 0:
-        from .auto import choose
-        from .parallel import leads, world
-
         warnings = []
         params, model_choice, ramp_choice = choose(case, params, comm=world(),
                                                    warnings=warnings)
@@ -328,8 +298,6 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
         if not quiet and ramp_choice is not None and ramp_choice["chosen"] > 0:
             print(f"load ramp -> {ramp_choice['chosen']} iterations: {ramp_choice['reason']}")
     params = case.resolve(params)  # order 0: the case's order for the (chosen) model
-    from .parallel import leads, world
-
     lead = leads()
     problem = build_problem(case, params, comm=world())
     problem.model_choice = model_choice
@@ -403,8 +371,6 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
             except NewtonFailure:
                 pass
     if not failed:
-        from .optimize.driver import best_iterate
-
         result.best = best_iterate(state.history, params.schedule.schedule(),
                                    float(problem.values[problem.objective]))
         if result.best is not None:
@@ -417,8 +383,6 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
     if problem.numbering is None:
         summary = write_outputs(path, problem, final_x, state.history, result, wall)
     else:
-        from .parallel_outputs import write_distributed_outputs
-
         summary = write_distributed_outputs(path, problem, final_x, state.history, result,
                                             wall, write=lead)
     if lead and (not quiet or failed):
@@ -448,8 +412,6 @@ def resume_run(out: str | os.PathLike, *, quiet: bool = False,
         if iterations < params.iterations:
             raise InputError(f"iterations: {iterations} is below the run's cap {params.iterations}")
         params = params.replace(iterations=iterations)
-    from .threads import compute
-
     with compute():
         return _run_case(case, params, path, quiet=quiet, resume=True,
                          model_choice=info.get("model_choice"),

@@ -15,7 +15,7 @@ import math
 import numbers
 from dataclasses import dataclass, field, fields
 
-from .params import InputError
+from .errors import InputError
 
 
 def setting(default, unit: str = "", help: str = "", *, range: str | None = None,  # noqa: A002

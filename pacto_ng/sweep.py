@@ -26,8 +26,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import InputError
 from .files import atomic_path, atomic_write_text
-from .params import InputError, Parameters
+from .params import Parameters
 
 COLUMNS = ("model", "load", "objective", "output_displacement", "load_reached", "converged",
            "iterations", "wall_time_s", "folder", "stopped")

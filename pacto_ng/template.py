@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .errors import InputError
 from .files import atomic_write_text
-from .params import InputError
 
 TEMPLATE = '''"""{name}: a soft finger with a round chamber that bends down under pressure.
 

@@ -16,6 +16,8 @@ import math
 import os
 from pathlib import Path
 
+from .errors import InputError
+
 
 def core_count() -> int:
     """The cores this process may run on: its CPU affinity (``taskset``, a container's or a
@@ -57,8 +59,6 @@ def _cgroup_cpu_quota() -> float | None:
 def thread_count() -> int:
     """NGSolve's thread count: ``PACTO_THREADS`` if set (1 to :func:`core_count`), else
     :func:`core_count`.  A bad value raises an InputError naming PACTO_THREADS."""
-    from .params import InputError
-
     env = os.environ.get("PACTO_THREADS", "").strip()
     cores = core_count()
     if not env:

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..params import InputError
+from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
 from ..settings import Settings, setting
 from .mma import Optimizer

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..params import InputError
+from ..errors import InputError
 from ..settings import Settings, setting
 
 #: objective changes a β stage must hold below ``beta_settle`` to end early (the driver's

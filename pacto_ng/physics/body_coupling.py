@@ -11,7 +11,7 @@ Which field a body is linear in is declared (the body's ``linear_in`` attribute,
 :class:`~pacto_ng.physics.mechanics.Mechanics`' default: the one non-element-wise field the
 declared energy does not read).  :meth:`BodyCoupling.build` verifies it on two random states of
 all fields (the body's LinearForm against ``B p`` to 1e-12) and raises
-:class:`~pacto_ng.physics.energy.DeclarationError` when it is wrong (NGSolve assembles ``B`` of a
+:class:`~pacto_ng.physics.traits.DeclarationError` when it is wrong (NGSolve assembles ``B`` of a
 body that is not linear in ``q`` without complaint, so the check is what catches it).
 """
 from __future__ import annotations
@@ -19,8 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..parallel import everywhere, largest
-from .energy import DeclarationError
 from .linear_system import fields_restored, random_fields
+from .traits import DeclarationError
 
 
 class BodyCoupling:

@@ -38,8 +38,8 @@ import numpy as np
 
 from dataclasses import dataclass
 
+from ..errors import InputError
 from ..interpolation import heaviside_deriv_np, heaviside_np
-from ..params import InputError
 from ..settings import Settings, setting
 from .mechanics import Field
 from .quadrature import integration_rules

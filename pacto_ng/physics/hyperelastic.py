@@ -61,6 +61,8 @@ from dataclasses import dataclass
 from math import fsum
 from typing import Callable
 
+from .gradient import dimension
+
 #: the rubber laws of this module (``--model``)
 LAWS = ("mooney_rivlin", "yeoh", "ogden")
 
@@ -90,8 +92,6 @@ def invariants(G, plane: str = "strain"):
     ``ValueError`` for plane stress (not implemented for the split energies) and for an
     unknown ``plane`` or a gradient that is not 2x2 or 3x3."""
     from ngsolve import Det, Id, InnerProduct, Trace
-
-    from .materials import dimension
 
     d = dimension(G, plane)
     if plane == "stress":

@@ -1,5 +1,5 @@
 """The linear system of a linear, conservative mechanics block whose energy declares itself
-quadratic (:class:`~pacto_ng.physics.energy.EnergyTraits`): ``R(u) = K u - s f``.
+quadratic (:class:`~pacto_ng.physics.traits.EnergyTraits`): ``R(u) = K u - s f``.
 
 ``K`` is the Hessian of the potential, assembled as a symbolic bilinear form instead of by
 ``AssembleLinearization`` of the ``Variation`` form (second-order automatic differentiation at
@@ -19,7 +19,7 @@ declared numpy modulus.
 The declarations are verified once at construction, on random values of every field at the
 block's quadrature points (``C`` at two different ``G``, ``∂φ/∂G = C G``, ``φ = ½ G:C:G``,
 ``C`` against its element-wise constant projection; the modulus against the CF): a wrong one
-raises :class:`~pacto_ng.physics.energy.DeclarationError`.  Equal to the ``Variation``
+raises :class:`~pacto_ng.physics.traits.DeclarationError`.  Equal to the ``Variation``
 tangent, residual and sensitivities to round-off (tests/physics/test_linear_fast.py).
 """
 from __future__ import annotations
@@ -29,7 +29,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from ..parallel import free_norm
-from .energy import DeclarationError
+from .traits import DeclarationError
 
 
 @contextmanager

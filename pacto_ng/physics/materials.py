@@ -31,27 +31,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-PLANES = ("strain", "stress")
-
-
-def dimension(G, plane: str = "strain") -> int:
-    """The dimension ``d`` of the gradient ``G`` (d x d), after checking that ``plane`` applies
-    to it: ``"strain"`` or ``"stress"`` in 2D, only ``"strain"`` (no meaning, the default) in
-    3D; ``ValueError`` otherwise."""
-    if plane not in PLANES:
-        raise ValueError(f"plane must be 'strain' or 'stress' (got '{plane}')")
-    d = int(G.dims[0])
-    if d not in (2, 3):
-        raise ValueError(f"the displacement gradient must be 2x2 or 3x3 (got {d}x{d})")
-    if d == 3 and plane == "stress":
-        raise ValueError("plane=stress applies to 2D meshes only: a 3D mesh is the solid itself "
-                         "(use plane=strain, the default, which 3D ignores)")
-    return d
+from .gradient import dimension
+from .hyperelastic import LAWS, Law
+from .presets import DEFAULT_SHAPES
 
 
 def lame(E, nu, plane: str = "strain"):
     """Lamé constants (μ, λ); ``plane="stress"`` returns the reduced λ* (2D only: the energies
-    check the dimension, :func:`dimension`)."""
+    check the dimension, :func:`~pacto_ng.physics.gradient.dimension`)."""
     mu = E / (2.0 * (1.0 + nu))
     lam = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
     if plane == "stress":
@@ -225,7 +212,7 @@ class Material:
       ``E``; the plane-stress stretch of the Neo-Hookean model does not depend on it).
 
     :func:`~pacto_ng.physics.energy.make_energy` turns these into the energy's
-    :class:`~pacto_ng.physics.energy.EnergyTraits`."""
+    :class:`~pacto_ng.physics.traits.EnergyTraits`."""
 
     name: str
     energy: object
@@ -248,9 +235,6 @@ MATERIALS = {
 def _rubber_laws():
     """Mooney–Rivlin, Yeoh and Ogden (physics/hyperelastic.py), each with its default shape
     (the isochoric Neo-Hookean; a preset, physics/presets.py, gives a published one)."""
-    from .hyperelastic import LAWS, Law
-    from .presets import DEFAULT_SHAPES
-
     return {name: Material(name, Law(name, DEFAULT_SHAPES[name]), needs_positive_J=True,
                            linear=False, stress_free=True, proportional_to_E=True)
             for name in LAWS}

@@ -20,7 +20,7 @@ from ``AssembleLinearization`` and is unsymmetric in general; the adjoint then s
 ``Kᵀ λ = ∂J/∂u``.
 
 The assembly is chosen from what the energy *declares*
-(:class:`~pacto_ng.physics.energy.EnergyTraits`, its ``traits`` attribute; an energy that
+(:class:`~pacto_ng.physics.traits.EnergyTraits`, its ``traits`` attribute; an energy that
 declares nothing gets the general route above), never from probes:
 
 * a quadratic energy (``φ = ½ G:C:G``, C per element) in a linear, conservative block: ``K``
@@ -34,7 +34,7 @@ declares nothing gets the general route above), never from probes:
 * a stress-free energy with a body load: the load norm from the load vectors.
 
 The declarations that a fast route relies on are verified once when the block is built and a
-wrong one raises :class:`~pacto_ng.physics.energy.DeclarationError`.  :attr:`Mechanics.assembly`
+wrong one raises :class:`~pacto_ng.physics.traits.DeclarationError`.  :attr:`Mechanics.assembly`
 says which routes are in use.  The same quadrature rule is pinned in the residual, tangent and
 sensitivity forms (see docs: a mismatch gives 1e-2 adjoint errors at order 2).
 
@@ -53,11 +53,11 @@ import numpy as np
 from ..parallel import total
 from .adjoint import Adjoint
 from .body_coupling import BodyCoupling
-from .energy import EnergyTraits, traits_of
 from .equilibrium import Equilibrium
 from .linear_system import LinearSystem
 from .newton import NewtonSettings
 from .quadrature import integration_rules
+from .traits import EnergyTraits, traits_of
 
 _UNDECLARED = object()  # a body without the attribute linear_in
 
@@ -108,9 +108,9 @@ class Mechanics(Equilibrium, Adjoint):
     energy : callable ``(G, coeffs) -> CF``
         Strain-energy density per unit volume; ``G = ∇u`` and ``coeffs`` maps every field name
         to its GridFunction.  Its ``traits`` attribute
-        (:class:`~pacto_ng.physics.energy.EnergyTraits`, e.g. from
+        (:class:`~pacto_ng.physics.traits.EnergyTraits`, e.g. from
         :func:`~pacto_ng.physics.energy.make_energy` or
-        :func:`~pacto_ng.physics.energy.declare`) chooses the fast routes; without it the
+        :func:`~pacto_ng.physics.traits.declare`) chooses the fast routes; without it the
         general route is used.
     fields : sequence of str or Field
         The block inputs (element-wise densities by default; a :class:`Field` with a space for
@@ -123,11 +123,11 @@ class Mechanics(Equilibrium, Adjoint):
         :class:`~pacto_ng.physics.body_coupling.BodyCoupling`); without the attribute that
         field is the one field on its own space (not element-wise) that the energy declares it
         does not read, if there is exactly one.  Verified when the block is built
-        (:class:`~pacto_ng.physics.energy.DeclarationError`); ``linear_in = None`` takes the
+        (:class:`~pacto_ng.physics.traits.DeclarationError`); ``linear_in = None`` takes the
         general route.
     guard : callable ``(G, coeffs) -> CF`` or None
         A CF that must stay positive (``det F``), or None: at the points the energy declares
-        (:attr:`~pacto_ng.physics.energy.EnergyTraits.guard_points`: the quadrature points,
+        (:attr:`~pacto_ng.physics.traits.EnergyTraits.guard_points`: the quadrature points,
         or also every element's vertices, edge midpoints and centroid; :attr:`guard_points`).
     linear : bool
         The whole residual (residual density and terms included) is linear in u (one Newton
@@ -332,13 +332,13 @@ class Mechanics(Equilibrium, Adjoint):
 
     @property
     def energy_traits(self) -> EnergyTraits:
-        """What the energy declares (:class:`~pacto_ng.physics.energy.EnergyTraits`)."""
+        """What the energy declares (:class:`~pacto_ng.physics.traits.EnergyTraits`)."""
         return self._traits
 
     @property
     def guard_points(self) -> str | None:
         """Where the guard is checked: ``"quadrature"`` or ``"element"`` (declared by the
-        energy, :class:`~pacto_ng.physics.energy.EnergyTraits`), None without a guard."""
+        energy, :class:`~pacto_ng.physics.traits.EnergyTraits`), None without a guard."""
         return None if self._guard is None else self._traits.guard_points
 
     @property

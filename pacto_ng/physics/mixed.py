@@ -43,7 +43,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..params import InputError
+from ..errors import InputError
 from ..settings import Settings, setting
 
 FORMULATIONS = ("auto", "displacement", "mixed")

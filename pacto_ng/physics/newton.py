@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from ..params import InputError
+from ..errors import InputError
 from ..parallel import free_norm
 from ..settings import Settings, setting
 from .solvers import DIRECT_MAX_DOFS_3D, SOLVERS

@@ -32,7 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from math import fsum
 
-from .hyperelastic import LAWS
+from .hyperelastic import LAWS, Law
 
 #: the Poisson ratio of a preset unless it states its own.  Silicones are nearly incompressible
 #: (ν ≈ 0.49-0.4999), but the displacement formulation locks as ν -> 0.5: docs/benchmarks.md,
@@ -154,8 +154,6 @@ def law_for(model: str, material: str):
     """The :class:`~pacto_ng.physics.hyperelastic.Law` a model uses: a rubber ``model``'s own
     law, or for ``wang`` the hyperelastic law it wraps (None: its default Neo-Hookean), with the
     preset's shape if ``material`` names one, else :data:`DEFAULT_SHAPES`."""
-    from .hyperelastic import Law
-
     if material:
         if model not in LAWS + ("wang",):
             return None

@@ -38,15 +38,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from .materials import (PLANES, dimension, first_piola_kirchhoff, linear_energy,
-                        neohookean_energy, svk_energy)
+from ..interpolation import heaviside_cf, power_cf
+from .gradient import PLANES, dimension
+from .hyperelastic import LAWS, Law
+from .materials import first_piola_kirchhoff, linear_energy, neohookean_energy, svk_energy
+from .presets import DEFAULT_SHAPES
+from .traits import EnergyTraits
+
 
 def _rubber():
     """Mooney–Rivlin, Yeoh and Ogden with their default shapes (the isochoric Neo-Hookean;
     :class:`~pacto_ng.physics.hyperelastic.Law` instances carry a preset's), all needing J > 0."""
-    from .hyperelastic import LAWS, Law
-    from .presets import DEFAULT_SHAPES
-
     return {name: (Law(name, DEFAULT_SHAPES[name]), True) for name in LAWS}
 
 
@@ -62,8 +64,6 @@ def wang_gamma_cf(rho, penal=3.0, beta: float = 100.0, eta: float = 0.001):
     Parameters.  ``H(0) = 0`` and ``H(1) = 1`` to round-off (1e-16).  ``ρ^p`` is
     :func:`~pacto_ng.interpolation.power_cf` (a plain ``ρ**p`` makes the residual NaN at ρ = 0).
     """
-    from ..interpolation import heaviside_cf, power_cf
-
     return heaviside_cf(power_cf(rho, penal), eta, beta)
 
 
@@ -171,14 +171,10 @@ class WangModel:
 
     @property
     def traits(self):
-        """The energy's declaration (:class:`~pacto_ng.physics.energy.EnergyTraits`): the fields
+        """The energy's declaration (:class:`~pacto_ng.physics.traits.EnergyTraits`): the fields
         it reads; stress-free at ``G = 0`` for a named ``φ_H`` (``∂φ_W/∂G = γ P_H(0) - γ σ_L(0)
         + σ_L(0) = 0``); not quadratic (the general route); its guard holds at the quadrature
         points, the only points where ``φ_H(γG)`` is evaluated."""
-        from .energy import EnergyTraits
-
-        from .hyperelastic import Law
-
         # every named φ_H and every rubber Law is stress-free at G = 0 (P_H(0) = 0)
         named = isinstance(self.hyper, (str, Law))
         return EnergyTraits(reads=self.reads, stress_free=named, guard_points="quadrature")

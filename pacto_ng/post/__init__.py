@@ -15,7 +15,8 @@ from .export import (convert, deformation_fields, extrude_solid, plot_deformed, 
 from .grid import mesh_to_pyvista, nodal_density
 from .part import Part, make_part
 from .part_analysis import PartAnalysis, Sweep, SweepPoint, outward_normal, pressure_body_force
-from .remesh import Remeshed, pressure_sampler, remesh
+from .remesh import Remeshed, remesh
+from .sampler import pressure_sampler
 from .threshold import Component, Loop, Thresholded, threshold
 from .traced import build_geometry
 

@@ -49,8 +49,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..files import atomic_write_text
-from ..params import InputError, Parameters
+from ..params import Parameters
 from ..physics.equilibrium import NewtonFailure
 from ..threads import compute
 from .cli_commands import check_threshold
@@ -60,7 +61,7 @@ from .materials import STIFF
 from .part import Part, make_part, part_ports, present_supports
 from .part_analysis import PartAnalysis, pressure_body_force
 from .part_resources import TIME_LIMIT, check_resources, part_estimate
-from .part_stage import write_part_stl
+from .part_stage import PART_MAXH, PART_ORDER, write_part_stl
 from .plots3d import deformed_picture
 from .post3d import solid_elements
 from .report import (analysis_csv, analysis_json, jsonable, materials_entry, part_entry,
@@ -69,7 +70,8 @@ from .runs import at_order, copy_gridfunction, design_delta, load_run, rebuild, 
 
 #: the kinds of a run's part (``darcy`` needs the run's Darcy field), in this order
 KINDS = ("darcy", "fixed", "follower")
-#: the part's displacement order when ``--order`` is not given, by dimension
+#: a case's part as built: its displacement order when ``--order`` is not given, by dimension
+#: (a run's part: the order and element size of the run's own part, :mod:`.part_stage`)
 DEFAULT_ORDER = {2: 2, 3: 1}
 
 
@@ -149,10 +151,17 @@ def expected_sweep(problem, pressures, load, **design) -> list[dict]:
     """Δ of the density design (``x=`` design variables, or ``rho_bar=`` physical densities)
     with the optimisation's own model at every pressure (load factor P/load; Newton with load
     stepping, warm-started along the sweep; after a failure the larger pressures are not
-    attempted).  Leaves the problem at the last pressure."""
+    attempted).  A linear model's Δ is linear in P (the Darcy pressure is linear in P_in):
+    one analysis at the run's load, scaled.  Leaves the problem at the last pressure."""
     mech = problem.mech
     warm = mech.state
     mech.set_state(replace(warm, u=np.zeros_like(warm.u), converged=False))
+    if mech.linear:
+        with compute():
+            mech.target = 1.0
+            delta = float(problem.chain.forward(**design)["delta"])
+        return [dict(pressure=P, delta=delta * P / load, newton_iterations=1, converged=True)
+                for P in pressures]
     rows, failed = [], False
     with compute():
         for P in pressures:
@@ -193,7 +202,8 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
                 kinds=KINDS, quiet: bool = False, connect: bool = True, threshold2=0.5,
                 model: str | None = None, time_limit: float = TIME_LIMIT) -> int:
     """``pacto analyse DIR``: the part of a finished run analysed (the module docstring).
-    ``order`` default :data:`DEFAULT_ORDER` of the run's dimension; ``model`` the part's
+    ``order`` and ``maxh`` default those of the run's own part (:mod:`.part_stage`: order 2,
+    half the design's element size in 2D, the design's in 3D); ``model`` the part's
     analysis model (default the run's); ``connect`` lower the threshold until the part
     reaches every output (``--keep-threshold``: False).  Returns the exit code (0)."""
     t0 = time.perf_counter()
@@ -217,8 +227,8 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
     with compute():
         problem = rebuild(run)
     dim = problem.mesh.dim
-    params = analysis_params(run.params, model, order or DEFAULT_ORDER[dim])
-    maxh = 0.5 * problem.h if maxh is None else float(maxh)
+    params = analysis_params(run.params, model, order or PART_ORDER[dim])
+    maxh = PART_MAXH[dim] * problem.h if maxh is None else float(maxh)
     est = part_estimate(problem, maxh, params.order, kinds)
     seconds = check_resources(est, f"--maxh = {maxh:g}", dim=dim, kinds=kinds,
                               n_pressures=len(pressures), model=params.model,

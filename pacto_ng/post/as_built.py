@@ -35,8 +35,8 @@ import numpy as np
 
 from .. import resources
 from ..case import mesh_for
+from ..errors import InputError
 from ..geometry import check_setup_names
-from ..params import InputError
 from ..threads import compute
 from .analyse import (DEFAULT_ORDER, Subject, analysis_params, check_kinds,
                       default_pressures, finish)

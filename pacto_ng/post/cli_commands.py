@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
+from ..errors import InputError
 from ..files import atomic_path
-from ..params import InputError
 from .domain import symmetry_line
 from .export import UNITS
 from .materials import material_areas

@@ -11,8 +11,8 @@ from netgen.meshing import NgException
 from netgen.occ import OCCException
 
 from ..case import mesh_for
+from ..errors import InputError
 from ..files import atomic_path
-from ..params import InputError
 from .domain import symmetry_line
 from .export import figure
 from .report import fmt_value

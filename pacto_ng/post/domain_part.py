@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .boundary import FREE, outer_boundary
+from .domain import BoundaryCurves, material_domain
 from .threshold import Loop, Thresholded
 from .traced import clean, loop_edges, spline
 
@@ -194,8 +195,6 @@ def build_domain_geometry(components, h, domain, *, curves=None, margin=None,
     """
     from netgen import occ
 
-    from .domain import BoundaryCurves
-
     spacing = 0.6 * h if min_spacing is None else float(min_spacing)
     tol = 0.1 * h if spline_tol is None else float(spline_tol)
     curves = BoundaryCurves(domain, 0.1 * h) if curves is None else curves
@@ -239,8 +238,6 @@ def domain_shape(th: Thresholded, kept, domain, min_spacing, spline_tol):
     """:func:`build_domain_geometry` of the kept pieces on ``domain`` without the excluded
     faces; the margin is ``0.25 h``, or three times the largest distance between the source
     mesh's boundary polyline and the domain's edges if that is more (at most ``2 h``)."""
-    from .domain import BoundaryCurves, material_domain
-
     faces = {f.name for f in domain.faces}
     missing = sorted(set(th.excluded) - faces)
     if missing:

@@ -24,6 +24,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .domain import BoundaryCurves, material_domain
+from .domain_part import build_domain_geometry
+from .grid import nodal_density
+from .sampler import pressure_sampler
+from .threshold import threshold
+from .traced import build_geometry
+
 SOFT, STIFF, INTERFACE = "soft", "stiff", "interface"
 MATERIALS = (SOFT, STIFF)
 #: pieces of one material smaller than this times h², or thinner on average (2 area /
@@ -46,9 +53,6 @@ class StiffRegion:
 def stiff_region(mesh, rho2, value: float = 0.5, *, exclude=()) -> StiffRegion:
     """Threshold the stiff-material field ρ̄2 at ``value`` (the rule of the module docstring);
     specks smaller than 4 h² are dropped as for ρ̄1."""
-    from .grid import nodal_density
-    from .threshold import threshold
-
     if not (0.0 < float(value) < 1.0):
         raise ValueError(f"threshold2 must lie in (0, 1), got {value!r}")
     nodal = np.asarray(nodal_density(mesh, rho2), dtype=float)
@@ -66,9 +70,6 @@ def _stiff_shape(stiff: StiffRegion, domain=None):
 
     th = stiff.thresholded
     if domain is not None:
-        from .domain import BoundaryCurves, material_domain
-        from .domain_part import build_domain_geometry
-
         dom = material_domain(domain, th.excluded)
         curves = BoundaryCurves(dom, 0.05 * th.h)
         bb = dom.bounding_box
@@ -77,8 +78,6 @@ def _stiff_shape(stiff: StiffRegion, domain=None):
         box = box.Move(occ.Vec(bb[0][0] - pad, bb[0][1] - pad, 0.0))
         shape = build_domain_geometry(th.components, th.h, box, curves=curves)
     else:
-        from .traced import build_geometry
-
         shape = build_geometry(th.components, th.h)
     shape.edges.name = INTERFACE
     return shape
@@ -130,8 +129,6 @@ def split_part(part, stiff: StiffRegion, domain=None):
 def assign_elementwise(ngm, stiff: StiffRegion, source) -> None:
     """Give every element of the Netgen mesh ``ngm`` (one material) the material of the nodal
     ρ̄2 interpolated at its centroid: ``stiff`` where >= the threshold, else ``soft``."""
-    from .remesh import pressure_sampler
-
     ngm.SetMaterial(1, SOFT)
     if stiff.thresholded is None:
         return

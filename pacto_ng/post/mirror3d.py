@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..params import InputError
+from ..errors import InputError
 
 #: a point within this fraction of the mesh's diameter of a plane lies on it
 PLANE_RTOL = 1e-9

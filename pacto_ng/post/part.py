@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..params import InputError
+from ..errors import InputError
 from ..physics.loads import Port
 from ..physics.mechanics import Supports
 from .materials import material_areas

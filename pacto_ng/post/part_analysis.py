@@ -79,7 +79,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..params import InputError
+from ..errors import InputError
 from ..physics.energy import make_energy
 from ..physics.equilibrium import NewtonFailure
 from ..physics.loads import Port, Spring

@@ -12,7 +12,7 @@ seconds of one (:func:`newton_seconds`).
 from __future__ import annotations
 
 from .. import resources, resources3d
-from ..params import InputError
+from ..errors import InputError
 from .runs import design_density
 
 #: an analysis estimated to take longer than this (seconds) is refused (``--time-limit``)

@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..files import atomic_write_text
-from ..params import InputError
 from ..physics.equilibrium import NewtonFailure
 from .domain import symmetry_line
 from .export import plot_deformed
@@ -244,8 +244,11 @@ def last_line(summary: dict, path) -> str:
                              f"{part['run_order']} analysis: {part['output_displacement_run']:.4g}"
                              f" m)")
                 if abs(part["gap"]) > GAP_LIMIT:
-                    text += (" — not as designed: --set robust=1 designs hinges the part keeps "
-                             "(docs/guide.md, 'The part')")
+                    robust = (summary.get("parameters") or {}).get("robust")
+                    text += (" — not as designed: " + (
+                        f"'pacto analyse {path}' tells where the gap comes from" if robust
+                        else "--set robust=1 designs hinges the part keeps")
+                        + " (docs/guide.md, 'The part')")
             bits.append(text)
     bits += part.get("warnings", [])
     return f"{head}: " + "; ".join(bits) + f" — {path}/part.stl"

@@ -25,9 +25,9 @@ import json
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..errors import InputError
 from ..files import atomic_path
 from ..outputs import strain_stress_measures, tensor_components
-from ..params import InputError
 from ..threads import compute
 from .export import UNITS
 from .grid import cell_volumes

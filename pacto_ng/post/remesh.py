@@ -34,6 +34,7 @@ import numpy as np
 from .boundary import BoundaryLocator, named_points, outer_boundary
 from .domain_part import domain_shape
 from .materials import INTERFACE, assign_elementwise, split_part
+from .sampler import pressure_sampler
 from .threshold import Thresholded
 from .traced import build_geometry
 
@@ -135,42 +136,6 @@ def _generate_part(part, maxh: float, threshold: float, stiff, domain, source):
 
 
 # ---------------------------------------------------------------------------------------
-def pressure_sampler(pressure, source):
-    """A function ``(xy) -> p`` for points ``xy`` (n, 2); zero outside the source mesh.
-
-    ``pressure`` may be an NGSolve CoefficientFunction or GridFunction on ``source``, a numpy
-    array of nodal values (one per source vertex, the vertex order of ``source``), or a
-    Python callable ``f(x, y)`` on arrays.
-    """
-    import ngsolve
-
-    if isinstance(pressure, np.ndarray):
-        vals = np.asarray(pressure, dtype=float).ravel()
-        if vals.shape[0] != source.nv:
-            raise ValueError(f"nodal pressure has {vals.shape[0]} values but the mesh has "
-                             f"{source.nv} vertices")
-        gf = ngsolve.GridFunction(ngsolve.H1(source, order=1))
-        gf.vec.FV().NumPy()[:source.nv] = vals
-        pressure = gf
-    if isinstance(pressure, ngsolve.CoefficientFunction):
-        cf = pressure
-
-        def sample(xy):
-            xy = np.atleast_2d(np.asarray(xy, dtype=float))
-            mips = source(xy[:, 0].copy(), xy[:, 1].copy())
-            out = np.zeros(len(xy))
-            inside = mips["nr"] >= 0
-            if inside.any():
-                out[inside] = np.asarray(cf(mips[inside])).ravel()
-            return out
-
-        return sample
-    if callable(pressure):
-        return lambda xy: np.asarray(pressure(np.atleast_2d(xy)[:, 0], np.atleast_2d(xy)[:, 1]),
-                                     dtype=float) * np.ones(len(np.atleast_2d(xy)))
-    raise TypeError("pressure must be a CoefficientFunction, GridFunction, nodal array or callable")
-
-
 def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
            p_in: float | None = None, wet_fraction: float = 0.5, wet_boundaries=("inlet",),
            probe: float | None = None, min_spacing: float | None = None,
@@ -187,8 +152,8 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
         Boundary names of the source that support the structure.  Pieces touching none of them
         are dropped; empty: keep every piece.
     pressure : CoefficientFunction, GridFunction, ndarray or callable, optional
-        The pressure field on the source mesh (see :func:`pressure_sampler`); None: only the
-        ``wet_boundaries`` are wetted.
+        The pressure field on the source mesh (see :func:`~.sampler.pressure_sampler`); None: only
+        the ``wet_boundaries`` are wetted.
     p_in : float, optional
         Inlet pressure of the wetting rule; default the largest nodal pressure.
     wet_fraction : float

@@ -11,9 +11,10 @@ from pathlib import Path
 import numpy as np
 
 from ..case import build_problem
-from ..geometry import Meshed
+from ..errors import InputError
+from ..mesh import Meshed
 from ..outputs import output_displacement
-from ..params import InputError, Parameters
+from ..params import Parameters
 from ..physics.equilibrium import NewtonFailure
 from ..threads import compute
 
@@ -110,12 +111,16 @@ def at_order(problem, order: int):
     the same penalty, β and load: a second problem of the same case (its chain run forward on
     ``problem``'s design variables), or ``problem`` itself when it has that order.  The part
     is analysed at order 2 while runs optimise at order 1, whose elements are stiffer: the
-    design's figure the part is compared with must be of the part's order.  Raises
-    NewtonFailure when the design has no equilibrium at that order."""
+    design's figure the part is compared with must be of the part's order.  A robust run's
+    second problem is of the standard chain: its design is the robust run's intermediate
+    (blueprint) design, the one its Δ and its part are of, analysed once instead of with its
+    eroded and dilated realisations.  Raises NewtonFailure when the design has no equilibrium
+    at that order."""
     if int(problem.params.order) == int(order):
         return problem
     meshed = Meshed(problem.mesh, float(problem.h), problem.shape)
-    twin = build_problem(problem.case, problem.params.replace(order=int(order)), meshed=meshed)
+    twin = build_problem(problem.case, problem.params.replace(order=int(order), robust=0),
+                         meshed=meshed)
     twin.apply_schedule(*problem.schedule_now())
     with compute():
         twin.chain.forward(x=problem.values["x"])

@@ -70,7 +70,8 @@ def test_follower_chain_gradient(kind, model):
 
 # -- the same through the case machinery (load_type=follower) ----------------------------------
 def _case(objective="mechanism", pressure=True):
-    from pacto_ng.case import Case, Pressure, Setup
+    from pacto_ng.case import Case
+    from pacto_ng.setup import Pressure, Setup
     from pacto_ng.params import Parameters
 
     defaults = Parameters(model="neohookean", nelx=20, nely=10, E1=3e8, E0=3e3, nu=0.4,

@@ -11,10 +11,10 @@ import pytest
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.physics.darcy import DarcyPressure
 from pacto_ng.physics.darcy_load import darcy_body, darcy_follower
-from pacto_ng.physics.energy import DeclarationError, declare
 from pacto_ng.physics.loads import Spring
 from pacto_ng.physics.materials import linear_energy, neohookean_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
+from pacto_ng.physics.traits import DeclarationError, declare
 from pacto_ng.responses import StrainEnergy
 from tests.small_cases import small_pa_mesh
 

@@ -12,10 +12,11 @@ import pytest
 
 from pacto_ng.mesh import Layout, Segment, structured_mesh
 from pacto_ng.params import Parameters
-from pacto_ng.physics.energy import EnergyTraits, declare, make_energy
+from pacto_ng.physics.energy import make_energy
 from pacto_ng.physics.materials import jacobian, neohookean_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.physics.quadrature import guard_rules
+from pacto_ng.physics.traits import EnergyTraits, declare
 
 pytestmark = pytest.mark.usefixtures("one_thread")
 

@@ -64,7 +64,8 @@ def test_a_solid_wall_lets_almost_nothing_through():
 
 # -- the gradient through the chain (the small pa-inverter of test_follower_gradients) ---------
 def _case():
-    from pacto_ng.case import Case, Pressure, Setup
+    from pacto_ng.case import Case
+    from pacto_ng.setup import Pressure, Setup
     from pacto_ng.params import Parameters
     from pacto_ng.physics.loads import Port, Spring
     from pacto_ng.physics.mechanics import Supports

@@ -6,11 +6,12 @@ import scipy.sparse as sp
 
 from pacto_ng.interpolation import simp_cf
 from pacto_ng.physics.darcy import DarcyPressure
-from pacto_ng.physics.energy import DeclarationError, declare, make_energy
+from pacto_ng.physics.energy import make_energy
 from pacto_ng.physics.loads import PointLoad, Spring
 from pacto_ng.physics.materials import linear_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.physics.scatter import ElementMatrices, element_colours
+from pacto_ng.physics.traits import DeclarationError, declare
 from tests.small_cases import small_pa_mesh
 
 

@@ -235,7 +235,7 @@ def test_optimisation_history_with_constant_gamma_equals_the_limit_model(gamma, 
     Neo-Hookean, to 1e-10 relative."""
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.optimize.driver import LoopState, optimize
-    from pacto_ng.runner import initial_design
+    from pacto_ng.initial import initial_design
 
     case = get_case("cantilever")
     hist = {}

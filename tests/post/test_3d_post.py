@@ -84,7 +84,9 @@ def test_analyse_darcy_fixed_and_follower(run3d):
     for name in ("analysis.json", "analysis.csv", "analysis.png", "deformed.png", "report.md",
                  "part.stl", "remeshed.vtu", "deformed.vtu"):
         assert (out / name).stat().st_size > 0, name
-    assert data["settings"]["order"] == 1 and data["settings"]["model"] == "linear"
+    # the run's own part's order and element size (2; the design's in 3D)
+    assert data["settings"]["order"] == 2 and data["settings"]["model"] == "linear"
+    assert data["settings"]["maxh"] == pytest.approx(data["run"]["mesh_h"])
     areas = data["part"]["boundaries"]
     # the chamber's walls (the inlet) are wetted; clamp, tip and symmetry carried over
     for name in ("pressure", "fixed", "tip", "symmetry_z"):

@@ -68,8 +68,11 @@ def test_2d_and_3d_write_the_same_layout(edge_run, run3d):
         for section in ("## The part", "## The seal", "## The analyses", "## The gap",
                         "## Warnings", "## Pictures"):
             assert section in md, (out, section)
-    # the default order: 2 in 2D, 1 in 3D; the run's own model
-    assert d2["settings"]["order"] == 2 and d3["settings"]["order"] == 1
+    # the default order and element size: the run's own part's (order 2; half the design's
+    # element size in 2D, the design's in 3D); the run's own model
+    assert d2["settings"]["order"] == 2 and d3["settings"]["order"] == 2
+    assert d2["settings"]["maxh"] == pytest.approx(0.5 * d2["run"]["mesh_h"])
+    assert d3["settings"]["maxh"] == pytest.approx(d3["run"]["mesh_h"])
     assert d2["settings"]["model"] == d3["settings"]["model"] == "linear"
     assert d2["settings"]["kinds"] == ["darcy", "fixed", "follower"]
 

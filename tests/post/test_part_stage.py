@@ -141,3 +141,41 @@ def test_a_linear_part_that_moves_far_is_told_its_figures_do_not_hold():
     assert beyond_linear(mesh, 0.1) == []
     (line,) = beyond_linear(mesh, 0.3)
     assert "15% of its size (2 m)" in line and "--model neohookean" in line
+
+
+@pytest.mark.parametrize("robust", [1, 2])
+def test_a_robust_design_at_the_part_s_order_is_its_intermediate_design(robust):
+    """The design's Δ at the part's order of a robust run (one analysis of the standard chain)
+    is the Δ of the robust chain itself built at that order (its intermediate design's)."""
+    from pacto_ng.post.runs import at_order, design_delta
+
+    case = get_case("pa-inverter")
+    params = case.resolve(case.defaults.replace(nelx=24, nely=12, robust=robust))
+    with compute():
+        run = build_problem(case, params)
+        x = np.random.default_rng(0).uniform(0.2, 0.9, run.field.n)
+        run.apply_schedule(3.0, 8.0, 1.0)
+        run.chain.forward(x=x)
+        second = build_problem(case, params.replace(order=2))
+        second.apply_schedule(3.0, 8.0, 1.0)
+        second.chain.forward(x=x)
+        twin = at_order(run, 2)
+    assert second.objective == "worst_case" and twin.objective == "objective"
+    assert design_delta(twin) == pytest.approx(second.values["delta"], rel=1e-10)
+    assert abs(design_delta(twin) / run.values["delta"] - 1) > 1e-3  # order 2 is not order 1
+
+
+@pytest.mark.parametrize("robust", [0, 1])
+def test_a_part_off_its_design_is_told_what_to_change(robust):
+    """The last line of a part 50 % off its design: the robust formulation, unless the run
+    had it already (then where the gap comes from)."""
+    from pacto_ng.post.part_stage import last_line
+
+    part = {"made": True, "sealed": True, "analysed": True, "converged": True, "kind": "fixed",
+            "load": 1e5, "output_displacement": 1.5e-3, "output_displacement_design": 1e-3,
+            "gap": 0.5, "order": 2, "run_order": 2, "warnings": []}
+    line = last_line({"part": part, "load_unit": "Pa", "parameters": {"robust": robust}},
+                     "RUN")
+    assert "(+50.0 %) — not as designed" in line
+    assert ("--set robust=1" in line) is (robust == 0)
+    assert ("'pacto analyse RUN'" in line) is (robust == 1)

@@ -14,7 +14,8 @@ L, H = 0.02, 0.01
 def _channel_case():
     """A channel L x H: inlet on the left edge, zero pressure on the right one, clamped below;
     no passive region, so a void density makes the whole channel open."""
-    from pacto_ng.case import Case, Pressure, Setup
+    from pacto_ng.case import Case
+    from pacto_ng.setup import Pressure, Setup
     from pacto_ng.mesh import Layout, Segment
     from pacto_ng.params import Parameters
     from pacto_ng.physics.mechanics import Supports

@@ -82,7 +82,7 @@ def test_each_row_counts_the_tangent_solves_of_its_iteration(monkeypatch):
     iteration before and the end of its own, counted at the solver."""
     from pacto_ng.case import build_problem, get_case
     from pacto_ng.physics.equilibrium import Equilibrium
-    from pacto_ng.runner import initial_design
+    from pacto_ng.initial import initial_design
 
     solves = [0]
     solve = Equilibrium.solve_tangent
