@@ -43,7 +43,8 @@ from .problem import Problem  # noqa: E402
 from .case import Case, domain_size, get_case, load_case_file  # noqa: E402
 from .builders import Builder, Responses, standard_chain  # noqa: E402
 from .responses import StrainEnergy, output_displacement  # noqa: E402
-from .geometry import load_cad, load_mesh, mesh_geometry  # noqa: E402
+from .geometry import load_cad, load_mesh  # noqa: E402
+from .meshing import mesh_geometry  # noqa: E402
 from .api import Result, check_gradients, load_result, run  # noqa: E402
 
 

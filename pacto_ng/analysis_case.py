@@ -7,8 +7,11 @@ import time
 
 import numpy as np
 
+from . import resources
 from .errors import InputError
 from .files import atomic_path, atomic_write_text, claim_folder
+from .runner import prepare_output
+from .studies import c_beam_limit
 
 
 def deformed_png(path, mesh, gfu, title: str):
@@ -43,8 +46,6 @@ def deformed_png(path, mesh, gfu, title: str):
 def run_analysis_case(case, params, out, *, quiet: bool = False, overwrite: bool = False) -> int:
     """The C-beam's load-factor sweep: summary.json and deformed.png in ``out`` (a folder
     holding earlier results is refused unless ``overwrite``)."""
-    from .runner import prepare_output
-
     if case.name != "c-beam":
         raise InputError(f"case '{case.name}' has no analysis driver")
     if params.model not in ("linear", "gnl", "neohookean", "wang"):
@@ -65,8 +66,6 @@ def _mesh_of(params) -> tuple[str, float]:
 def _check_resources(case, params) -> None:
     """The C-beam's mesh and analysis checked as a run's (:mod:`pacto_ng.resources`: memory
     and meshing time), one line and no mesh started when they do not fit."""
-    from . import resources
-
     kind, h = _mesh_of(params)
     solver = "sparsecholesky"  # a symmetric tangent (no follower load)
     if kind == "quad":
@@ -83,8 +82,6 @@ def _check_resources(case, params) -> None:
 
 
 def _c_beam(case, params, path, quiet: bool) -> int:
-    from .studies import c_beam_limit
-
     t0 = time.perf_counter()
     mesh_kind, h = _mesh_of(params)
     # the case's own loads: f1 downward at the top arm's end, f2 rightward at the bottom's

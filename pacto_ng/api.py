@@ -25,8 +25,11 @@ import numpy as np
 
 from .case import Case, get_case
 from .errors import InputError
+from .gradcheck import check_case
 from .params import Parameters
 from .problem import Problem
+from .runner import optimise_case
+from .threads import compute
 
 
 @dataclass
@@ -142,8 +145,8 @@ def run(case: Case | str | os.PathLike, out: str | os.PathLike | None = None, *,
     >>> result = run("my_case.py", out="output/mine", iterations=10)   # doctest: +SKIP
     >>> result.objective, result.summary["volume_fraction"]             # doctest: +SKIP
     """
+    # the post package loads matplotlib and pyvista at its import (0.5 s on ``import pacto_ng``)
     from .post.part_stage import finish_run
-    from .runner import optimise_case
 
     if not isinstance(case, Case):
         case = get_case(os.fspath(case))
@@ -168,8 +171,6 @@ def check_gradients(case: Case | str | os.PathLike, *, seed: int = 0, quiet: boo
     --------
     >>> check_gradients("my_case.py") < 1e-5                              # doctest: +SKIP
     """
-    from .gradcheck import check_case
-
     if not isinstance(case, Case):
         case = get_case(os.fspath(case))
     params = case_parameters(case, settings)
@@ -198,8 +199,7 @@ def load_result(folder: str | os.PathLike, *, case: Case | None = None,
     InputError
         The folder holds no finished run, or its case (file) is not found.
     """
-    from .post.runs import load_run, rebuild
-    from .threads import compute
+    from .post.runs import load_run, rebuild  # the post package: see run()
 
     folder = Path(folder)
     run_ = load_run(folder, "load_result", case=case)

@@ -26,13 +26,14 @@ from typing import Callable
 from .builders import Builder, standard_chain
 from .derive import MECHANISM_RATIO, derive_settings
 from .errors import InputError
-from .geometry import (bounding_sides, check_inlet_touches_design, check_setup_names,
-                       check_vectors, mesh_geometry)
+from .geometry import bounding_sides
+from .meshing import mesh_geometry
 from .parallel import DesignNumbering, distribute
 from .params import Parameters
 from .problem import Problem
 from .robust import robust_chain
 from .setup import Pressure, Setup  # noqa: F401 - Pressure: pacto_ng.case.Pressure for scripts
+from .setup_names import check_inlet_touches_design, check_setup_names, check_vectors
 
 CASE_MODULES = {
     "mbb": "pacto_ng.cases.mbb",

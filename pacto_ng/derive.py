@@ -9,7 +9,8 @@ params.json is never derived.
 """
 from __future__ import annotations
 
-from .geometry import bounding_sides, derived_maxh, element_size
+from .geometry import bounding_sides
+from .meshing import derived_maxh, element_size
 from .params import Parameters
 
 
@@ -45,7 +46,7 @@ def derive_settings(case, params: Parameters) -> Parameters:
     derived from the case, each recorded with how (:attr:`Parameters.derived`):
 
     - ``maxh`` (Netgen elements, ``nelx`` = 0) from the geometry's size, and from a given
-      filter radius (:func:`~pacto_ng.geometry.derived_maxh`);
+      filter radius (:func:`~pacto_ng.meshing.derived_maxh`);
     - ``filter_radius``: :data:`FILTER_ELEMENTS` element sizes, and where ``maxh`` is derived
       too at least :data:`FILTER_SHARE` of the domain's smallest side;
     - a case that gives none of the penalty (or of the projection) schedule's settings:

@@ -15,6 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .interpolation import heaviside_deriv_np, heaviside_np
+from .physics.solvers import LinearSolver
 
 
 class HelmholtzFilter:
@@ -27,8 +28,6 @@ class HelmholtzFilter:
     def __init__(self, mesh, radius: float, inputs=("rho",), output="rho_tilde",
                  solver: str = "auto"):
         from ngsolve import H1, L2, BilinearForm, GridFunction, Integrate, grad, dx
-
-        from .physics.solvers import LinearSolver
 
         if radius <= 0:
             raise ValueError("filter radius must be positive")

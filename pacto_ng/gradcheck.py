@@ -12,6 +12,7 @@ import numpy as np
 
 from .case import build_problem
 from .core import check_gradient
+from .geometry import extent
 
 
 #: the projection's β of a robust chain's check (:func:`check_case`)
@@ -22,8 +23,6 @@ def coarse_params(case, params, explicit_mesh: bool):
     """A coarse mesh for the check unless the user gave one; tight Newton tolerance."""
     changes = {"newton_rtol": min(params.newton_rtol or 1e-12, 1e-12)}
     if not explicit_mesh:
-        from .geometry import extent
-
         size = extent(case.make_geometry(params))
         if params.nelx > 0:
             nx = min(params.nelx, 24)

@@ -12,7 +12,7 @@ names in both:
   rectangle with ``boundary=NAME`` (a cavity) its edges inside the domain get that name;
 * points (co-dimension 2): the port names.
 
-Every geometry, a Layout or another (:func:`pacto_ng.geometry.mesh_geometry`), is meshed into a
+Every geometry, a Layout or another (:func:`pacto_ng.meshing.mesh_geometry`), is meshed into a
 :class:`Meshed` domain: the mesh, its element size and the shape it was made from.
 """
 from __future__ import annotations

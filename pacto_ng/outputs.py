@@ -24,8 +24,14 @@ from pathlib import Path
 
 import numpy as np
 
+from .delta import output_displacement, output_displacement_at
 from .files import atomic_path, atomic_write_text, check_tail
+from .filters import HelmholtzFilter
+from .measures import strain_stress_measures, tensor_components
+from .physics.darcy_leakage import Outflow, leakage
+from .physics.darcy_load import Compliance
 from .problem import Problem
+from .responses import StrainEnergy, compliance as compliance_block
 
 #: the columns of history.csv (one row per iteration), then the case's reported responses
 HISTORY_COLUMNS = ("iteration", "objective", "volume", "constraint", "change", "penal", "beta",
@@ -95,8 +101,6 @@ def solvers_used(problem: Problem) -> dict:
     """The linear solver of each system (``--set solver``, :mod:`pacto_ng.physics.solvers`):
     the displacement's tangent, the Darcy pressure's and the Helmholtz filter's (None: no
     such system), each as its ``solver_info`` (route, method, preconditioner, iterations)."""
-    from .filters import HelmholtzFilter
-
     filters = [b for b in problem.chain.blocks if isinstance(b, HelmholtzFilter)]
     return {"displacement": problem.mech.solver_info,
             "pressure": (problem.pressure_block.solver_info
@@ -126,8 +130,6 @@ def lowest_jacobian(problem: Problem) -> dict:
 def strain_energy(problem: Problem) -> float | None:
     """The stored strain energy of the last analysed state, for a run whose chain does not
     compute it (None before any analysis)."""
-    from .responses import StrainEnergy
-
     vals = problem.values
     if "u" not in vals:
         return None
@@ -145,59 +147,11 @@ def compliance(problem: Problem) -> float | None:
     if "u" not in vals or mech.has_residual_density:
         return None
     if problem.pressure_block is not None:
-        from .physics.darcy_load import Compliance
-
         block = Compliance(mech, problem.pressure_block)
         return block.forward(*(vals[name] for name in block.inputs))
     if not mech.loads:
         return None
-    from .responses import compliance as compliance_block
-
     return compliance_block(mech).forward(vals["u"])
-
-
-def _output_ports(problem: Problem) -> tuple:
-    """What the reported output displacement reads, and whether that is the case's ports:
-    its ports, or else a unit-direction port at its one point/edge load (empty: neither)."""
-    from .physics.loads import Port
-
-    setup = problem.setup
-    if setup.ports:
-        return setup.ports, "port"
-    if len(setup.loads) == 1:
-        force = np.asarray(setup.loads[0].force, dtype=float)
-        norm = float(np.linalg.norm(force))
-        if norm > 0:
-            return (Port(setup.loads[0].region, tuple(force / norm)),), "load"
-    return (), None
-
-
-def output_displacement(problem: Problem) -> float | None:
-    """``Δ = Σ weight · d·u`` of the last analysed state (see :func:`output_displacement_at`),
-    for a run whose chain does not compute it.  None before any analysis or where the case has
-    neither a port nor a single point/edge load."""
-    from .physics.loads import Outputs
-    from .responses import output_displacement as output_block
-
-    vals = problem.values
-    ports, _ = _output_ports(problem)
-    if "u" not in vals or not ports:
-        return None
-    where = ports[0] if len(ports) == 1 else Outputs(ports)
-    return output_block(problem.mech, where).forward(vals["u"])
-
-
-def output_displacement_at(problem: Problem) -> dict | None:
-    """Where the output displacement is read: ``kind`` "port" (the case's output ports) or
-    "load" (no port: at its one point/edge load, in the force's direction), and each
-    ``region`` with its ``direction`` d and ``weight`` (Δ = Σ weight · d·u, u at a named point
-    or its mean over a named boundary).  None where no output displacement is defined."""
-    ports, kind = _output_ports(problem)
-    if not ports:
-        return None
-    return {"kind": kind,
-            "terms": [{"region": port.region, "direction": [float(c) for c in port.direction],
-                       "weight": float(port.weight)} for port in ports]}
 
 
 def leak(problem: Problem) -> float | None:
@@ -214,8 +168,6 @@ def leak(problem: Problem) -> float | None:
         return None
     if not blk.zero:
         return 0.0
-    from .physics.darcy_leakage import Outflow
-
     return float(Outflow(blk).forward(vals[blk.inputs[0]], vals[blk.output]))
 
 
@@ -228,8 +180,6 @@ def pressure_and_material_summary(problem: Problem) -> dict:
     out = {}
     vals = problem.values
     if problem.pressure_block is not None:
-        from .physics.darcy_leakage import leakage
-
         blk = problem.pressure_block
         out["leak"] = leak(problem)
         info = leakage(blk, vals[blk.inputs[0]], problem.h)
@@ -267,6 +217,7 @@ def write_history(target: Path, history: list, problem: Problem) -> None:
 def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, result,
                   wall: float) -> dict:
     """Write the run's results into ``path``; returns the summary (summary.json)."""
+    # the post package loads matplotlib and pyvista at its import (0.5 s): only here
     from .post.plots import convergence_png, density_png, materials_png, pressure_png
 
     summ = summary_dict(problem, history, result, wall)
@@ -324,37 +275,6 @@ def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
         VTKOutput(problem.mesh, coefs=coefs, names=names, filename=str(tmp.with_suffix("")),
                   subdivision=0 if problem.params.order == 1 else 1, legacy=False).Do()
         check_tail(tmp, b"</VTKFile>", target)  # VTKOutput does not report a failed write
-
-
-def tensor_components(dim: int) -> list:
-    """``((i, j), name)`` of a symmetric tensor's components written to design.vtu: xx, yy,
-    xy in 2D; xx, yy, zz, xy, yz, xz in 3D."""
-    if dim == 3:
-        return [((0, 0), "xx"), ((1, 1), "yy"), ((2, 2), "zz"), ((0, 1), "xy"),
-                ((1, 2), "yz"), ((0, 2), "xz")]
-    return [((0, 0), "xx"), ((1, 1), "yy"), ((0, 1), "xy")]
-
-
-def strain_stress_measures(problem: Problem) -> dict:
-    """The strain and stress CFs of the analysed state (2x2 in-plane in 2D, 3x3 in 3D: the
-    size of ``Grad(u)``), by model: ``linear``: ε and σ; ``gnl``/``neohookean``:
-    Green–Lagrange ``E_GL`` and the second Piola–Kirchhoff ``S`` (``F⁻¹ ∂φ/∂F`` by automatic
-    differentiation); ``wang``: ``E_W1``, ``E_W2`` (thesis eqs 5.4–5.5) and ``S`` (eq. 5.3).
-    design.vtu holds their element means (:func:`tensor_components`)."""
-    from ngsolve import Grad
-
-    from .physics.materials import first_piola_kirchhoff, green_lagrange, second_piola_kirchhoff
-
-    mech = problem.mech
-    G, c = Grad(mech.gfu), mech.coeffs
-    model = problem.params.model
-    if model == "wang":
-        wm = mech.energy  # the WangModel (make_energy passes the model as the energy)
-        return {"E_W1": wm.strain_w1(G, c), "E_W2": wm.strain_w2(G, c), "S": wm.stress(G, c)}
-    phi = lambda A: mech.energy(A, c)  # noqa: E731
-    if model == "linear":
-        return {"strain": 0.5 * (G + G.trans), "stress": first_piola_kirchhoff(phi, G)}
-    return {"E_GL": green_lagrange(G), "S": second_piola_kirchhoff(phi, G)}
 
 
 # ------------------------------------------------------------------------------------------

@@ -36,7 +36,7 @@ options, ``pacto_ng.run(**settings)`` or a run's params.json): a setting nobody 
 *derived* from the case instead of taking its declared default — the mesh size from the domain,
 the filter radius from the mesh size, the continuation when the case sets none.  The rules
 are :func:`pacto_ng.derive.derive_settings` (the mesh size's in
-:func:`pacto_ng.geometry.derived_maxh`), applied by :meth:`pacto_ng.case.Case.resolve` through
+:func:`pacto_ng.meshing.derived_maxh`), applied by :meth:`pacto_ng.case.Case.resolve` through
 :meth:`Parameters.derive`; ``--show-parameters`` says how each derived value came about
 (:attr:`Parameters.derived`).
 """
@@ -47,7 +47,7 @@ from dataclasses import fields
 
 from .builders import DesignSettings, ObjectiveSettings
 from .errors import InputError
-from .geometry import MeshSettings
+from .meshing import MeshSettings
 from .optimize.driver import OptimizerSettings
 from .optimize.schedules import ScheduleSettings
 from .physics.darcy import DarcySettings

@@ -3,15 +3,16 @@ meshing time, estimated from the mesh options and the element order *before* any
 and refused with one line (an :class:`~pacto_ng.params.InputError`, exit code 2 from the CLI)
 when they do not fit this machine.
 
-:func:`pacto_ng.geometry.mesh_geometry` calls :func:`check` on :func:`estimate_triangles`
+:func:`pacto_ng.meshing.mesh_geometry` calls :func:`check` on :func:`estimate_triangles`
 (Netgen: a Layout, a netgen.occ shape, a CAD file), :func:`estimate_grid` (structured quads)
 or, for a mesh that exists (a mesh file after reading, an ``ngsolve.Mesh``),
 :func:`estimate_mesh` on its counts.  The remesh of a run's part (``pacto analyse``, ``pacto
 export``: :func:`pacto_ng.post.runs.check_part_mesh`) is checked on :func:`estimate_part`, and
 the C-beam analysis (``pacto run c-beam``) on the same estimates as a run's mesh.
 
-Estimates (2D; 3D meshes: :mod:`pacto_ng.resources3d`; measured on this 2-core, 23 GB
-machine, ngsolve 6.2.2608)
+Estimates (2D; 3D meshes: :mod:`pacto_ng.resources3d`; the :class:`~pacto_ng.estimate.Estimate`
+record and a run's memory around its system: :mod:`pacto_ng.estimate`; measured on this 2-core,
+23 GB machine, ngsolve 6.2.2608)
 --------------------------------------------------------------------------
 **Elements.**  Netgen triangles of size ``h`` on a face of area ``A``: ``(4/√3)·A/h²``, the
 count of equilateral triangles of side ``h`` (a 2 x 1 rectangle at h = 0.04 ... 0.005 gave
@@ -36,15 +37,13 @@ above 2·10⁴ dofs) as ``bytes = a · ndof^b · q^[quads] · o^k``::
     sparsecholesky  a = 447   b = 1.074  q = 1.17  o = 1.170   measured/fit 0.91–1.10
     umfpack         a = 1182  b = 1.051  q = 1.11  o = 1.272   measured/fit 0.89–1.13
 
-(``bytes`` less ``_MESH_BYTES`` per element), e.g. 1.67·10⁶ dofs (order 3, 184 662
-triangles): 3.56 GB with Cholesky, 8.81 GB with UMFPACK; 1.44·10⁶ dofs (order 3, 200 x 100
-quads): 3.73 and 7.55 GB.  A run holds more: the mesh (``_MESH_BYTES`` per element,
-860 measured), the linear fast paths' element matrices while they are built (about 88 bytes
-per entry, built only below 20·10⁶ entries: physics/scatter.py; counted for the displacement
-and a Darcy pressure in every case, an over-estimate for cases without them), and the
-pressure's and filter's systems, MMA and the outputs (``_RUN_FACTOR`` = 1.25 on the system).
-Checked on whole runs (``pacto run ... --set iterations=2``, peak RSS by ``/usr/bin/time``,
-less the 0.22 GB of a default mbb run), estimate / measured:
+(``bytes`` less the mesh, :func:`~pacto_ng.estimate.mesh_bytes`), e.g. 1.67·10⁶ dofs (order
+3, 184 662 triangles): 3.56 GB with Cholesky, 8.81 GB with UMFPACK; 1.44·10⁶ dofs (order 3,
+200 x 100 quads): 3.73 and 7.55 GB.  A run holds more: the mesh, the linear fast paths'
+element matrices while they are built, and the pressure's and filter's systems, MMA and the
+outputs (:func:`pacto_ng.estimate.run_overheads`).  Checked on whole runs (``pacto run ...
+--set iterations=2``, peak RSS by ``/usr/bin/time``, less the 0.22 GB of a default mbb run),
+estimate / measured:
 
     run                                                    dofs      measured  est/meas
     mbb --nelx 400 --nely 300 --order 3                   2 164 202   6.71 GB   1.00
@@ -75,18 +74,16 @@ import math
 import os
 import resource
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
+from . import resources3d
 from .errors import InputError
+from .estimate import Estimate, mesh_bytes, run_overheads
+from .mesh import Layout, netgen_mesh, structured_mesh
 
 # the displacement system's memory fit (see the module docstring): (a, b, quad, per order)
 _FIT = {"sparsecholesky": (447.2, 1.0735, 1.168, 1.1697),
         "umfpack": (1181.7, 1.0512, 1.108, 1.2717)}
-_MESH_BYTES = 1000.0        # per element of the mesh (Netgen + NGSolve; 860 measured at 185k)
-_RUN_FACTOR = 1.25          # a whole run over its displacement system (module docstring)
-_SCATTER_BYTES = 88.0       # per entry of the fast paths' element matrices, while built
-_SCATTER_MAX = 20_000_000   # entries above which they are not built (physics/scatter.py)
 _SAFETY = 0.8               # of the free memory a run may plan to use
 _TRIANGLES_PER_AREA = 4.0 / math.sqrt(3.0)  # equilateral triangles of side h per h²
 _EDGE_TRIANGLES = 6.0       # extra triangles per length/he along an edge with a smaller maxh
@@ -96,59 +93,17 @@ MESH_TIME_LIMIT = 300.0     # default of the mesh_time_limit setting, seconds
 _HUGE = 1e300               # counts are capped here (a maxh of 1e-300 still gives one line)
 
 
-@dataclass(frozen=True)
-class Estimate:
-    """What a mesh will cost: ``elements``, displacement ``dofs`` at ``order`` (0: the mesh
-    alone, no analysis on it), a run's peak
-    ``memory`` (bytes above the process's start) and the ``mesh_seconds`` its ``mesher``
-    (``Netgen``, ``the grid builder``; None for a mesh that exists) takes.  ``kind``:
-    ``triangles``, ``quads``, ``tetrahedra``, ``hexahedra`` or ``elements`` (mixed);
-    ``exact``: elements and dofs counted, not estimated (a structured grid, a mesh that
-    exists)."""
-
-    elements: float
-    dofs: float
-    memory: float
-    mesh_seconds: float
-    order: int
-    kind: str
-    mesher: str | None
-    exact: bool = False
-
-
 def run_memory(dofs: float, order: int, elements: float, *, quads: bool = False,
                solver: str | None = None) -> float:
     """A run's peak memory in bytes (above the process's start) for ``dofs`` displacement
     dofs of ``order`` on ``elements`` elements (module docstring): the displacement system
-    (``solver``: ``sparsecholesky``, ``umfpack`` or None for the larger, umfpack's) times
-    ``_RUN_FACTOR``, the mesh, and the precomputed element matrices of the linear fast paths."""
+    (``solver``: ``sparsecholesky``, ``umfpack`` or None for the larger, umfpack's) and what a
+    run holds around it (:func:`pacto_ng.estimate.run_overheads`)."""
     k = max(int(order), 1)
     a, b, q, o = _FIT[solver or "umfpack"]
     system = a * min(max(dofs, 1.0), 1e30) ** b * (q if quads else 1.0) * o ** k
     local = (k + 1) ** 2 if quads else (k + 1) * (k + 2) / 2  # scalar dofs per element
     return run_overheads(system, elements, local, dim=2)
-
-
-def mesh_bytes(elements: float) -> float:
-    """The memory of a mesh of ``elements`` elements (Netgen + NGSolve), as the fits count it."""
-    return _MESH_BYTES * elements
-
-
-def run_overheads(system: float, elements: float, local: float, *, dim: int,
-                  displacement_matrices: bool = True) -> float:
-    """A run's memory around its displacement ``system`` (bytes, assembled and factorised):
-    the system times ``_RUN_FACTOR``, the mesh, and the linear fast paths' element matrices
-    for ``local`` scalar dofs per element (a ``dim``-vector displacement's, unless
-    ``displacement_matrices`` is False: an iterative route assembles by its form, and the
-    Darcy pressure's two matrices; none above ``_SCATTER_MAX`` entries)."""
-    scatter = 0.0
-    parts = [2 * elements * local ** 2]  # Darcy K, D
-    if displacement_matrices:
-        parts.append(elements * (dim * local) ** 2)
-    for entries in parts:
-        if entries <= _SCATTER_MAX:  # above it the fast path is not built
-            scatter += _SCATTER_BYTES * entries
-    return _RUN_FACTOR * system + mesh_bytes(elements) + scatter
 
 
 def vector_h1_dofs(order: int, *, vertices: float, edges: float, trigs: float = 0.0,
@@ -178,15 +133,15 @@ def estimate_part(area: float, maxh: float, order: int | None = None, *,
                   solver: str | None = None) -> Estimate:
     """The Netgen remesh at ``maxh`` of a part of about ``area`` (a thresholded design:
     ``pacto analyse``, ``pacto export``): with ``order``, a re-analysis on it (its memory as a
-    run's, :func:`estimate_triangles`); None: the mesh alone (``_MESH_BYTES`` per triangle,
-    no displacement system).  Against Netgen's count on pa-inverter parts (from the design's
+    run's, :func:`estimate_triangles`); None: the mesh alone (:func:`~pacto_ng.estimate.
+    mesh_bytes`, no displacement system).  Against Netgen's count on pa-inverter parts (from the design's
     Σ a ρ̄, maxh 0.005-0.001): 0.80-1.67 (a remesh's parts are graded, thin members and
     boundaries fill unevenly)."""
     triangles = netgen_triangles(area, maxh)
     if order is not None:
         return estimate_triangles(triangles, order, solver=solver)
     n = min(float(triangles), _HUGE)
-    return Estimate(n, 0.0, _MESH_BYTES * n, _NETGEN_SECONDS * n, 0, "triangles", "Netgen")
+    return Estimate(n, 0.0, mesh_bytes(n), _NETGEN_SECONDS * n, 0, "triangles", "Netgen")
 
 
 def shape_triangles(shape, maxh: float) -> float:
@@ -219,9 +174,7 @@ def estimate_mesh(mesh, order: int, *, solver: str | None = None,
     import numpy as np
 
     if mesh.dim == 3:
-        from .resources3d import estimate_mesh as estimate_mesh_3d
-
-        return estimate_mesh_3d(mesh, order, solver=solver, linear_solver=linear_solver)
+        return resources3d.estimate_mesh(mesh, order, solver=solver, linear_solver=linear_solver)
 
     types = np.asarray(mesh.ngmesh.Elements2D().NumPy()["type"])
     quads = int(np.count_nonzero(types == 11))  # Netgen's QUAD; TRIG is 10
@@ -382,8 +335,6 @@ def probe(kind: str, size: float, order: int, solver: str) -> dict:
     from ngsolve import (BilinearForm, InnerProduct, SetNumThreads, Sym, TaskManager, VectorH1,
                          div, dx, Grad)
 
-    from .mesh import Layout, netgen_mesh, structured_mesh
-
     SetNumThreads(2)
     with TaskManager():
         start = _read_kib("/proc/self/status", "VmHWM:")
@@ -437,7 +388,7 @@ def measure(quick: bool = False) -> list[dict]:
         sel = [r for r in rows if r["solver"] == solver and r["dofs"] > 20000]
         if len(sel) < 4:
             continue
-        y = np.log([r["peak_bytes"] - _MESH_BYTES * r["elements"] for r in sel])
+        y = np.log([r["peak_bytes"] - mesh_bytes(r["elements"]) for r in sel])
         X = np.array([[1.0, np.log(r["dofs"]), r["kind"] == "grid", r["order"]] for r in sel])
         c = np.linalg.lstsq(X, y, rcond=None)[0]
         ratio = np.exp(y - X @ c)

@@ -1,6 +1,8 @@
-"""Resources of 3D meshes, estimated before meshing (the 3D half of :mod:`pacto_ng.resources`).
+"""Resources of 3D meshes, estimated before meshing (the 3D half of :mod:`pacto_ng.resources`;
+the :class:`~pacto_ng.estimate.Estimate` record and a run's memory around its system:
+:mod:`pacto_ng.estimate`).
 
-:func:`pacto_ng.geometry.mesh_geometry` checks a 3D netgen.occ shape (a Solid, a Glue of
+:func:`pacto_ng.meshing.mesh_geometry` checks a 3D netgen.occ shape (a Solid, a Glue of
 solids, a CAD file holding solids) and a :class:`~pacto_ng.box.Box` meshed as tetrahedra on
 :func:`estimate_tets`, a Box meshed as hexahedra on :func:`estimate_hex_grid`, and a 3D mesh
 that exists on :func:`estimate_mesh` (:func:`pacto_ng.resources.estimate_mesh` passes 3D meshes
@@ -52,14 +54,14 @@ GB; with BDDC, 2.1·10⁵ dofs (order 2, 32 x 16 x 16 hexahedra): 1.44 GB, 3.2·
 73 721 tetrahedra): 1.26 GB.  At 4.4·10⁴ dofs the
 3D Cholesky takes 0.43 GB where the 2D fit gives 0.05 GB; at 1.5·10⁵, 2.7 GB against 0.19
 GB.  Below 2·10⁴ dofs the measured is 0.94–1.29 of the fit (fixed costs).  The rest of a
-run is counted as in 2D (:func:`pacto_ng.resources.run_overheads`: ``_RUN_FACTOR`` on the
-system, the mesh, the fast paths' element matrices).  Checked on a whole run (``pacto run
+run is counted as in 2D (:func:`pacto_ng.estimate.run_overheads`: a factor on the system,
+the mesh, the fast paths' element matrices).  Checked on a whole run (``pacto run
 cantilever-3d --maxh 0.012 --order 1 --iterations 2``, 85 141 tetrahedra against 90 422
 estimated, 53 115 dofs, Cholesky): peak RSS 1.82 GB above the 0.12 GB of the imports, the
 estimate from its counts 2.04 GB (1.12); ``--maxh 0.02 --order 2`` (15 977 tetrahedra
 against 19 531 estimated, 78 219 dofs, CG + BDDC, no element matrices): 0.86 GB, the
 estimate from its counts 0.61 GB (0.71: the iterative run holds more around its system than
-``_RUN_FACTOR`` counts; one run, not refitted).  Which route the run takes is the
+:func:`~pacto_ng.estimate.run_overheads` counts; one run, not refitted).  Which route the run takes is the
 physics' (:func:`route`: :func:`pacto_ng.physics.solvers.choose`; with ``solver = auto``
 direct at order 1 and up to ``DIRECT_MAX_DOFS_3D`` dofs, iterative above it at order ≥ 2).
 This machine (23 GB, about 18 GB usable) plans runs up to about 5·10⁵ dofs with Cholesky at
@@ -81,7 +83,9 @@ import math
 import resource
 import sys
 
-from .resources import Estimate, run_overheads
+from .box import Box, Patch, structured_box
+from .estimate import Estimate, mesh_bytes, run_overheads
+from .physics.solvers import LinearSolver, choose
 
 # the displacement system's memory fit in 3D (module docstring): (a, b, hexahedra, per order)
 _FIT = {"sparsecholesky": (57.55, 1.4627, 1.582, 1.0925),
@@ -100,8 +104,6 @@ _OUTPUT_BYTES_PER_POINT = 460.0
 def route(dofs: float, order: int, linear_solver: str = "auto") -> str:
     """``"direct"`` or ``"iterative"``: the displacement system's route as the physics takes
     it (:func:`pacto_ng.physics.solvers.choose`; ``linear_solver`` its ``solver`` setting)."""
-    from .physics.solvers import choose
-
     return choose(linear_solver, int(min(dofs, 1e18)), 3, max(int(order), 1))
 
 
@@ -111,7 +113,7 @@ def run_memory(dofs: float, order: int, elements: float, *, hexes: bool = False,
     dofs of ``order`` on ``elements`` tetrahedra (or hexahedra): the displacement system's fit
     for its :func:`route` (direct: ``solver``, ``sparsecholesky``, ``umfpack`` or None for the
     larger, umfpack's; iterative: CG or GMRES with BDDC) and the same overheads as in 2D
-    (:func:`pacto_ng.resources.run_overheads`)."""
+    (:func:`pacto_ng.estimate.run_overheads`)."""
     k = max(int(order), 1)
     direct = route(dofs, k, linear_solver) == "direct"
     a, b, q, o = _FIT[(solver or "umfpack") if direct else "iterative"]
@@ -255,8 +257,6 @@ def probe_solve(size: float, order: int, solver: str, hexes: bool = False) -> di
     with TaskManager():
         start = _hwm()
         if hexes:
-            from .box import Box, Patch, structured_box
-
             n = int(size)
             mesh = structured_box(Box(2.0, 1.0, 1.0, patches=(Patch("fixed", "xmin"),)),
                                   2 * n, n, n)
@@ -272,8 +272,6 @@ def probe_solve(size: float, order: int, solver: str, hexes: bool = False) -> di
         a = BilinearForm(fes, symmetric=solver != "umfpack")
         a += (InnerProduct(Sym(Grad(u)), Sym(Grad(v))) + div(u) * div(v)) * dx
         if solver == "iterative":  # CG + BDDC as the physics builds it
-            from .physics.solvers import LinearSolver
-
             route = LinearSolver(a, fes.FreeDofs(), setting="iterative", order=order)
         t = time.perf_counter()
         a.Assemble()  # the iterative route's preconditioner is built here
@@ -316,11 +314,9 @@ def fit_tets(rows) -> float:
 
 
 def fit_memory(rows, solver: str) -> tuple[float, float, float, float]:
-    """``(a, b, q, o)`` of ``bytes − _MESH_BYTES·elements = a · ndof^b · q^[hexes] · o^k``
+    """``(a, b, q, o)`` of ``bytes − mesh_bytes(elements) = a · ndof^b · q^[hexes] · o^k``
     over the solve probes of ``solver`` above 2·10⁴ dofs (least squares in the logs)."""
     import numpy as np
-
-    from .resources import mesh_bytes
 
     sel = [r for r in rows if r["solver"] == solver and r["dofs"] > 20000]
     y = np.log([r["peak_bytes"] - mesh_bytes(r["elements"]) for r in sel])

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .parallel import total
+from .physics.sensitivities import FieldGradient
 
 
 class LinearFunctional:
@@ -70,8 +71,6 @@ class StrainEnergy:
 
     def __init__(self, mech, output="se"):
         from ngsolve import BilinearForm, GridFunction, Integrate, Variation
-
-        from .physics.sensitivities import FieldGradient
 
         self.mech = mech
         self.inputs = (mech.output,) + mech.inputs

@@ -15,6 +15,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .geometries.c_beam import layout as c_beam_layout
+from .mesh import netgen_mesh, structured_mesh
+from .params import Parameters
+from .physics.energy import make_energy
+from .physics.loads import PointLoad
+from .physics.materials import jacobian
+from .physics.mechanics import Mechanics, Supports
+from .physics.newton import NewtonSettings, solve_with_continuation
+from .physics.quadrature import guard_rules
+
 
 @dataclass
 class CBeamResult:
@@ -89,16 +99,6 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
         ``β1``, ``η1`` of eq. 5.2 (γ is 1 in the C and 0 in the void to round-off for any of them).
     """
     from ngsolve import QUAD, TRIG, VOL, Grad, Parameter
-
-    from .geometries.c_beam import layout as c_beam_layout
-    from .mesh import netgen_mesh, structured_mesh
-    from .params import Parameters
-    from .physics.energy import make_energy
-    from .physics.loads import PointLoad
-    from .physics.materials import jacobian
-    from .physics.mechanics import Mechanics, Supports
-    from .physics.newton import NewtonSettings, solve_with_continuation
-    from .physics.quadrature import guard_rules
 
     layout = c_beam_layout(loads_on=loads_on)
     if mesh == "quad":

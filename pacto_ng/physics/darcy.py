@@ -43,6 +43,7 @@ from ..interpolation import heaviside_deriv_np, heaviside_np
 from ..settings import Settings, setting
 from .mechanics import Field
 from .quadrature import integration_rules
+from .scatter import ElementMatrices
 from .solvers import LinearSolver
 
 __all__ = ["DarcySettings", "DarcyPressure"]
@@ -340,8 +341,6 @@ class DarcyPressure:
 
     # -- helpers --------------------------------------------------------------------------------
     def _build_scatter(self):
-        from .scatter import ElementMatrices
-
         def set_coefficients(cs):
             self.K.vec.FV().NumPy()[:] = cs[0]
             self.D.vec.FV().NumPy()[:] = cs[1]

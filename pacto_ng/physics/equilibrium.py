@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..parallel import everywhere, free_norm
-
+from .materials import jacobian
 from .newton import NewtonResult, solve_with_continuation
+from .quadrature import element_points, guard_rules
 from .solvers import LinearSolver, adjoint_rtol
-from .quadrature import guard_rules
 
 
 class NewtonFailure(RuntimeError):
@@ -197,9 +197,6 @@ class Equilibrium:
         of :mod:`~pacto_ng.physics.quadrature`: triangles, quadrilaterals, tetrahedra,
         hexahedra."""
         from ngsolve import VOL, Grad
-
-        from .materials import jacobian
-        from .quadrature import element_points
 
         if points not in ("quadrature", "corners"):
             raise ValueError(f"points must be 'quadrature' or 'corners' (got '{points}')")

@@ -29,6 +29,8 @@ from contextlib import contextmanager
 import numpy as np
 
 from ..parallel import free_norm
+from .quadrature import centroid_rules, stiffness_rules
+from .scatter import ElementMatrices
 from .traits import DeclarationError
 
 
@@ -72,8 +74,6 @@ class LinearSystem:
 
     def __init__(self, mech, coupling=None):
         from ngsolve import CF, L2, BilinearForm, GridFunction, Grad, LinearForm, VOL, dx
-
-        from .quadrature import centroid_rules, stiffness_rules
 
         self.mech = mech
         self._Ku, self._Ku_at = None, None  # K u of the last residual and (version, u) of it
@@ -266,8 +266,6 @@ class LinearSystem:
     def _build_scatter(self):
         """Build the element matrices (once; above their memory budget the assembly stays
         symbolic)."""
-        from .scatter import ElementMatrices
-
         self._scatter_built = True
         gfc = self.gfC.vec.FV().NumPy()
         c1 = self._C1

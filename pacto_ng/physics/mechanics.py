@@ -55,6 +55,7 @@ from .adjoint import Adjoint
 from .body_coupling import BodyCoupling
 from .equilibrium import Equilibrium
 from .linear_system import LinearSystem
+from .mixed import Mixed
 from .newton import NewtonSettings
 from .quadrature import integration_rules
 from .traits import EnergyTraits, traits_of
@@ -227,8 +228,6 @@ class Mechanics(Equilibrium, Adjoint):
             raise ValueError(f"formulation must be 'displacement' or 'mixed' (got "
                              f"'{formulation}')")
         if formulation == "mixed":
-            from .mixed import Mixed
-
             kw.update(Mixed.displacement_options(mesh, order))
         self.fes = VectorH1(mesh, order=order, **kw)
         if total(mesh, np.count_nonzero(~np.array(list(self.fes.FreeDofs()), dtype=bool))) == 0:

@@ -5,16 +5,16 @@ names :mod:`.boundary`, the threshold's choice :mod:`.threshold_choice`) → bod
 mesh with named boundaries (:mod:`.remesh` in 2D, the part's geometry :mod:`.traced` or, on the
 case's own shape, :mod:`.domain_part`; :mod:`.part3d` and :mod:`.remesh3d` in 3D; both behind
 :func:`.part.make_part`) → the part analysed with the run's own material law under the Darcy,
-fixed or follower pressure (:class:`.part_analysis.PartAnalysis`) → STL, VTU and pictures
-(:mod:`.export`); ``pacto analyse`` chains it all (:func:`.analyse.analyse_run`; a case's own
+fixed or follower pressure (:class:`.part_analysis.PartAnalysis`) → STL and VTU
+(:mod:`.export`) and pictures (:mod:`.pictures`); ``pacto analyse`` chains it all (:func:`.analyse.analyse_run`; a case's own
 geometry as built: :mod:`.as_built`).
 """
 from .boundary import outer_boundary
-from .export import (convert, deformation_fields, extrude_solid, plot_deformed, plot_sweeps,
-                     write_stl, write_vtu)
+from .export import convert, deformation_fields, extrude_solid, write_stl, write_vtu
 from .grid import mesh_to_pyvista, nodal_density
 from .part import Part, make_part
 from .part_analysis import PartAnalysis, Sweep, SweepPoint, outward_normal, pressure_body_force
+from .pictures import plot_deformed, plot_sweeps
 from .remesh import Remeshed, remesh
 from .sampler import pressure_sampler
 from .threshold import Component, Loop, Thresholded, threshold

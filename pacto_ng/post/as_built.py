@@ -36,11 +36,11 @@ import numpy as np
 from .. import resources
 from ..case import mesh_for
 from ..errors import InputError
-from ..geometry import check_setup_names
+from ..setup_names import check_setup_names
 from ..threads import compute
-from .analyse import (DEFAULT_ORDER, Subject, analysis_params, check_kinds,
-                      default_pressures, finish)
+from .analysis_options import DEFAULT_ORDER, analysis_params, check_kinds, default_pressures
 from .boundary import named_points
+from .finish import Subject, finish
 from .grid import mesh_to_pyvista
 from .materials import STIFF
 from .part import Part

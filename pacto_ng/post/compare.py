@@ -14,7 +14,7 @@ from ..case import mesh_for
 from ..errors import InputError
 from ..files import atomic_path
 from .domain import symmetry_line
-from .export import figure
+from .pictures import figure
 from .report import fmt_value
 from .runs import load_run
 

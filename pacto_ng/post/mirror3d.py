@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from .part3d import boundary_vertices
 
 #: a point within this fraction of the mesh's diameter of a plane lies on it
 PLANE_RTOL = 1e-9
@@ -52,8 +53,6 @@ def symmetry_planes(mesh, rtol: float = PLANE_RTOL) -> list[SymmetryPlane]:
     """The symmetry planes of a 3D NGSolve mesh (see the module docstring), in the order of
     their names.  InputError (naming ``--mirror``) when a name's faces are not one plane, or
     not perpendicular to an axis, or two names share an axis."""
-    from .part3d import boundary_vertices
-
     pts = np.asarray(mesh.ngmesh.Coordinates(), dtype=float)
     diam = float(np.ptp(pts, axis=0).max())
     planes = []

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..files import atomic_path
+from ..measures import strain_stress_measures, tensor_components
 from .export import UNITS, extrude_solid, material_ids, mesh_arrays, write_binary_stl
 
 
@@ -167,7 +168,7 @@ def part_fields(problem, part: PartMesh) -> tuple[dict, dict, list]:
     * point data ``u`` (m, (n, 2)) and ``p`` (Pa, the Darcy pressure at the run's load, for a
       pressure case): the run's fields at the part's vertices;
     * cell data of the run model's strain and stress measures (as ``design.vtu``:
-      :func:`~pacto_ng.outputs.strain_stress_measures`; e.g. ``E_GL_xx``, ``S_xx`` …, or
+      :func:`~pacto_ng.measures.strain_stress_measures`; e.g. ``E_GL_xx``, ``S_xx`` …, or
       ``strain_*``/``stress_*`` for a linear run), the element means of the element holding
       the centroid, in-plane components ``xx``, ``yy``, ``xy``.
 
@@ -176,8 +177,6 @@ def part_fields(problem, part: PartMesh) -> tuple[dict, dict, list]:
     only ρ̄ and p are given, and ``notes`` says so.
     """
     from ngsolve import GridFunction
-
-    from ..outputs import strain_stress_measures, tensor_components
 
     mesh, mech = problem.mesh, problem.mech
     half_p = ~part.mirrored_point

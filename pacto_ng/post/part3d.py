@@ -25,6 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .export import UNITS, write_binary_stl
+from .grid import area_weighted_nodal, cell_volumes, mesh_to_pyvista
+
 #: Taubin's steps (pass band about 0.1) and the number of λ|μ pairs
 TAUBIN_LAMBDA, TAUBIN_MU, TAUBIN_ITERATIONS = 0.5, -0.53, 15
 #: a point whose interpolated indicator is this close to 1 lies on the domain's boundary
@@ -64,8 +67,6 @@ def element_materials_3d(mesh) -> np.ndarray:
 def included_grid(mesh, exclude=()):
     """``(grid, keep)``: the pyvista grid of the mesh's elements outside the materials
     ``exclude`` (cell data ``cid``: the NGSolve element number) and the boolean mask of them."""
-    from .grid import mesh_to_pyvista
-
     grid = mesh_to_pyvista(mesh)
     grid.cell_data["cid"] = np.arange(grid.n_cells)
     keep = ~np.isin(element_materials_3d(mesh), list(exclude))
@@ -101,8 +102,6 @@ def part3d(mesh, rho, threshold: float, *, clamp=(), exclude=(), fields=None) ->
     design's ρ̄2), smoothed to the vertices as ρ̄ is and carried into the solid's point data
     under their names (interpolated by the clip).  ValueError when nothing is solid or no
     piece touches the clamp."""
-    from .grid import area_weighted_nodal, cell_volumes
-
     rho = np.asarray(rho, dtype=float).ravel()
     if rho.size != mesh.ne:
         raise ValueError(f"rho has {rho.size} values but the mesh has {mesh.ne} elements")
@@ -226,8 +225,6 @@ def write_part_stl(path, surface, units: str = "m", header: str = ""):
     """A part's closed surface (pyvista PolyData, e.g. :attr:`Part3D.surface`) as a binary STL
     (its facets oriented outward), coordinates in ``units`` (``m`` or ``mm``:
     :data:`~pacto_ng.post.export.UNITS`), stated in the header."""
-    from .export import UNITS, write_binary_stl
-
     surf = surface.copy().triangulate()
     surf.clear_data()
     unit = f"units {units}"

@@ -39,12 +39,12 @@ from ..errors import InputError
 from ..files import atomic_write_text
 from ..physics.equilibrium import NewtonFailure
 from .domain import symmetry_line
-from .export import plot_deformed
 from .mirror3d import mirror_surface, symmetry_planes
 from .part import Part, make_part, part_ports, present_supports
 from .part2d import part_mesh, write_part_stl as write_stl_2d
 from .part3d import write_part_stl as write_stl_3d
 from .part_analysis import PartAnalysis
+from .pictures import plot_deformed
 from .plots3d import deformed_picture
 from .runs import at_order, copy_gridfunction, design_delta
 
@@ -193,7 +193,7 @@ def _warnings(part: Part, problem, ports, point) -> list[str]:
 def write_part_stl(path, part: Part, problem):
     """The part, closed and whole (mirrored about the symmetry lines or planes of
     ``problem.mesh``), in mm; ``problem`` needs ``mesh``, ``case.name`` and
-    ``params.thickness`` (a run's problem, or :class:`~.analyse.Subject`)."""
+    ``params.thickness`` (a run's problem, or :class:`~.finish.Subject`)."""
     name = problem.case.name
     if part.dim == 2:
         line = symmetry_line(problem.mesh)

@@ -13,6 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..files import atomic_path
+from .domain import Line, symmetry_line
+from .domain import mirror as reflect
+from .plots3d import design_picture, pressure_picture
 
 
 def element_polygons(mesh) -> list[np.ndarray]:
@@ -24,8 +27,6 @@ def mirror_line(mesh, mirror=True):
     """The symmetry line to mirror the pictures of ``mesh`` about: None with ``mirror=False``
     or when the mesh has no straight ``symmetry`` boundary; ``mirror`` may also be a
     :class:`~pacto_ng.post.domain.Line` (used as it is)."""
-    from .domain import Line, symmetry_line
-
     if isinstance(mirror, Line):
         return mirror
     return symmetry_line(mesh) if mirror else None
@@ -43,8 +44,6 @@ def picture_polygons(mesh, values, mirror=True):
     line : Line or None
         The line mirrored about.
     """
-    from .domain import mirror as reflect
-
     line = mirror_line(mesh, mirror)
     polys = [p[:, :2] for p in element_polygons(mesh)]
     values = np.asarray(values)
@@ -81,8 +80,6 @@ def density_png(path, problem, field_name: str | None = None, title: str | None 
                 mirror=True):
     rho = problem.design_density() if field_name is None else np.asarray(problem.values[field_name])
     if problem.mesh.dim == 3:
-        from .plots3d import design_picture
-
         design_picture(path, problem.mesh, rho, title=title or _title_3d(problem))
         return
     import matplotlib
@@ -176,8 +173,6 @@ def pressure_png(path, problem, title: str | None = None, leak: float | None = N
     pv = block.gfp.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
     quoted = "" if leak is None else f"leak Q/(Kv P_in) = {leak:.3g}"
     if mesh.dim == 3:
-        from .plots3d import pressure_picture
-
         pressure_picture(path, mesh, pv, rho, title=title or f"{problem.case.name} (P_in = "
                          f"{p_in:g} Pa)" + (f", {quoted}" if quoted else ""))
         return

@@ -16,6 +16,7 @@ import os
 import numpy as np
 
 from ..files import atomic_path
+from .grid import area_weighted_nodal, cell_volumes, mesh_to_pyvista
 
 WINDOW = (1200, 500)  #: pixels of design.png (two views) and pressure.png
 
@@ -30,8 +31,6 @@ def _plotter(shape=(1, 1)):
 
 def nodal_field(grid, values) -> np.ndarray:
     """Volume-weighted mean of the element ``values`` around every point of ``grid``."""
-    from .grid import area_weighted_nodal, cell_volumes
-
     return area_weighted_nodal(grid, np.asarray(values, dtype=float), cell_volumes(grid))
 
 
@@ -56,8 +55,6 @@ def _screenshot(plotter, path):
 def design_picture(path, mesh, rho, title: str = "") -> None:
     """design.png of a 3D design: the ρ̄ = 0.5 iso-surface and the mid-depth cut coloured by
     ρ̄ (module docstring); ``rho`` one value per element in NGSolve's order."""
-    from .grid import mesh_to_pyvista
-
     grid = mesh_to_pyvista(mesh)
     rho = np.clip(np.asarray(rho, dtype=float), 0.0, 1.0)
     grid.point_data["rho_bar"] = nodal_field(grid, rho)
@@ -84,8 +81,6 @@ def design_picture(path, mesh, rho, title: str = "") -> None:
 def pressure_picture(path, mesh, p_rel, rho, title: str = "") -> None:
     """pressure.png of a 3D design: ``p_rel`` (p / P_in at the mesh's vertices) on the
     mid-depth cut, with the cut's ρ̄ = 0.5 line (``rho`` per element)."""
-    from .grid import mesh_to_pyvista
-
     grid = mesh_to_pyvista(mesh)
     grid.point_data["p"] = np.asarray(p_rel, dtype=float)
     grid.point_data["rho_bar"] = nodal_field(grid, np.clip(np.asarray(rho, dtype=float), 0, 1))
@@ -107,8 +102,6 @@ def deformed_picture(path, mesh, u, title: str = "") -> None:
     """The deformed part of a 3D analysis: its surface moved by ``u`` (a vector field on
     ``mesh``, true scale) coloured by |u| over the undeformed surface's feature edges, seen
     obliquely and from above (+z), with the axes in metres."""
-    from .grid import mesh_to_pyvista
-
     grid = mesh_to_pyvista(mesh)
     pts = np.asarray(grid.points, dtype=float)
     uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy(), pts[:, 2].copy())))

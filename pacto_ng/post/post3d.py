@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import InputError
 from ..files import atomic_path
-from ..outputs import strain_stress_measures, tensor_components
+from ..measures import strain_stress_measures, tensor_components
 from ..threads import compute
 from .export import UNITS
 from .grid import cell_volumes
@@ -138,7 +138,7 @@ def part_solid(part, problem=None):
     * point data ``p`` (Pa, pressure cases) and ``u`` (m): the run's Darcy pressure and
       displacement at the points;
     * cell data of the run model's strain and stress measures
-      (:func:`~pacto_ng.outputs.strain_stress_measures`: ``strain`` and ``stress`` (σ) for a
+      (:func:`~pacto_ng.measures.strain_stress_measures`: ``strain`` and ``stress`` (σ) for a
       linear run, Green–Lagrange ``E_GL`` and second Piola–Kirchhoff ``S`` for the
       hyperelastic ones, ``E_W1``, ``E_W2``, ``S`` for Wang): the element means of the source
       element (design.vtu's values), each a symmetric tensor of 6 components in VTK's order xx,

@@ -1,6 +1,7 @@
 """What ``pacto analyse`` writes about a part, in one layout for 2D and 3D, for a run's part
-and for a case as built: ``analysis.json`` (:func:`analysis_json`), ``analysis.csv``
-(:func:`analysis_csv`) and ``report.md`` (:func:`report_md`).
+and for a case as built: ``analysis.json`` (:func:`analysis_json`; the part's entries in it:
+:mod:`.part_entries`), ``analysis.csv`` (:func:`analysis_csv`) and the table printed at the
+end (:func:`short_table`); ``report.md`` is :mod:`.report_md`.
 
 ``analysis.json``:
 
@@ -42,9 +43,6 @@ import math
 
 import numpy as np
 
-from .materials import interface_length, material_areas
-from .part3d import closed_checks
-from .post3d import material_volumes
 
 #: the definitions written into analysis.json and report.md
 DEFINITIONS = {
@@ -108,6 +106,7 @@ def num(v):
 
 
 def fmt_value(v, spec=".4g"):
+    """``v`` formatted with ``spec``; "—" for None (not converged, not computed)."""
     return "—" if v is None else format(v, spec)
 
 
@@ -136,7 +135,7 @@ def analysis_json(*, run: dict, settings: dict, part: dict, seal, materials, swe
                   ports, expected, deformed: dict, warnings: list, wall: float) -> dict:
     """The content of ``analysis.json`` (the module's table).  ``sweeps``: kind ->
     :class:`~.part_analysis.Sweep` over ``settings["pressures"]``; ``expected``: the rows of
-    :func:`~.analyse.expected_sweep`, or None (a part as built)."""
+    :func:`~.expected.expected_sweep`, or None (a part as built)."""
     kinds = list(sweeps)
     rows = []
     for i, P in enumerate(settings["pressures"]):
@@ -195,194 +194,6 @@ def short_table(data) -> str:
     return "\n".join(lines)
 
 
-# -- report.md ----------------------------------------------------------------------------
-def report_md(d) -> str:
-    """``report.md``: the same sections for every part (2D or 3D, a run's or as built): the
-    part, the seal, the analyses, the gap, the warnings, the pictures."""
-    L = _head(d) + _part_section(d) + _seal_section(d) + _analyses_section(d)
-    L += _gap_section(d) + _warnings_section(d) + _pictures_section(d)
-    return "\n".join(L) + "\n"
-
-
-def _head(d) -> list[str]:
-    run = d["run"]
-    unit = run["load_unit"]
-    if run.get("as_built"):
-        return [f"# Analysis of {run['case']} as built", "",
-                f"The case's own geometry is the part: all its material (the design region "
-                f"and the passive solids), its passive void regions removed; no optimisation.  "
-                f"Reference load {run['load']:.4g} {unit}.", ""]
-    L = [f"# Analysis of {run['case']} — {run['model']} design, optimised at "
-         f"{run['load']:.4g} {unit}", "",
-         f"Run folder `{run['dir']}`; design `{run['design']}` after {run['iterations']} "
-         f"iterations (stopped: {run['stopped']}).  Rebuilt output displacement "
-         f"Δ = {fmt_value(run['output_displacement_rebuilt'], '.6g')} m "
-         f"(summary.json: {fmt_value(run['output_displacement_summary'], '.6g')} m)"
-         + ("." if run.get("expected_order") is None or
-            run["output_displacement_at_order"] == run["output_displacement_rebuilt"] else
-            f"; at order {run['expected_order']}, the part's, on the same mesh: "
-            f"{fmt_value(run['output_displacement_at_order'], '.6g')} m, the expected Δ "
-            f"below."), ""]
-    if run.get("order_note"):
-        L += [f"**Note**: {run['order_note']}.", ""]
-    if run.get("load_path_note"):
-        L += [f"**Warning**: {run['load_path_note']}.", ""]
-    if run["dim"] == 2:
-        L += ["| run design ρ̄ | run Darcy pressure |", "|---|---|",
-              "| ![design](../design.png) | ![pressure](../pressure.png) |", ""]
-    return L
-
-
-def _part_section(d) -> list[str]:
-    s, part, run = d["settings"], d["part"], d["run"]
-    unit = part["measure_unit"]
-    kind = "triangles" if run["dim"] == 2 else "tetrahedra"
-    L = ["## The part", ""]
-    if run.get("as_built"):
-        L.append(f"The case's mesh without its void regions: {part['elements']} elements "
-                 f"(maxh {fmt_value(s['maxh'])} m), measure {part['measure']:.6g} {unit}.")
-    else:
-        L.append(f"ρ̄ thresholded at {s['threshold']:.4g} and remeshed with Netgen {kind} of "
-                 f"{s['maxh']:.4g} m ({part['elements']} elements, geometry "
-                 f"{part['geometry']}).")
-        ch = s.get("threshold_choice") or {}
-        if ch.get("note"):
-            L.append(f"The threshold: {ch['note']}.")
-        m = part.get("measures", {})
-        L += ["", f"| measure ({unit}) | value |", "|---|---|"]
-        L += [f"| {k.replace('_', ' ')} | {fmt_value(v, '.6g')} |" for k, v in m.items()
-              if isinstance(v, (int, float)) and not isinstance(v, bool)]
-        L.append(f"| the design's material Σ a ρ̄ | {part['design_measure']:.6g} |")
-    L += ["", f"Wetted (`pressure`) boundary: {fmt_value(part['wetted'])} "
-              f"{'m' if run['dim'] == 2 else 'm²'}.  Rule: {d['definitions']['wetting']}."]
-    for region, sh in (part.get("port_shifts") or {}).items():
-        L.append(f"The named point `{region}` sits on the part's vertex {sh:.3g} m from its "
-                 f"place on the design's mesh.")
-    mats = d.get("materials")
-    if mats:
-        L += ["", f"**Two materials**: E2 on `stiff`, E1 on every other region "
-                  f"({mats['mode']}).", "", f"| region | E (Pa) | measure ({unit}) |",
-              "|---|---|---|"]
-        L += [f"| {k} | {mats['E'].get(k, float('nan')):g} | {v:.6g} |"
-              for k, v in mats["remeshed"].items()]
-        if run["dim"] == 2:
-            L += ["", "![materials](materials.png)"]
-    ports = s["output_ports"]
-    L += ["", f"Supports on the part: {s['supports']}.  Output Δ = Σ w·d·u over "
-              f"{len(ports)} port(s): " + "; ".join(
-                  f"`{q['region']}` d = {q['direction']}, w = {q['weight']:g}, spring "
-                  f"{q['spring']:g} N/m" for q in ports) + ".", ""]
-    return L
-
-
-def _seal_section(d) -> list[str]:
-    seal = d.get("seal")
-    L = ["## The seal", ""]
-    if seal is None:
-        return L + ["No pressure chamber (no pressure load).", ""]
-    what = ("the case's geometry: the void behind the inlet walls" if d["run"].get("as_built")
-            else f"the thresholded design (threshold {seal['threshold']:g})")
-    if not seal["chambers"]:
-        L.append(f"Checked on {what}: no void lies behind the inlet (it is on the part's "
-                 f"outer boundary, the fluid beyond it): no chamber to close.")
-    for c in seal["chambers"]:
-        state = "sealed: closed off from every zero-pressure boundary" if c["sealed"] else (
-            f"**open** to `{c['boundary']}` near ("
-            + ", ".join(f"{v:.4g}" for v in c["opening"]) + ") m")
-        L.append(f"Checked on {what}: chamber `{c['name']}` is {state}.")
-    return L + [""]
-
-
-def _analyses_section(d) -> list[str]:
-    s, kinds = d["settings"], d["settings"]["kinds"]
-    E = s["E"]
-    E_text = f"{E:g} Pa" if not isinstance(E, dict) else ", ".join(
-        f"{v:g} Pa ({k})" for k, v in E.items())
-    L = ["## The analyses", "",
-         f"Model `{s['model']}`" + (f", material `{s['material']}`" if s["material"] else "")
-         + f", E = {E_text}, ν = {s['nu']:g}"
-         + (f", t = {s['thickness']:g} m ({s['plane']})" if s["thickness"] else "")
-         + f"; displacement order {s['order']}, formulation {s['formulation']}.", "",
-         f"* **output** — {d['definitions']['output']};"]
-    if not d["run"].get("as_built"):
-        L.append(f"* **expected** — {d['definitions']['expected']};")
-    L += [f"* **{k}** — {d['definitions'][k]};" for k in kinds]
-    ref = "follower" if "follower" in kinds else kinds[-1]
-    L += ["", "![analysis](analysis.png)", "",
-          "| P | expected Δ (m) | " + " | ".join(f"Δ {k} (m)" for k in kinds)
-          + " | max \\|u\\| (m) | min J | Newton its |", "|" + "---|" * (5 + len(kinds))]
-    for r in d["pressures"]:
-        its = "/".join(str(r[k]["newton_iterations"]) for k in kinds)
-        L.append(f"| {r['pressure']:.4g} | {fmt_value(r['expected'])} | "
-                 + " | ".join(fmt_value(r[k]["delta"]) for k in kinds)
-                 + f" | {fmt_value(r[ref]['max_u'])} | {fmt_value(r[ref]['min_J'])} | {its} |")
-    L += ["", f"P in {d['run']['load_unit']}; max |u| and min J of the {ref} analysis; Newton "
-              f"iterations {'/'.join(kinds)}; — : not converged.", ""]
-    regions = [q["region"] for q in s["output_ports"]]
-    if len(regions) > 1:
-        cols = [(k, r) for k in kinds for r in regions]
-        L += ["Every port's own displacement d·u (m), Δ = Σ w·d·u:", "",
-              "| P | " + " | ".join(f"{k} `{r}`" for k, r in cols) + " |",
-              "|" + "---|" * (1 + len(cols))]
-        L += [f"| {row['pressure']:.4g} | " + " | ".join(
-            fmt_value(row[k]["ports"][r]) for k, r in cols) + " |" for row in d["pressures"]]
-        L.append("")
-    return L
-
-
-def _gap_section(d) -> list[str]:
-    L = ["## The gap", ""]
-    if d["gap_at_largest_pressure"] is None:
-        return L + ["No expected Δ: a part as built has no optimisation to compare with.", ""]
-
-    def pct(gaps):
-        return ", ".join(f"{k} {fmt_value(None if g is None else 100 * g, '+.1f')} %"
-                         for k, g in gaps.items())
-
-    P = [r["pressure"] for r in d["pressures"]]
-    return L + [f"(analysed − expected)/|expected|: at {P[-1]:.4g} "
-                f"{pct(d['gap_at_largest_pressure'])}; at {P[0]:.4g} "
-                f"{pct(d['gap_at_smallest_pressure'])} (at a small pressure the gap is what "
-                f"thresholding and remeshing change; its growth with the pressure is the "
-                f"nonlinearity the optimisation's model missed).", ""] + _parts_table(d)
-
-
-def _parts_table(d) -> list[str]:
-    """Where the gap at the largest pressure comes from (analysis.json's ``gap_parts``)."""
-    parts = d.get("gap_parts")
-    if not parts:
-        return []
-    L = [f"Where it comes from, at {d['pressures'][-1]['pressure']:.4g} (in % of the expected "
-         f"Δ; the steps add up to the gap):", "",
-         "| kind | threshold (rounded on the design mesh) | remesh (body-fitted, same Darcy "
-         "load) | wall pressure (instead of the Darcy body force) | total |", "|---|---|---|---|---|"]
-    for k, g in parts.items():
-        L.append(f"| {k} | " + " | ".join(f"{100 * g[s]:+.1f}" for s in
-                                          ("threshold", "remesh", "wall_pressure", "total"))
-                 + " |")
-    return L + [""]
-
-
-def _warnings_section(d) -> list[str]:
-    L = ["## Warnings", ""]
-    if not d["warnings"]:
-        return L + ["None.", ""]
-    return L + [f"* {w}" for w in d["warnings"]] + [""]
-
-
-def _pictures_section(d) -> list[str]:
-    ds = d["deformed_state"]
-    L = ["## Pictures", ""]
-    if ds["kind"] is not None:
-        L += [f"The {ds['kind']} analysis at {ds['pressure']:.4g} {d['run']['load_unit']}, "
-              f"true scale, over the undeformed part:", "", "![deformed](deformed.png)", ""]
-    L += ["Files: `analysis.json` (every number above), `analysis.csv`, `part.stl` (the part, "
-          "closed and whole, in mm), `remeshed.vtu` / `deformed.vtu` (u, J, stress, von_mises"
-          + (", p" if d["run"].get("as_built") is False else "") + "; reference / deformed "
-          "configuration), `analysis.png`, `deformed.png`.", ""]
-    return L
-
-
 def jsonable(value):
     """Tuples as lists, numpy numbers as Python numbers, recursively (for analysis.json)."""
     if isinstance(value, dict):
@@ -392,95 +203,3 @@ def jsonable(value):
     if isinstance(value, np.generic):
         return value.item()
     return value
-
-
-# -- the part's entries ---------------------------------------------------------------------
-def part_measures(part) -> dict:
-    """The measures of a run's part (m² in 2D, m³ in 3D): thresholded, kept on the clamp,
-    remeshed, and what was dropped on the way."""
-    a, b = part.pieces
-    if part.dim == 2:
-        kept = a.polygon_area - b.dropped_area
-        out = dict(thresholded=a.area, polygons=a.polygon_area, removed_specks=a.removed_area,
-                   dropped_floating=b.dropped_area, kept=kept, remeshed=b.area)
-    else:
-        kept = a.volume_kept
-        out = dict(thresholded=a.volume_thresholded, kept=kept, surface=a.volume,
-                   remeshed=b.volume, pieces=a.pieces, dropped_pieces=a.dropped,
-                   dropped_tetrahedra=b.dropped, **closed_checks(a.surface))
-    out["remeshed_vs_kept"] = out["remeshed"] / kept - 1.0 if kept else None
-    return out
-
-
-def materials_entry(part, E, threshold2) -> dict | None:
-    """analysis.json's ``materials`` for a part with a ``stiff`` region (else None): how the
-    regions were made, threshold2, each region's modulus and measure (3D two-material runs:
-    also in the clipped solid, ``part``; 2D: the interface's length)."""
-    if not isinstance(E, dict):
-        return None
-    measures = {k: v for k, v in material_areas(part.mesh).items() if k in E}
-    out = {"mode": part.materials or "as built", "threshold2": threshold2, "E": E,
-           "remeshed": measures, "part": None, "interface_length": None}
-    if part.dim == 3 and part.pieces[0] is not None and "material" in getattr(
-            part.pieces[0].solid, "cell_data", {}):
-        out["part"] = material_volumes(part.pieces[0].solid)
-    if part.dim == 2:
-        out["interface_length"] = interface_length(part.mesh)
-    return out
-
-
-def part_warnings(part, ports, sweeps, shown, h: float, unit: str) -> list[str]:
-    """What a user must know of the part beyond its figures: an output point the part does
-    not reach (its vertex more than two design elements ``h`` away), a sweep that stopped, a
-    port that moves more across its direction than along it (in the ``shown`` kind's last
-    converged state)."""
-    out = []
-    regions = {p.region for p in ports}
-    for region, (src, new) in part.ports.items():
-        shift = float(np.linalg.norm(np.subtract(new, src)))
-        if region in regions and shift > 2.0 * h:
-            out.append(f"the part does not reach the output point '{region}': its nearest "
-                       f"vertex is {shift:.3g} m away (the output ends in void)")
-    for kind, sw in sweeps.items():
-        bad = [p for p in sw.points if not p.converged]
-        if bad:
-            above = "" if len(bad) == 1 else " nor above"
-            out.append(f"the {kind} analysis did not converge at {bad[0].pressure:.4g} "
-                       f"{unit} (equilibrium up to {100 * bad[0].load_reached:.3g} % of "
-                       f"it){above}")
-    if shown is not None:
-        pt = sweeps[shown].points[int(np.flatnonzero(sweeps[shown].converged)[-1])]
-        for port, vec in zip(ports, pt.vectors):
-            d = np.asarray(port.direction, dtype=float) / np.linalg.norm(port.direction)
-            v = np.asarray(vec, dtype=float)
-            along = float(v @ d)
-            across = float(np.linalg.norm(v - along * d))
-            if across > abs(along):
-                out.append(f"the output '{port.region}' moves more across its direction "
-                           f"({across:.3g} m) than along it ({along:.3g} m) in the {shown} "
-                           f"analysis at {pt.pressure:.4g} {unit}: the "
-                           f"objective leaves that motion free")
-    return out
-
-
-def boundary_measures(mesh) -> dict:
-    """The length (2D) or area (3D) of every named boundary of ``mesh``."""
-    import ngsolve
-
-    return {name: float(ngsolve.Integrate(1.0, mesh, ngsolve.BND,
-                                          definedon=mesh.Boundaries(name)))
-            for name in sorted(set(mesh.GetBoundaries()))}
-
-
-def part_entry(part, ports, measures: dict) -> dict:
-    """analysis.json's ``part``: :meth:`~.part.Part.summary`, its ``measures`` and its named
-    points (source position, the part's vertex, the shift between them)."""
-    entry = dict(part.summary(), measures=dict(measures), boundaries=boundary_measures(part.mesh))
-    regions = {p.region for p in ports}
-    entry["points"] = {k: {"source": list(map(float, a)), "new": list(map(float, b)),
-                           "shift": float(np.linalg.norm(np.subtract(b, a)))}
-                       for k, (a, b) in part.ports.items()}
-    shifts = {k: v["shift"] for k, v in entry["points"].items() if k in regions}
-    entry["port_shifts"] = shifts
-    entry["output_port_shift"] = max(shifts.values()) if shifts else None
-    return jsonable(entry)

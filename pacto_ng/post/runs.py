@@ -10,13 +10,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case import build_problem
+from .. import resources
+from ..case import build_problem, read_run_params
+from ..delta import output_displacement
 from ..errors import InputError
 from ..mesh import Meshed
-from ..outputs import output_displacement
 from ..params import Parameters
 from ..physics.equilibrium import NewtonFailure
 from ..threads import compute
+from .grid import cell_areas, element_materials, mesh_to_pyvista
+from .materials import SOFT, STIFF, stiff_region
+from .remesh import remesh
+from .threshold import threshold
 
 
 # ------------------------------------------------------------------------------------------
@@ -42,8 +47,6 @@ class Run:
 def load_run(folder, command: str, case=None) -> Run:
     """Read ``params.json``, ``summary.json`` and ``checkpoint.npz``; InputError if anything
     that a finished run holds is missing."""
-    from ..case import read_run_params
-
     path = Path(folder)
     if not path.is_dir():
         raise InputError(f"{command}: '{folder}' is not a folder")
@@ -149,8 +152,6 @@ def thresholded_elements(th) -> np.ndarray:
     """Element ρ in {0, 1} of the thresholded design: 1 where at least half of the element's
     area lies inside the clipped solid of :func:`~pacto_ng.post.threshold.threshold` (0 in the
     materials it left out)."""
-    from .grid import cell_areas, element_materials, mesh_to_pyvista
-
     grid = mesh_to_pyvista(th.source)
     grid.point_data["rho"] = th.nodal
     grid.cell_data["cid"] = np.arange(grid.n_cells)
@@ -181,8 +182,6 @@ def materials_of(problem, setup, params, threshold2: float, exclude=()):
     """``(stiff, E)`` of a run's part: one material, ``(None, E1)``; two materials, the stiff
     region of ρ̄2 thresholded at ``threshold2`` (:func:`~pacto_ng.post.materials.stiff_region`)
     and ``{"soft": E1, "stiff": E2}``."""
-    from .materials import SOFT, STIFF, stiff_region
-
     if setup.materials == 1:
         return None, float(params.E1)
     rho2 = np.asarray(problem.values["rho_bar2"], dtype=float)
@@ -197,8 +196,6 @@ def check_part_mesh(run: Run, problem, rho: np.ndarray, maxh: float, *,
     its triangles from the solid area of the design ``rho`` (``Σ a_e ρ̄_e``, about the
     thresholded part's), its meshing time against the run's ``mesh_time_limit`` and, with
     ``order``, the memory of a re-analysis on it (``solver``: its displacement system's)."""
-    from .. import resources
-
     area = float(problem.field.areas @ rho)
     resources.check(resources.estimate_part(area, maxh, order, solver=solver),
                     f"--maxh = {maxh:g}", mesh_time_limit=run.params.mesh_time_limit,
@@ -210,9 +207,6 @@ def part_of_run(run: Run, threshold_value: float, maxh: float | None, threshold2
     """Threshold and remesh the final design of a run (the wetting rule for pressure cases;
     two materials: the regions ``soft`` and ``stiff``, ρ̄2 thresholded at ``threshold2``).
     Returns ``(Thresholded, Remeshed, problem)``; InputError when there is no part."""
-    from .remesh import remesh
-    from .threshold import threshold
-
     setup = run.case.make_setup(run.params)
     with compute():
         problem = rebuild(run)

@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from pacto_ng import sweep
+from pacto_ng import sweep, sweep_plan, sweep_table
 from pacto_ng.cli import main
 from pacto_ng.params import InputError, Parameters
 
@@ -23,56 +23,56 @@ def summary(folder):
 
 # -- pure functions --------------------------------------------------------------------------
 def test_parse_loads():
-    assert sweep.parse_loads("1e5, 1e6,1e7") == (1e5, 1e6, 1e7)
-    assert sweep.parse_loads("2.5") == (2.5,)
+    assert sweep_plan.parse_loads("1e5, 1e6,1e7") == (1e5, 1e6, 1e7)
+    assert sweep_plan.parse_loads("2.5") == (2.5,)
 
 
 @pytest.mark.parametrize("text", ["", " , ", "1,abc", "0", "-1", "inf", "nan", "1,,2", "1,1.0"])
 def test_parse_loads_rejects(text):
     with pytest.raises(InputError, match="--loads"):
-        sweep.parse_loads(text)
+        sweep_plan.parse_loads(text)
 
 
 def test_parse_models():
-    assert sweep.parse_models(None, "linear") == ("linear",)
-    assert sweep.parse_models("linear, neohookean", "gnl") == ("linear", "neohookean")
+    assert sweep_plan.parse_models(None, "linear") == ("linear",)
+    assert sweep_plan.parse_models("linear, neohookean", "gnl") == ("linear", "neohookean")
     for bad in ("rubber", "", "linear,linear", "linear,"):
         with pytest.raises(InputError, match="--models"):
-            sweep.parse_models(bad, "linear")
+            sweep_plan.parse_models(bad, "linear")
 
 
 @pytest.mark.parametrize("load, label", [(1e5, "1e5"), (2.5e5, "2.5e5"), (1.0, "1e0"),
                                          (0.5, "5e-1"), (123456.7, "1.23457e5"), (1e-7, "1e-7")])
 def test_load_label(load, label):
-    assert sweep.load_label(load) == label
+    assert sweep_plan.load_label(load) == label
 
 
 def test_grid_and_folder_names():
-    runs = sweep.sweep_grid(("linear", "neohookean"), (1e5, 1e6))
+    runs = sweep_plan.sweep_grid(("linear", "neohookean"), (1e5, 1e6))
     assert [(r.model, r.load, r.folder) for r in runs] == [
         ("linear", 1e5, "linear-1e5"), ("linear", 1e6, "linear-1e6"),
         ("neohookean", 1e5, "neohookean-1e5"), ("neohookean", 1e6, "neohookean-1e6")]
-    p = sweep.run_parameters(Parameters(), runs[3])
+    p = sweep_plan.run_parameters(Parameters(), runs[3])
     assert p.model == "neohookean" and p.load == 1e6
 
 
 def test_run_status_and_parameter_check(tmp_path):
     params = Parameters(iterations=3)
-    assert sweep.run_status(tmp_path) == "new"
+    assert sweep_plan.run_status(tmp_path) == "new"
     (tmp_path / "params.json").write_text(json.dumps({"case": "mbb", "params": params.to_dict()}))
-    assert sweep.run_status(tmp_path) == "new"  # stopped before its first checkpoint
+    assert sweep_plan.run_status(tmp_path) == "new"  # stopped before its first checkpoint
     (tmp_path / "checkpoint.npz").write_bytes(b"")
     (tmp_path / "summary.json").write_text('{"objective": 1.')  # cut short while writing
-    assert sweep.run_status(tmp_path) == "resume"
-    sweep.check_same_parameters(tmp_path, params, "resume")
+    assert sweep_plan.run_status(tmp_path) == "resume"
+    sweep_plan.check_same_parameters(tmp_path, params, "resume")
     with pytest.raises(InputError, match="iterations = 3.*iterations = 4"):
-        sweep.check_same_parameters(tmp_path, Parameters(iterations=4), "resume")
+        sweep_plan.check_same_parameters(tmp_path, Parameters(iterations=4), "resume")
     (tmp_path / "summary.json").write_text(json.dumps({"objective": 1.0,
                                                        "parameters": params.to_dict()}))
-    assert sweep.run_status(tmp_path) == "done"
-    sweep.check_same_parameters(tmp_path, params, "done")
+    assert sweep_plan.run_status(tmp_path) == "done"
+    sweep_plan.check_same_parameters(tmp_path, params, "done")
     with pytest.raises(InputError, match="volfrac"):
-        sweep.check_same_parameters(tmp_path, Parameters(iterations=3, volfrac=0.3), "done")
+        sweep_plan.check_same_parameters(tmp_path, Parameters(iterations=3, volfrac=0.3), "done")
 
 
 def test_parameter_check_compares_what_a_run_was_asked_for(tmp_path):
@@ -85,11 +85,11 @@ def test_parameter_check_compares_what_a_run_was_asked_for(tmp_path):
         "objective": 1.0, "parameters": resolved.to_dict(),
         "model_choice": {"requested": "auto", "chosen": "wang"},
         "load_ramp_choice": {"requested": -1, "chosen": 37}}))
-    sweep.check_same_parameters(tmp_path, asked, "done")
+    sweep_plan.check_same_parameters(tmp_path, asked, "done")
     with pytest.raises(InputError, match="load_ramp = -1, this sweep has load_ramp = 0"):
-        sweep.check_same_parameters(tmp_path, asked.replace(load_ramp=0), "done")
+        sweep_plan.check_same_parameters(tmp_path, asked.replace(load_ramp=0), "done")
     with pytest.raises(InputError, match="model = 'auto', this sweep has model = 'wang'"):
-        sweep.check_same_parameters(tmp_path, asked.replace(model="wang"), "done")
+        sweep_plan.check_same_parameters(tmp_path, asked.replace(model="wang"), "done")
 
 
 def _fake_summary(folder, **kw):
@@ -102,14 +102,14 @@ def _fake_summary(folder, **kw):
 
 
 def test_table_rows_of_finished_failed_and_missing_runs(tmp_path):
-    runs = sweep.sweep_grid(("neohookean",), (1e5, 1e6, 1e7, 1e8))
+    runs = sweep_plan.sweep_grid(("neohookean",), (1e5, 1e6, 1e7, 1e8))
     _fake_summary(tmp_path / runs[0].folder)
     _fake_summary(tmp_path / runs[1].folder, converged=False, stopped="newton",
                   load_reached=4e5, load_factor_reached=0.4)
     # the optimisation ended normally but the final analysis of the design failed
     _fake_summary(tmp_path / runs[2].folder, converged=True, stopped="iterations",
                   load_reached=5e6, load_factor_reached=0.5)
-    rows = sweep.collect_table(tmp_path, runs, errors={runs[3].folder: "RuntimeError: boom"})
+    rows = sweep_table.collect_table(tmp_path, runs, errors={runs[3].folder: "RuntimeError: boom"})
     ok, newton, final, missing = rows
     assert ok["converged"] is True and ok["load_reached"] == 1e5 and ok["iterations"] == 7
     assert newton["converged"] is False and newton["load_reached"] == 4e5
@@ -118,14 +118,14 @@ def test_table_rows_of_finished_failed_and_missing_runs(tmp_path):
     assert missing["converged"] is False and missing["stopped"] == "error"
     assert missing["objective"] is None and missing["load"] == 1e8
 
-    sweep.write_csv(tmp_path / "sweep.csv", rows)
+    sweep_table.write_csv(tmp_path / "sweep.csv", rows)
     table = read_csv(tmp_path / "sweep.csv")
-    assert tuple(table[0]) == sweep.COLUMNS
+    assert tuple(table[0]) == sweep_table.COLUMNS
     assert [r["converged"] for r in table] == ["true", "false", "false", "false"]
     assert float(table[1]["load_reached"]) == 4e5 and table[1]["folder"] == "neohookean-1e6"
     assert table[3]["objective"] == "" and table[3]["stopped"] == "error"
 
-    sweep.plot_sweep(tmp_path / "sweep.png", rows, "test", "N")
+    sweep_table.plot_sweep(tmp_path / "sweep.png", rows, "test", "N")
     assert (tmp_path / "sweep.png").read_bytes()[:4] == b"\x89PNG"
 
 
@@ -133,7 +133,7 @@ def test_plot_without_output_displacement(tmp_path):
     rows = [dict(model=m, load=f, objective=f * f * k, output_displacement=None,
                  stopped="iterations")
             for k, m in enumerate(("linear", "gnl"), 1) for f in (1.0, 10.0)]
-    sweep.plot_sweep(tmp_path / "p.png", rows)
+    sweep_table.plot_sweep(tmp_path / "p.png", rows)
     assert (tmp_path / "p.png").stat().st_size > 1000
 
 

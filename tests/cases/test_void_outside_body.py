@@ -49,7 +49,7 @@ def test_a_void_chamber_outside_the_body_is_refused_in_one_line(tmp_path, name, 
 def test_a_chamber_cut_out_of_the_body_passes(tmp_path):
     """The template's own chamber (cut out and glued back) passes the check."""
     from pacto_ng.case import load_case_file, mesh_for
-    from pacto_ng.geometry import check_inlet_touches_design, check_setup_names
+    from pacto_ng.setup_names import check_inlet_touches_design, check_setup_names
 
     path = tmp_path / "finger.py"
     path.write_text(TEMPLATE.format(name="finger", file="finger.py"))
@@ -74,7 +74,7 @@ def _pad_mesh(inlet_end):
 def test_an_inlet_that_meets_the_design_at_a_vertex_only_is_refused():
     """An inlet along the pad's outer edge touches the design at the pad's corner (x = 4 mm)
     and borders only pad elements: it pressurises nothing."""
-    from pacto_ng.geometry import check_inlet_touches_design
+    from pacto_ng.setup_names import check_inlet_touches_design
 
     with pytest.raises(InputError) as err:
         check_inlet_touches_design(_pad_mesh(0.004), ("inlet",), ())

@@ -19,7 +19,8 @@ import pacto_ng
 #: the modules of the reference, as docs/api.md builds them (pacto_ng: the public API of
 #: ``__all__``; the others: where those names live, with their module docstrings)
 MODULES = ["pacto_ng", "pacto_ng.api", "pacto_ng.case", "pacto_ng.setup", "pacto_ng.problem",
-           "pacto_ng.errors", "pacto_ng.geometry", "pacto_ng.mesh",
+           "pacto_ng.errors", "pacto_ng.geometry", "pacto_ng.meshing", "pacto_ng.setup_names",
+           "pacto_ng.mesh",
            "pacto_ng.settings", "pacto_ng.builders",
            "pacto_ng.params", "pacto_ng.physics.loads", "pacto_ng.post"]
 

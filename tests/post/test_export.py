@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from pacto_ng.physics.materials import neohookean_energy
-from pacto_ng.post.export import (convert, plot_deformed, plot_sweeps, write_stl, write_vtu)
+from pacto_ng.post.export import convert, write_stl, write_vtu
+from pacto_ng.post.pictures import plot_deformed, plot_sweeps
 
 T = 1e-3  # thickness (m)
 

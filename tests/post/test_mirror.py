@@ -1,5 +1,5 @@
 """Pictures of a case solved on a symmetric half show the whole mechanism (post.plots,
-post.domain.symmetry_line, export.plot_deformed)."""
+post.domain.symmetry_line, pictures.plot_deformed)."""
 import numpy as np
 import pytest
 
@@ -111,7 +111,7 @@ def test_pictures_are_written_mirrored(pa_half, tmp_path):
     import matplotlib.image as mpimg
     import ngsolve as ng
 
-    from pacto_ng.post.export import plot_deformed
+    from pacto_ng.post.pictures import plot_deformed
     from pacto_ng.post.plots import density_png
 
     problem = types.SimpleNamespace(mesh=pa_half, values={"rho_bar": _design(pa_half)})

@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 from pacto_ng.physics.loads import Port
-from pacto_ng.post.report import analysis_csv, analysis_json, part_warnings, report_md
+from pacto_ng.post.part_entries import part_warnings
+from pacto_ng.post.report import analysis_csv, analysis_json
+from pacto_ng.post.report_md import report_md
 
 PORT = Port("output", (0.0, -1.0), 1e4)
 

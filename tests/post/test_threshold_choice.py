@@ -139,7 +139,7 @@ def test_check_threshold_rejects_with_the_option_named(value):
 def test_load_path_note(rebuilt, summary, warned):
     """A Δ of the final design loaded from rest that is not the optimisation's (measured on a
     PneuNet design at 1e6 Pa: 3.2e-5 and 7.3e-5 m from rest, 5.1e-4 m in summary.json)."""
-    from pacto_ng.post.analyse import load_path_note
+    from pacto_ng.post.expected import load_path_note
 
     note = load_path_note(rebuilt, summary)
     assert (note is not None) == warned

@@ -78,7 +78,8 @@ def _analysed(mesh, rho2, out, kinds):
     Neo-Hookean sweeps (E1 soft, E2 stiff, each region its own: PartAnalysis), and the files
     a part's analysis writes of its regions: remeshed.vtu and materials.png."""
     from pacto_ng.params import Parameters
-    from pacto_ng.post.export import plot_materials, write_vtu
+    from pacto_ng.post.export import write_vtu
+    from pacto_ng.post.pictures import plot_materials
     from pacto_ng.post.materials import stiff_region
     from pacto_ng.post.part_analysis import PartAnalysis
     from pacto_ng.post.remesh import remesh

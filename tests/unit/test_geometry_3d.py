@@ -6,9 +6,10 @@ import pytest
 
 import pacto_ng as pn
 from pacto_ng.box import Block, Box, Patch, structured_box
-from pacto_ng.geometry import check_setup_names, mesh_geometry
+from pacto_ng.meshing import mesh_geometry
 from pacto_ng.params import InputError
 from pacto_ng.setup import Pressure, Setup
+from pacto_ng.setup_names import check_setup_names
 from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
 

@@ -3,7 +3,7 @@ import dataclasses
 
 import pytest
 
-from pacto_ng import sweep
+from pacto_ng import sweep_plan
 from pacto_ng.case import get_case
 from pacto_ng.cli import main
 from pacto_ng.params import InputError, Parameters
@@ -20,10 +20,10 @@ def test_resolve_uses_the_model_table_only_when_order_is_not_given():
 
 def test_sweep_resolves_each_model_separately():
     case = dataclasses.replace(get_case("mbb"), model_orders={"linear": 2})
-    lin, nh = sweep.sweep_grid(("linear", "neohookean"), (1.0,))
-    assert sweep.run_parameters(Parameters(), lin, case).order == 2
-    assert sweep.run_parameters(Parameters(), nh, case).order == 1
-    assert sweep.run_parameters(Parameters(order=3), nh, case).order == 3
+    lin, nh = sweep_plan.sweep_grid(("linear", "neohookean"), (1.0,))
+    assert sweep_plan.run_parameters(Parameters(), lin, case).order == 2
+    assert sweep_plan.run_parameters(Parameters(), nh, case).order == 1
+    assert sweep_plan.run_parameters(Parameters(order=3), nh, case).order == 3
 
 
 def test_cantilever_default_orders():

@@ -25,19 +25,19 @@ def no_meshing(monkeypatch):
     """Meshing must not start: every mesh builder raises MeshingStarted."""
     from netgen import occ
 
-    import pacto_ng.geometry as geometry
+    import pacto_ng.meshing as meshing
 
     def started(*args, **kwargs):
         raise MeshingStarted
 
-    import pacto_ng.mesh as mesh
+    import pacto_ng.studies as studies
 
-    monkeypatch.setattr(geometry, "structured_mesh", started)
-    monkeypatch.setattr(geometry, "netgen_mesh", started)
-    monkeypatch.setattr(geometry, "structured_box", started)  # a Box's hexahedra
-    monkeypatch.setattr(geometry, "netgen_box_mesh", started)
-    monkeypatch.setattr(mesh, "structured_mesh", started)  # the C-beam analysis's mesher
-    monkeypatch.setattr(mesh, "netgen_mesh", started)
+    monkeypatch.setattr(meshing, "structured_mesh", started)
+    monkeypatch.setattr(meshing, "netgen_mesh", started)
+    monkeypatch.setattr(meshing, "structured_box", started)  # a Box's hexahedra
+    monkeypatch.setattr(meshing, "netgen_box_mesh", started)
+    monkeypatch.setattr(studies, "structured_mesh", started)  # the C-beam analysis's mesher
+    monkeypatch.setattr(studies, "netgen_mesh", started)
     monkeypatch.setattr(occ, "OCCGeometry", started)
 
 
@@ -141,12 +141,13 @@ def test_estimate_against_real_meshes(name, scale):
     from ngsolve import VectorH1
 
     from pacto_ng.case import get_case
-    from pacto_ng.geometry import _is_occ_shape, mesh_geometry
+    from pacto_ng.geometry import is_occ_shape
+    from pacto_ng.meshing import mesh_geometry
 
     case = get_case(name)
     geo = case.make_geometry(case.defaults)
     h = case.defaults.maxh * scale
-    tri = (resources.shape_triangles(geo, h) if _is_occ_shape(geo)
+    tri = (resources.shape_triangles(geo, h) if is_occ_shape(geo)
            else resources.netgen_triangles(geo.width * geo.height, h))
     mesh = mesh_geometry(geo, maxh=h).mesh
     for k in (1, 2, 3):
@@ -188,7 +189,7 @@ def test_local_maxh_of_a_shape_counts():
 def test_occ_shape_refused_before_netgen(no_meshing):
     from netgen import occ
 
-    from pacto_ng.geometry import mesh_geometry
+    from pacto_ng.meshing import mesh_geometry
 
     face = occ.WorkPlane().Rectangle(1, 1).Face()
     face.name = "design"
@@ -197,7 +198,7 @@ def test_occ_shape_refused_before_netgen(no_meshing):
 
 
 def test_mesh_file_checked_after_reading(tmp_path, monkeypatch):
-    from pacto_ng.geometry import mesh_geometry
+    from pacto_ng.meshing import mesh_geometry
     from pacto_ng.mesh import Layout, netgen_mesh
 
     path = tmp_path / "part.vol"

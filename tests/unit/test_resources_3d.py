@@ -8,7 +8,7 @@ import pytest
 
 from pacto_ng import resources, resources3d
 from pacto_ng.box import Block, Box, Patch, netgen_box_mesh, structured_box
-from pacto_ng.geometry import mesh_geometry
+from pacto_ng.meshing import mesh_geometry
 from pacto_ng.params import InputError
 
 
@@ -66,14 +66,14 @@ def test_3d_memory_is_above_2d_at_the_same_dofs():
 def no_meshing(monkeypatch):
     from netgen import occ
 
-    import pacto_ng.geometry as geometry
+    import pacto_ng.meshing as meshing
 
     def started(*args, **kwargs):
         raise AssertionError("meshing started")
 
     monkeypatch.setattr(occ, "OCCGeometry", started)
-    monkeypatch.setattr(geometry, "netgen_box_mesh", started)
-    monkeypatch.setattr(geometry, "structured_box", started)
+    monkeypatch.setattr(meshing, "netgen_box_mesh", started)
+    monkeypatch.setattr(meshing, "structured_box", started)
 
 
 @pytest.mark.parametrize("geometry, kwargs, words", [

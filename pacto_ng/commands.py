@@ -1,0 +1,96 @@
+"""The ``pacto`` commands that optimise or post-process a design: ``run`` and ``resume`` (the
+optimisation, then its part), ``sweep``, ``evaluate``, ``analyse``, ``export`` and ``compare``,
+each from the parsed arguments (:mod:`pacto_ng.cli_parser`) to its exit code.
+
+They need :mod:`pacto_ng.runner` and :mod:`pacto_ng.post`, about 0.5 s to import (pyvista,
+meshio): :mod:`pacto_ng.cli` imports this module for these commands only, so that
+``pacto --help``, ``pacto cases`` and ``pacto new`` stay quick.
+"""
+from __future__ import annotations
+
+import argparse
+
+from .case import get_case
+from .cli_parser import params_from_args
+from .errors import InputError
+from .evaluate import evaluate_design
+from .parallel import leads
+from .post.analyse import analyse_run
+from .post.analysis_options import parse_pressures
+from .post.as_built import analyse_as_built
+from .post.cli_commands import export_run
+from .post.compare import compare_runs
+from .post.part_stage import finish_run
+from .runner import optimise_case, resume_run
+from .sweep import run_sweep
+from .sweep_plan import parse_loads, parse_models
+
+
+def post_command(args) -> int:
+    """``pacto analyse``, ``pacto export`` and ``pacto compare``."""
+    if args.command == "analyse":
+        return _analyse_command(args)
+    if args.command == "export":
+        return export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
+                          maxh=args.maxh, quiet=args.quiet, threshold2=args.threshold2,
+                          units=args.units, mirror=args.mirror)
+    return compare_runs(args.dirs, out=args.out, quiet=args.quiet)
+
+
+def _analyse_command(args) -> int:
+    """``pacto analyse DIR`` (pacto_ng.post.analyse) or ``pacto analyse CASE --as-built``
+    (pacto_ng.post.as_built)."""
+    pressures = parse_pressures(args.pressures) if args.pressures is not None else None
+    kinds = None if args.kinds is None else tuple(
+        k.strip() for k in args.kinds.split(",") if k.strip())
+    if args.as_built:
+        case = get_case(args.dir)
+        params = params_from_args(case, argparse.Namespace(
+            set=args.set, model=args.model, maxh=args.maxh, nelx=None))
+        return analyse_as_built(case, params, pressures=pressures, kinds=kinds,
+                                order=args.order, out=args.out, quiet=args.quiet,
+                                time_limit=args.time_limit)
+    for flag, value in (("--set", args.set), ("--out", args.out)):
+        if value:
+            raise InputError(f"{flag}: applies to --as-built; a run's part is analysed with the "
+                             f"run's parameters (--model names another law) in DIR/analysis/")
+    return analyse_run(args.dir, pressures=pressures, threshold_value=args.threshold,
+                       maxh=args.maxh, order=args.order,
+                       kinds=kinds if kinds is not None else ("darcy", "fixed", "follower"),
+                       quiet=args.quiet, connect=not args.keep_threshold,
+                       threshold2=args.threshold2, model=args.model, time_limit=args.time_limit)
+
+
+def run_with_part(case, params, out, args) -> int:
+    """``pacto run``: the optimisation, then its part (:mod:`pacto_ng.post.part_stage`) made,
+    checked and analysed by the rank that writes the folder."""
+    done = optimise_case(case, params, out, quiet=args.quiet, overwrite=args.overwrite)
+    return _with_part(done, out, args)
+
+
+def resume_with_part(args) -> int:
+    """``pacto resume``: the optimisation continued, then its part, as ``pacto run``."""
+    done = resume_run(args.dir, quiet=args.quiet, iterations=args.iterations)
+    return _with_part(done, args.dir, args)
+
+
+def _with_part(done, out, args) -> int:
+    """A finished optimisation's part made, checked and analysed (unless ``--no-part``);
+    the run's exit code."""
+    if leads() and not args.no_part:
+        finish_run(out, done.problem, done.summary, quiet=args.quiet)
+    return done.exit_code
+
+
+def sweep_command(case, params, args) -> int:
+    """``pacto sweep``: the case over the grid of ``--loads`` and ``--models``."""
+    loads = parse_loads(args.loads)
+    models = parse_models(args.models, params.model)
+    return run_sweep(case, params, models, loads, args.out or f"output/sweep-{case.name}",
+                     scheduler=args.scheduler, workers=args.workers, quiet=args.quiet)
+
+
+def evaluate_command(case, params, out, args) -> int:
+    """``pacto evaluate``: the given design analysed into ``out``."""
+    return evaluate_design(case, params, args.density, out, filtered=args.filtered,
+                           quiet=args.quiet, overwrite=args.overwrite)
