@@ -250,5 +250,7 @@ def last_line(summary: dict, path) -> str:
                         else "--set robust=1 designs hinges the part keeps")
                         + " (docs/guide.md, 'The part')")
             bits.append(text)
+    elif part.get("why_not_analysed"):
+        bits.append(f"made, not analysed ({part['why_not_analysed']})")
     bits += part.get("warnings", [])
     return f"{head}: " + "; ".join(bits) + f" — {path}/part.stl"

@@ -179,3 +179,14 @@ def test_a_part_off_its_design_is_told_what_to_change(robust):
     assert "(+50.0 %) — not as designed" in line
     assert ("--set robust=1" in line) is (robust == 0)
     assert ("'pacto analyse RUN'" in line) is (robust == 1)
+
+
+def test_a_part_that_is_not_analysed_says_so():
+    """A case without pressure or port (the MBB beam): its part is made, and the last line
+    says why it is not analysed instead of nothing."""
+    from pacto_ng.post.part_stage import last_line
+
+    why = "the part is analysed for pressure cases with an output port"
+    line = last_line({"part": {"made": True, "analysed": False, "why_not_analysed": why,
+                               "sealed": None}}, "RUN")
+    assert line == f"part: made, not analysed ({why}) — RUN/part.stl"
