@@ -153,23 +153,19 @@ def _rebuilt_entry(run, problem, quiet):
 def _at_part_order(problem, order, entry, quiet):
     """The run's problem at the part's ``order`` (:func:`~.runs.at_order`), its Δ at the
     run's load into the 'run' ``entry``; the run's problem where that has no equilibrium."""
-    entry["expected_order"] = int(order)
-    if problem.failure or int(problem.params.order) == int(order):
-        entry["expected_order"] = int(problem.params.order)
-        entry["output_displacement_at_order"] = entry["output_displacement_rebuilt"]
-        return problem
-    try:
-        with compute():
+    design = problem
+    if not problem.failure:
+        try:
             design = at_order(problem, order)
-    except NewtonFailure as err:
-        entry["expected_order"] = int(problem.params.order)
-        entry["output_displacement_at_order"] = entry["output_displacement_rebuilt"]
-        entry["order_note"] = (f"the design has no equilibrium at order {order} ({err}); the "
-                               f"expected Δ is at the run's order")
-        return problem
-    entry["output_displacement_at_order"] = design_delta(design)
-    say(quiet, f"  the design at order {order}: Δ = "
-                f"{entry['output_displacement_at_order']:.6g} m")
+        except NewtonFailure as err:
+            entry["order_note"] = (f"the design has no equilibrium at order {order} ({err}); "
+                                   f"the expected Δ is at the run's order")
+    entry["expected_order"] = int(design.params.order)
+    entry["output_displacement_at_order"] = (entry["output_displacement_rebuilt"]
+                                             if design is problem else design_delta(design))
+    if design is not problem:
+        say(quiet, f"  the design at order {order}: Δ = "
+                   f"{entry['output_displacement_at_order']:.6g} m")
     return design
 
 
