@@ -144,18 +144,7 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
     an ``ngsolve.Mesh`` is checked on its own counts."""
     import ngsolve
 
-    source = "the mesh"
-    if isinstance(geometry, (str, os.PathLike)):
-        low = str(geometry).lower()
-        if low.endswith(CAD_SUFFIXES):
-            geometry = load_cad(geometry)
-        elif low.endswith(MESH_SUFFIXES):
-            source = f"mesh file '{geometry}'"
-            geometry = load_mesh(geometry)
-        else:
-            raise InputError(f"geometry: '{geometry}' is neither a CAD file "
-                             f"({', '.join(CAD_SUFFIXES)}) nor a mesh file "
-                             f"({', '.join(MESH_SUFFIXES)})")
+    geometry, source = _read_file(geometry)
     if isinstance(geometry, Box):
         return _mesh_box(geometry, maxh, (nelx, nely, nelz), order, mesh_time_limit,
                          dict(solver=solver, linear_solver=linear_solver))
@@ -165,11 +154,7 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
     if nelx > 0 and not isinstance(geometry, Layout):
         raise InputError("nelx, nely: structured quads need a rectangular domain (a Layout); "
                          "this case's geometry is not one (give --maxh instead)")
-
-    def fits(estimate, what, advice):
-        resources.check(estimate, what, mesh_time_limit=mesh_time_limit, advice=advice)
-
-    finer = "give a larger maxh or a lower order"
+    fits = _fits(mesh_time_limit)
     if isinstance(geometry, ngsolve.Mesh):
         mesh = _checked_mesh(geometry)
         fits(resources.estimate_mesh(mesh, order, solver=solver, linear_solver=linear_solver),
@@ -177,48 +162,88 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
              "give a coarser mesh or a lower order")
         return Meshed(mesh, _mean_size(mesh), None)
     if isinstance(geometry, Layout):
-        if nelx > 0:
-            fits(resources.estimate_grid(nelx, nely, order, solver=solver),
-                 f"nelx x nely = {nelx} x {nely}", "give a smaller nelx, nely or order")
-            mesh = structured_mesh(geometry, nelx, nely)
-            return Meshed(mesh, min(geometry.width / nelx, geometry.height / nely), None)
-        _check_maxh(maxh, min(geometry.width, geometry.height))
-        triangles = resources.netgen_triangles(geometry.width * geometry.height, maxh)
-        fits(resources.estimate_triangles(triangles, order, solver=solver), f"maxh = {maxh:g}",
-             finer)
-        return Meshed(netgen_mesh(geometry, maxh), maxh, layout_shape(geometry))
+        return _mesh_layout(geometry, maxh, nelx, nely, order, fits, solver)
     if is_occ_shape(geometry):
-        solid = is_solid(geometry)
-        if len(geometry.faces) == 0:
-            raise InputError("geometry: the shape has no face to mesh")
-        _check_maxh(maxh, extent(geometry))
-        if solid:
-            estimate = resources3d.estimate_tets(resources3d.shape_tets(geometry, maxh), order,
-                                                 solver=solver, linear_solver=linear_solver)
-        else:
-            estimate = resources.estimate_triangles(resources.shape_triangles(geometry, maxh),
-                                                    order, solver=solver)
-        fits(estimate, f"maxh = {maxh:g}", finer)
-        from netgen import occ
-
-        try:
-            ngm = occ.OCCGeometry(geometry, dim=3 if solid else 2).GenerateMesh(maxh=maxh)
-        except RuntimeError as err:
-            raise InputError(f"geometry: Netgen could not mesh the shape at maxh = {maxh:g} "
-                             f"({err})") from None
-        return Meshed(_checked_mesh(ngsolve.Mesh(ngm)), maxh, geometry)
+        return _mesh_shape(geometry, maxh, order, fits, solver, linear_solver)
     raise InputError(f"geometry: got a {type(geometry).__name__}; a case's geometry must be a "
                      "netgen.occ shape, a Layout, a Box, a CAD or mesh file path, or an "
                      "ngsolve.Mesh")
+
+
+#: what a refused Netgen mesh says to do
+_FINER = "give a larger maxh or a lower order"
+
+
+def _fits(mesh_time_limit: float):
+    """``fits(estimate, what, advice)``: refuse, with one line, a mesh that would not fit this
+    machine's memory or would take longer than ``mesh_time_limit`` to make
+    (:func:`pacto_ng.resources.check`)."""
+    def fits(estimate, what, advice):
+        resources.check(estimate, what, mesh_time_limit=mesh_time_limit, advice=advice)
+
+    return fits
+
+
+def _read_file(geometry) -> tuple:
+    """``(geometry, source)``: a CAD file's shape or a mesh file's mesh for a path (the
+    geometry itself otherwise), and how a refused mesh names it."""
+    if not isinstance(geometry, (str, os.PathLike)):
+        return geometry, "the mesh"
+    low = str(geometry).lower()
+    if low.endswith(CAD_SUFFIXES):
+        return load_cad(geometry), "the mesh"
+    if low.endswith(MESH_SUFFIXES):
+        return load_mesh(geometry), f"mesh file '{geometry}'"
+    raise InputError(f"geometry: '{geometry}' is neither a CAD file "
+                     f"({', '.join(CAD_SUFFIXES)}) nor a mesh file "
+                     f"({', '.join(MESH_SUFFIXES)})")
+
+
+def _mesh_layout(layout: Layout, maxh, nelx, nely, order, fits, solver) -> Meshed:
+    """A Layout as structured quads (``nelx, nely > 0``) or Netgen triangles of ``maxh``,
+    checked by ``fits`` (:func:`_fits`) first."""
+    if nelx > 0:
+        fits(resources.estimate_grid(nelx, nely, order, solver=solver),
+             f"nelx x nely = {nelx} x {nely}", "give a smaller nelx, nely or order")
+        mesh = structured_mesh(layout, nelx, nely)
+        return Meshed(mesh, min(layout.width / nelx, layout.height / nely), None)
+    _check_maxh(maxh, min(layout.width, layout.height))
+    triangles = resources.netgen_triangles(layout.width * layout.height, maxh)
+    fits(resources.estimate_triangles(triangles, order, solver=solver), f"maxh = {maxh:g}",
+         _FINER)
+    return Meshed(netgen_mesh(layout, maxh), maxh, layout_shape(layout))
+
+
+def _mesh_shape(shape, maxh, order, fits, solver, linear_solver) -> Meshed:
+    """A netgen.occ shape as Netgen tetrahedra (a solid) or triangles of ``maxh``, checked by
+    ``fits`` (:func:`_fits`) first."""
+    import ngsolve
+    from netgen import occ
+
+    solid = is_solid(shape)
+    if len(shape.faces) == 0:
+        raise InputError("geometry: the shape has no face to mesh")
+    _check_maxh(maxh, extent(shape))
+    if solid:
+        estimate = resources3d.estimate_tets(resources3d.shape_tets(shape, maxh), order,
+                                             solver=solver, linear_solver=linear_solver)
+    else:
+        estimate = resources.estimate_triangles(resources.shape_triangles(shape, maxh),
+                                                order, solver=solver)
+    fits(estimate, f"maxh = {maxh:g}", _FINER)
+    try:
+        ngm = occ.OCCGeometry(shape, dim=3 if solid else 2).GenerateMesh(maxh=maxh)
+    except RuntimeError as err:
+        raise InputError(f"geometry: Netgen could not mesh the shape at maxh = {maxh:g} "
+                         f"({err})") from None
+    return Meshed(_checked_mesh(ngsolve.Mesh(ngm)), maxh, shape)
 
 
 def _mesh_box(box: Box, maxh, nel, order, mesh_time_limit, solvers: dict) -> Meshed:
     """A Box as Netgen tetrahedra of ``maxh`` or, with ``nel`` = (nelx, nely, nelz) > 0,
     structured hexahedra; checked against this machine's resources first (``solvers``: the
     estimates' ``solver`` and ``linear_solver``)."""
-    def fits(estimate, what, advice):
-        resources.check(estimate, what, mesh_time_limit=mesh_time_limit, advice=advice)
-
+    fits = _fits(mesh_time_limit)
     nelx, nely, nelz = nel
     if nelx > 0:
         if nelz == 0:
@@ -231,8 +256,7 @@ def _mesh_box(box: Box, maxh, nel, order, mesh_time_limit, solvers: dict) -> Mes
         return Meshed(mesh, float(min(box.size / np.array(nel))), None)
     _check_maxh(maxh, float(box.size.min()))
     tets = resources3d.netgen_tets(float(np.prod(box.size)), maxh)
-    fits(resources3d.estimate_tets(tets, order, **solvers), f"maxh = {maxh:g}",
-         "give a larger maxh or a lower order")
+    fits(resources3d.estimate_tets(tets, order, **solvers), f"maxh = {maxh:g}", _FINER)
     return Meshed(netgen_box_mesh(box, maxh), maxh, box_shape(box))
 
 

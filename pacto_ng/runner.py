@@ -280,23 +280,9 @@ def _run_case(case: Case, params: Parameters, out: str | os.PathLike, *, quiet: 
 
 def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *, quiet: bool,
               resume: bool, model_choice: dict | None, ramp_choice: dict | None) -> Finished:
-    t_start = time.perf_counter()
-    if resume and (path / "summary.json").exists():  # a finished run continued: add its time
-        try:
-            t_start -= float(json.loads((path / "summary.json").read_text())["wall_time_s"])
-        except (ValueError, KeyError, TypeError):
-            pass
+    t_start = time.perf_counter() - _time_before(path, resume)
     if params.model == "auto" or params.load_ramp < 0:
-        warnings = []
-        params, model_choice, ramp_choice = choose(case, params, comm=world(),
-                                                   warnings=warnings)
-        if leads():  # sizes and moduli that do not match: said even with --quiet
-            for line in warnings:
-                print(f"pacto: warning: {line}", file=sys.stderr, flush=True)
-        if not quiet and model_choice is not None:
-            print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
-        if not quiet and ramp_choice is not None and ramp_choice["chosen"] > 0:
-            print(f"load ramp -> {ramp_choice['chosen']} iterations: {ramp_choice['reason']}")
+        params, model_choice, ramp_choice = _auto_choices(case, params, quiet)
     params = case.resolve(params)  # order 0: the case's order for the (chosen) model
     lead = leads()
     problem = build_problem(case, params, comm=world())
@@ -320,16 +306,8 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
             "model_choice": model_choice, "load_ramp_choice": ramp_choice}
     if lead:
         _write_params(path / "params.json", info)
-    if resume and not quiet:
-        print(f"resuming {case.name} at iteration {state.k}" if resumed else
-              f"resuming {case.name}: no checkpoint yet, starting at iteration 0")
     if not quiet:
-        mixed = " (mixed formulation)" if problem.mech.formulation == "mixed" else ""
-        ne = problem.mesh.ne if problem.numbering is None else problem.numbering.ne
-        ranks = "" if problem.numbering is None else f" on {problem.numbering.comm.size} ranks"
-        print(f"{case.name}: model {params.model}{mixed}, {ne} elements{ranks}, order "
-              f"{params.order}, {problem.mech.fes.ndofglobal} displacement dofs, "
-              f"{problem.n_design} design variables")
+        _announce(case, params, problem, state.k if resume else None, resumed)
 
     def on_iteration(st, row):
         if not lead:
@@ -345,6 +323,67 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
                           tol=params.tol, method=params.optimizer, move=params.move, state=state,
                           on_iteration=on_iteration, obj_tol=params.obj_tol,
                           load_adapt=params.load_adapt)
+    final_x, failed = _final_analysis(problem, params, state, result)
+    if failed and params.model in WHEN_NEWTON_FAILS:
+        result.message += "; " + WHEN_NEWTON_FAILS[params.model]
+    wall = time.perf_counter() - t_start
+    if problem.numbering is None:
+        summary = write_outputs(path, problem, final_x, state.history, result, wall)
+    else:
+        summary = write_distributed_outputs(path, problem, final_x, state.history, result,
+                                            wall, write=lead)
+    if lead and (not quiet or failed):
+        print(("run stopped: " if failed else "") + result.message + f" — output in {path}")
+    return Finished(1 if failed else 0, problem, final_x, state.history, summary)
+
+
+def _time_before(path: Path, resume: bool) -> float:
+    """The wall time a finished run that is continued already took (its summary.json's), else
+    0: a resumed run's time adds to it."""
+    if resume and (path / "summary.json").exists():
+        try:
+            return float(json.loads((path / "summary.json").read_text())["wall_time_s"])
+        except (ValueError, KeyError, TypeError):
+            pass
+    return 0.0
+
+
+def _auto_choices(case: Case, params: Parameters, quiet: bool) -> tuple:
+    """``(params, model_choice, ramp_choice)`` with the model (``auto``) and the load ramp
+    (negative) chosen for the case (:func:`pacto_ng.auto.choose`), said on the terminal."""
+    warnings = []
+    params, model_choice, ramp_choice = choose(case, params, comm=world(), warnings=warnings)
+    if leads():  # sizes and moduli that do not match: said even with --quiet
+        for line in warnings:
+            print(f"pacto: warning: {line}", file=sys.stderr, flush=True)
+    if not quiet and model_choice is not None:
+        print(f"model auto -> {model_choice['chosen']}: {model_choice['reason']}")
+    if not quiet and ramp_choice is not None and ramp_choice["chosen"] > 0:
+        print(f"load ramp -> {ramp_choice['chosen']} iterations: {ramp_choice['reason']}")
+    return params, model_choice, ramp_choice
+
+
+def _announce(case: Case, params: Parameters, problem: Problem, resumed_at: int | None,
+              resumed: bool) -> None:
+    """The run's first lines: where a resume starts (``resumed_at``: its iteration, None for a
+    new run) and the problem's size."""
+    if resumed_at is not None:
+        print(f"resuming {case.name} at iteration {resumed_at}" if resumed else
+              f"resuming {case.name}: no checkpoint yet, starting at iteration 0")
+    mixed = " (mixed formulation)" if problem.mech.formulation == "mixed" else ""
+    ne = problem.mesh.ne if problem.numbering is None else problem.numbering.ne
+    ranks = "" if problem.numbering is None else f" on {problem.numbering.comm.size} ranks"
+    print(f"{case.name}: model {params.model}{mixed}, {ne} elements{ranks}, order "
+          f"{params.order}, {problem.mech.fes.ndofglobal} displacement dofs, "
+          f"{problem.n_design} design variables")
+
+
+def _final_analysis(problem: Problem, params: Parameters, state: LoopState,
+                    result: LoopResult) -> tuple[np.ndarray, bool]:
+    """``(final_x, failed)``: the reported design (the last good one after a Newton failure)
+    analysed at the schedule's last values; after a failure at the full load, the last
+    analysed design at the load it carried.  ``result.message`` and ``result.best`` say what
+    was found."""
     failed = result.stopped == "newton"
     final_x = state.last_good if failed else state.x
     if final_x is None:
@@ -377,17 +416,7 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
             result.message += (f"; iteration {result.best['iteration']} had a lower objective "
                                f"({result.best['objective']:.6g}, feasible, at the final "
                                "schedule) than the reported design")
-    if failed and params.model in WHEN_NEWTON_FAILS:
-        result.message += "; " + WHEN_NEWTON_FAILS[params.model]
-    wall = time.perf_counter() - t_start
-    if problem.numbering is None:
-        summary = write_outputs(path, problem, final_x, state.history, result, wall)
-    else:
-        summary = write_distributed_outputs(path, problem, final_x, state.history, result,
-                                            wall, write=lead)
-    if lead and (not quiet or failed):
-        print(("run stopped: " if failed else "") + result.message + f" — output in {path}")
-    return Finished(1 if failed else 0, problem, final_x, state.history, summary)
+    return final_x, failed
 
 
 def _write_params(path: Path, info: dict) -> None:

@@ -98,16 +98,10 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
     wang_beta, wang_eta : float
         ``β1``, ``η1`` of eq. 5.2 (γ is 1 in the C and 0 in the void to round-off for any of them).
     """
-    from ngsolve import QUAD, TRIG, VOL, Grad, Parameter
+    from ngsolve import Parameter
 
     layout = c_beam_layout(loads_on=loads_on)
-    if mesh == "quad":
-        n = int(round(layout.width / h))
-        msh = structured_mesh(layout, n, n)
-    elif mesh == "trig":
-        msh = netgen_mesh(layout, h)
-    else:
-        raise ValueError("mesh must be 'quad' or 'trig'")
+    msh = _c_beam_mesh(layout, mesh, h)
     material = Parameters(model=model, E1=E1, E0=E0_ratio * E1, nu=nu, plane="strain",
                           wang_beta=wang_beta, wang_eta=wang_eta)
     energy, guard, linear = make_energy(material, Parameter(3.0))
@@ -119,25 +113,8 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
                      thickness=thickness, guard=guard, linear=linear, newton=settings)
     solid = np.array([el.mat != "void" for el in msh.Elements()])
     mech.set_fields(solid.astype(float))
-
-    # det F sampled densely: integration points, vertices, edge midpoints and centroid
-    rules = guard_rules(mech.rules)
-    Jcf = jacobian(Grad(mech.gfu))
-    pts = msh.MapToAllElements(rules, VOL)
-    per_el = len(rules[QUAD if mesh == "quad" else TRIG].points)
-    solid_pts = np.repeat(solid, per_el)
-    checked = solid_pts if model == "wang" else np.ones_like(solid_pts)
     steps = []
-
-    def accept(load, u):
-        mech.gfu.vec.data = u
-        vals = np.asarray(Jcf(pts)).ravel()
-        if stop_at_inversion and float(vals[checked].min()) <= 0.0:
-            where = "of the solid " if model == "wang" else ""
-            return f"an element {where}inverted (det F <= 0 at a vertex or edge midpoint)"
-        steps.append((load, float(vals[solid_pts].min()), float(vals[~solid_pts].min())))
-        return ""
-
+    accept = _inversion_check(mech, solid, mesh, model == "wang", stop_at_inversion, steps)
     res = solve_with_continuation(mech, mech.gfu.vec, lam_max, settings, warm=False,
                                   linear=linear, accept=accept)
     lam = res.load_reached
@@ -146,3 +123,41 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
     u2 = mech.gfu(msh(layout.width, 0.0))
     return CBeamResult(model, order, mesh, lam, (lam * f1, lam * f2), res.converged, reason,
                        res.iterations, (u1[0], u1[1], u2[0], u2[1]), res.history, steps, mech)
+
+
+def _c_beam_mesh(layout, mesh: str, h: float):
+    """The C-beam's square as structured ``h``-sized quadrilaterals (``quad``) or Netgen
+    triangles of size ``h`` (``trig``)."""
+    if mesh == "quad":
+        n = int(round(layout.width / h))
+        return structured_mesh(layout, n, n)
+    if mesh == "trig":
+        return netgen_mesh(layout, h)
+    raise ValueError("mesh must be 'quad' or 'trig'")
+
+
+def _inversion_check(mech, solid, mesh: str, wang: bool, stop_at_inversion: bool, steps: list):
+    """The ``accept`` of :func:`~pacto_ng.physics.newton.solve_with_continuation`: a converged
+    increment is refused (``stop_at_inversion``) when ``det F <= 0`` anywhere in the checked
+    region (the solid for ``wang``, else every element), sampled densely (integration points,
+    vertices, edge midpoints and centroid); an accepted one appends ``(λ, min det F solid,
+    min det F void)`` to ``steps``."""
+    from ngsolve import QUAD, TRIG, VOL, Grad
+
+    rules = guard_rules(mech.rules)
+    Jcf = jacobian(Grad(mech.gfu))
+    pts = mech.mesh.MapToAllElements(rules, VOL)
+    per_el = len(rules[QUAD if mesh == "quad" else TRIG].points)
+    solid_pts = np.repeat(solid, per_el)
+    checked = solid_pts if wang else np.ones_like(solid_pts)
+
+    def accept(load, u):
+        mech.gfu.vec.data = u
+        vals = np.asarray(Jcf(pts)).ravel()
+        if stop_at_inversion and float(vals[checked].min()) <= 0.0:
+            where = "of the solid " if wang else ""
+            return f"an element {where}inverted (det F <= 0 at a vertex or edge midpoint)"
+        steps.append((load, float(vals[solid_pts].min()), float(vals[~solid_pts].min())))
+        return ""
+
+    return accept

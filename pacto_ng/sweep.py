@@ -141,9 +141,8 @@ def run_sweep(case, base: Parameters, models, loads, out: str | os.PathLike, *,
         check_same_parameters(root / r.folder, params[r.folder], status[r.folder])
     todo = [r for r in runs if status[r.folder] != "done"]
     t0 = time.perf_counter()
-    errors, codes, done_now = {}, {}, 0
+    errors, codes = {}, {}
     n = len(runs)
-    how = {"new": "new", "resume": "resumed from checkpoint"}
     header = (f"sweep {case.name}: {n} runs ({len(models)} models x {len(loads)} loads), "
               f"{n - len(todo)} already done, {len(todo)} to run")
     if not todo and not quiet:
@@ -154,26 +153,8 @@ def run_sweep(case, base: Parameters, models, loads, out: str | os.PathLike, *,
         try:
             if not quiet:
                 print(f"{header} on {where} — output in {root}", flush=True)
-            futures = {}
-            for r in todo:
-                fut = client.submit(run_one, case.file or case.name, params[r.folder].to_dict(),
-                                    str(root / r.folder), status[r.folder] == "resume",
-                                    pure=False, key=f"pacto-{r.folder}-{time.time_ns()}")
-                futures[fut] = r
-            for fut in distributed.as_completed(futures):
-                r = futures[fut]
-                try:
-                    codes[r.folder] = fut.result()["exit_code"]
-                except Exception as exc:  # raised on the worker, or the worker died
-                    errors[r.folder] = f"{type(exc).__name__}: {exc}"
-                    codes[r.folder] = 1
-                done_now += 1
-                row = table_row(root, r, errors.get(r.folder))
-                if not quiet:
-                    line = progress_line(n - len(todo) + done_now, n, row, how[status[r.folder]])
-                    if r.folder in errors:
-                        line += f" ({errors[r.folder]})"
-                    print(line, flush=True)
+            errors, codes = _run_on_cluster(distributed, client, case, todo, params, status,
+                                            root, n, quiet)
         finally:
             client.close()
             if cluster is not None:
@@ -188,3 +169,34 @@ def run_sweep(case, base: Parameters, models, loads, out: str | os.PathLike, *,
             msg += f"; load not reached in {', '.join(failed)}"
         print(f"sweep: {msg} — {root / 'sweep.csv'}, {root / 'sweep.png'}")
     return 1 if failed or any(codes.values()) else 0
+
+
+def _run_on_cluster(distributed, client, case, todo, params, status, root, n: int,
+                    quiet: bool) -> tuple[dict, dict]:
+    """The runs ``todo`` as tasks on the cluster, a progress line as each ends (``n``: the
+    grid's runs).  Returns ``(errors, codes)`` by folder: what a run that raised (on the
+    worker, or the worker died) raised, and every run's exit code."""
+    how = {"new": "new", "resume": "resumed from checkpoint"}
+    errors, codes = {}, {}
+    futures = {}
+    for r in todo:
+        fut = client.submit(run_one, case.file or case.name, params[r.folder].to_dict(),
+                            str(root / r.folder), status[r.folder] == "resume",
+                            pure=False, key=f"pacto-{r.folder}-{time.time_ns()}")
+        futures[fut] = r
+    done_now = 0
+    for fut in distributed.as_completed(futures):
+        r = futures[fut]
+        try:
+            codes[r.folder] = fut.result()["exit_code"]
+        except Exception as exc:  # raised on the worker, or the worker died
+            errors[r.folder] = f"{type(exc).__name__}: {exc}"
+            codes[r.folder] = 1
+        done_now += 1
+        row = table_row(root, r, errors.get(r.folder))
+        if not quiet:
+            line = progress_line(n - len(todo) + done_now, n, row, how[status[r.folder]])
+            if r.folder in errors:
+                line += f" ({errors[r.folder]})"
+            print(line, flush=True)
+    return errors, codes

@@ -195,6 +195,120 @@ def _counting(problem, evaluate):
     return counted
 
 
+class _NoDesign(Exception):
+    """No design of this iteration could be analysed (:func:`_analyse_or_cut`); the message
+    says why and which design is kept."""
+
+
+def _values_only(evaluate, state):
+    """GCMMA's inner loop's evaluation: the scaled objective and the constraints of a trial
+    design; a trial design Newton cannot analyse ends the loop (None), and the step of the
+    last approximation is taken, as MMA would."""
+
+    def values_only(xt):
+        try:
+            F0, f = evaluate(xt, gradients=False)
+        except NewtonFailure:
+            return None
+        return np.asarray(F0) * state.scale, f
+
+    return values_only
+
+
+def _stage(problem, schedule: Schedule, state: LoopState, k: int, start_iteration):
+    """The continuation schedules of iteration ``k``, with the held β cap and the adaptive
+    load cap, applied to ``problem``: ``(penal, beta, scheduled load, load)``."""
+    penal, beta_s, scheduled = schedule.values(k, state.history)
+    if k - state.beta_capped_at >= BETA_HOLD and state.beta_cap < np.inf:
+        # the capped β has run BETA_HOLD iterations: the next step (of the ratio that
+        # worked) towards the schedule's
+        state.beta_cap *= state.beta_step
+        state.beta_capped_at = k
+        if state.beta_cap >= beta_s * (1 - 1e-12):
+            state.beta_cap = float("inf")
+    beta = min(beta_s, state.beta_cap)
+    load = min(scheduled, state.load_cap)
+    problem.apply_schedule(penal, beta, load)
+    if start_iteration is not None:
+        start_iteration(k, state.history)
+    return penal, beta, scheduled, load
+
+
+def _analyse_or_cut(evaluate, problem, state: LoopState, x, penal, beta, load, scheduled,
+                    load_adapt, k):
+    """Values and gradients at ``x``; with ``load_adapt``, a failed β step is cut, and a design
+    that Newton cannot analyse (a new mechanism, a wall that folds at the first increment) is
+    brought back towards the last good one, each from the last good design's equilibria
+    (module docstring).  Returns ``(F0, f, dF0, df, x, beta, load, cuts)``; raises
+    :class:`_NoDesign` when no design can be analysed."""
+    cuts = 0
+    before = state.history[-1]["beta"] if state.history else beta
+    # the last good design's equilibria: where a cut design's analysis starts
+    warm = getattr(problem, "warm", None) if load_adapt else None
+    while True:
+        # a β step that Newton cannot carry at this load is cut before the load is lowered
+        beta_cut = (load_adapt and beta > before
+                    and math.sqrt(beta / before) >= MIN_BETA_STEP * (1 - 1e-12))
+        # a design step after which Newton carries at most COLLAPSE of the load is cut
+        # before the load is lowered
+        can_cut = state.last_good is not None and cuts < DESIGN_CUTS
+        try:
+            F0, f, dF0, df, load = _analyse(evaluate, problem, state, x, penal, beta, load,
+                                            scheduled, 0.0 if beta_cut else load_adapt, k,
+                                            floor=COLLAPSE if can_cut else 0.0)
+            return F0, f, dF0, df, x, beta, load, cuts
+        except NewtonFailure as err:
+            if beta_cut:
+                # the β step is what Newton cannot take: a smaller one (the geometric
+                # mean), held BETA_HOLD iterations, so that the optimiser can mend what the
+                # sharper projection opens (an eroded realisation's leak) before the next
+                state.beta_step = math.sqrt(beta / before)
+                beta = state.beta_cap = before * state.beta_step
+                state.beta_capped_at = k
+                problem.apply_schedule(penal, beta, load)
+                if warm is not None:
+                    problem.set_warm(warm)
+                continue
+            if (not load_adapt or not can_cut
+                    or err.result.load_reached > COLLAPSE * load):
+                kept = (f"the last good design (iteration {k - 1}) is saved" if k > 0 else
+                        "no design could be analysed at this load; the initial design is "
+                        "saved")
+                tried = f" (also with the design step halved {cuts} times)" if cuts else ""
+                if warm is not None:  # the final analysis of the kept design starts there
+                    problem.set_warm(warm)
+                raise _NoDesign(f"iteration {k}: {err}{tried}; {kept}") from None
+            cuts += 1
+            x = state.last_good + 0.5 * (x - state.last_good)
+            if warm is not None:
+                problem.set_warm(warm)
+            load = min(scheduled, state.load_cap)
+            problem.apply_schedule(penal, beta, load)
+
+
+def _switch_on_zigzag(opt, method: str, schedule: Schedule, state: LoopState, k: int,
+                      f0: float, load: float) -> None:
+    """mma-gcmma: GCMMA from now on once the objective zigzags on the final problem (the
+    switch once; a resumed run scans its history again)."""
+    if (method == "mma-gcmma" and opt.method != "gcmma" and state.beta_cap == np.inf
+            and schedule.settled(k, history=state.history) and load >= 1.0):
+        final = [r["objective"] for r in state.history
+                 if schedule.settled(r["iteration"], history=state.history)
+                 and r["load"] >= 1.0] + [f0]
+        if zigzag_at(final) is not None:
+            opt.method = "gcmma"
+
+
+def _settled_small(state: LoopState, schedule: Schedule, k: int, change: float, load: float,
+                   tol: float, obj_tol: float) -> bool:
+    """The convergence test's step: the design (or the objective) changed little, and every
+    schedule has settled (the full load, no β cap for more than 5 iterations)."""
+    small = change < tol or _stalled(state.history, obj_tol)
+    settled = (schedule.settled(k, window=5, history=state.history) and load >= 1.0
+               and state.beta_cap == np.inf and k - state.beta_capped_at > 5)
+    return small and settled
+
+
 def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method: str,
              move: float, state: LoopState, on_iteration=None, obj_tol: float = 0.0,
              load_adapt: float = 0.0) -> LoopResult:
@@ -219,95 +333,26 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
                     terms=terms)
     opt.state = state.opt_state
     x = state.x.copy()
-
-    def values_only(xt):
-        # GCMMA's inner loop: a trial design Newton cannot analyse ends the loop (None), and
-        # the step of the last approximation is taken, as MMA would
-        try:
-            F0, f = evaluate(xt, gradients=False)
-        except NewtonFailure:
-            return None
-        return np.asarray(F0) * state.scale, f
+    values_only = _values_only(evaluate, state)
 
     while state.k < iterations:
         k = state.k
         t0 = time.perf_counter()
         # ---- continuation schedules ------------------------------------------------------
-        penal, beta_s, scheduled = schedule.values(k, state.history)
-        if k - state.beta_capped_at >= BETA_HOLD and state.beta_cap < np.inf:
-            # the capped β has run BETA_HOLD iterations: the next step (of the ratio that
-            # worked) towards the schedule's
-            state.beta_cap *= state.beta_step
-            state.beta_capped_at = k
-            if state.beta_cap >= beta_s * (1 - 1e-12):
-                state.beta_cap = float("inf")
-        beta = min(beta_s, state.beta_cap)
-        load = min(scheduled, state.load_cap)
-        problem.apply_schedule(penal, beta, load)
-        if start_iteration is not None:
-            start_iteration(k, state.history)
+        penal, beta, scheduled, load = _stage(problem, schedule, state, k, start_iteration)
         # ---- analysis and sensitivities ---------------------------------------------------
-        # with load_adapt, a failed β step is cut, and a design that Newton cannot analyse (a
-        # new mechanism, a wall that folds at the first increment) is brought back towards the
-        # last good one, each from the last good design's equilibria (module docstring)
         evaluate.work[:] = [0, 0]  # the Newton work of this iteration's analyses (_counting)
-        cuts = 0
-        before = state.history[-1]["beta"] if state.history else beta
-        # the last good design's equilibria: where a cut design's analysis starts
-        warm = getattr(problem, "warm", None) if load_adapt else None
-        while True:
-            # a β step that Newton cannot carry at this load is cut before the load is lowered
-            beta_cut = (load_adapt and beta > before
-                        and math.sqrt(beta / before) >= MIN_BETA_STEP * (1 - 1e-12))
-            # a design step after which Newton carries at most COLLAPSE of the load is cut
-            # before the load is lowered
-            can_cut = state.last_good is not None and cuts < DESIGN_CUTS
-            try:
-                F0, f, dF0, df, load = _analyse(evaluate, problem, state, x, penal, beta, load,
-                                                scheduled, 0.0 if beta_cut else load_adapt, k,
-                                                floor=COLLAPSE if can_cut else 0.0)
-                break
-            except NewtonFailure as err:
-                if beta_cut:
-                    # the β step is what Newton cannot take: a smaller one (the geometric
-                    # mean), held BETA_HOLD iterations, so that the optimiser can mend what the
-                    # sharper projection opens (an eroded realisation's leak) before the next
-                    state.beta_step = math.sqrt(beta / before)
-                    beta = state.beta_cap = before * state.beta_step
-                    state.beta_capped_at = k
-                    problem.apply_schedule(penal, beta, load)
-                    if warm is not None:
-                        problem.set_warm(warm)
-                    continue
-                if (not load_adapt or not can_cut
-                        or err.result.load_reached > COLLAPSE * load):
-                    kept = (f"the last good design (iteration {k - 1}) is saved" if k > 0 else
-                            "no design could be analysed at this load; the initial design is "
-                            "saved")
-                    tried = f" (also with the design step halved {cuts} times)" if cuts else ""
-                    if warm is not None:  # the final analysis of the kept design starts there
-                        problem.set_warm(warm)
-                    return LoopResult(state, False, "newton",
-                                      f"iteration {k}: {err}{tried}; {kept}")
-                cuts += 1
-                x = state.last_good + 0.5 * (x - state.last_good)
-                if warm is not None:
-                    problem.set_warm(warm)
-                load = min(scheduled, state.load_cap)
-                problem.apply_schedule(penal, beta, load)
+        try:
+            F0, f, dF0, df, x, beta, load, cuts = _analyse_or_cut(
+                evaluate, problem, state, x, penal, beta, load, scheduled, load_adapt, k)
+        except _NoDesign as stop:
+            return LoopResult(state, False, "newton", str(stop))
         state.last_good = x.copy()
         f0 = float(np.max(F0))  # the objective (the worst of its terms)
         if state.scale is None:  # fix the objective normalisation once (kept on resume)
             state.scale = 10.0 / max(abs(f0), 1e-300)
         # ---- design update (MMA / GCMMA with move limit) ------------------------------------
-        if (method == "mma-gcmma" and opt.method != "gcmma" and state.beta_cap == np.inf
-                and schedule.settled(k, history=state.history) and load >= 1.0):
-            # the switch once (a resumed run scans its history again)
-            final = [r["objective"] for r in state.history
-                     if schedule.settled(r["iteration"], history=state.history)
-                     and r["load"] >= 1.0] + [f0]
-            if zigzag_at(final) is not None:
-                opt.method = "gcmma"
+        _switch_on_zigzag(opt, method, schedule, state, k, f0, load)
         # ---- record: read of x before GCMMA's inner loop analyses trial designs ------------
         row = dict(iteration=k, objective=f0, volume=problem.volume_fraction(),
                    constraint=float(np.max(f)), change=None, penal=penal, beta=beta, load=load,
@@ -326,10 +371,8 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
         x = xnew
         state.x, state.opt_state, state.k = x.copy(), opt.state, k + 1
         # ---- convergence: only once every schedule has settled ------------------------------
-        small = change < tol or _stalled(state.history, obj_tol)
-        settled = (schedule.settled(k, window=5, history=state.history) and load >= 1.0
-                   and state.beta_cap == np.inf and k - state.beta_capped_at > 5)
-        state.stable = state.stable + 1 if (small and settled) else 0
+        state.stable = state.stable + 1 if _settled_small(state, schedule, k, change, load,
+                                                          tol, obj_tol) else 0
         if on_iteration is not None:
             on_iteration(state, row)
         if state.stable >= 2 and np.max(f) <= 1e-3:

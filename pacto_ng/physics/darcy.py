@@ -148,7 +148,7 @@ class DarcyPressure:
                  sensitivity: bool = True, inputs=("rho_bar",), output: str = "p",
                  intorder: int | None = None, inverse: str = "sparsecholesky",
                  solver: str = "auto"):
-        from ngsolve import (BND, H1, L2, BilinearForm, GridFunction, LinearForm, dx, grad)
+        from ngsolve import H1, L2, BilinearForm, GridFunction, LinearForm, dx, grad
 
         inlet = _names(inlet, "inlet")
         zero = _names(zero, "zero")
@@ -189,24 +189,8 @@ class DarcyPressure:
         self._solver = LinearSolver(self.a, self.fes.FreeDofs(), setting=solver,
                                     order=self.order, inverse=inverse, coarse=())  # no ds term
 
-        # unit lifting: 1 on the inlet dofs, 0 elsewhere (zero-pressure dofs win at shared points)
-        lift = GridFunction(self.fes)
-        lift.Set(1.0, BND, definedon=mesh.Boundaries("|".join(inlet)))
-        on_inlet = self.fes.GetDofs(mesh.Boundaries("|".join(inlet)))
-        vals = lift.vec.FV().NumPy()
-        vals[~np.array(list(on_inlet), dtype=bool)] = 0.0
-        if zero:
-            on_zero = np.array(list(self.fes.GetDofs(mesh.Boundaries("|".join(zero)))), dtype=bool)
-            vals[on_zero] = 0.0
-        self._lift = lift.vec
-
-        # state, adjoint and the sensitivity form -λᵀ ∂R/∂ρ̄ (built once)
-        self.gfp = GridFunction(self.fes)
-        self.lam = GridFunction(self.fes)
-        q0 = self.l2.TestFunction()
-        self._sens = LinearForm(self.l2)
-        self._sens += (self._dK * grad(self.gfp) * grad(self.lam)
-                       + self._dD * (self.gfp - self.p_out) * self.lam) * q0 * DX
+        self._lift = self._inlet_lifting()
+        self._start_state()
         self._rhs = self.gfp.vec.CreateVector()
         self._dp = self.gfp.vec.CreateVector()
         self._ready = False
@@ -222,6 +206,34 @@ class DarcyPressure:
         one = GridFunction(self.fes)
         one.Set(1.0)
         self._one = one.vec.FV().NumPy().copy()  # the constant 1 (p - p_out in the sensitivity)
+
+    def _inlet_lifting(self):
+        """The unit lifting ``ℓ``: 1 on the inlet dofs, 0 elsewhere (zero-pressure dofs win at
+        shared points), a vector on :attr:`fes`."""
+        from ngsolve import BND, GridFunction
+
+        mesh, inlet, zero = self.mesh, self.inlet, self.zero
+        lift = GridFunction(self.fes)
+        lift.Set(1.0, BND, definedon=mesh.Boundaries("|".join(inlet)))
+        on_inlet = self.fes.GetDofs(mesh.Boundaries("|".join(inlet)))
+        vals = lift.vec.FV().NumPy()
+        vals[~np.array(list(on_inlet), dtype=bool)] = 0.0
+        if zero:
+            on_zero = np.array(list(self.fes.GetDofs(mesh.Boundaries("|".join(zero)))), dtype=bool)
+            vals[on_zero] = 0.0
+        return lift.vec
+
+    def _start_state(self):
+        """The state :attr:`gfp`, the adjoint :attr:`lam` and the sensitivity form
+        ``-λᵀ ∂R/∂ρ̄`` on them (built once)."""
+        from ngsolve import GridFunction, LinearForm, grad
+
+        self.gfp = GridFunction(self.fes)
+        self.lam = GridFunction(self.fes)
+        q0 = self.l2.TestFunction()
+        self._sens = LinearForm(self.l2)
+        self._sens += (self._dK * grad(self.gfp) * grad(self.lam)
+                       + self._dD * (self.gfp - self.p_out) * self.lam) * q0 * self.DX
 
     # -- validation --------------------------------------------------------------------------
     @staticmethod

@@ -39,9 +39,10 @@ says which routes are in use.  The same quadrature rule is pinned in the residua
 sensitivity forms (see docs: a mismatch gives 1e-2 adjoint errors at order 2).
 
 The block's methods are in three modules: this one builds it (supports, fields, the energy's
-forms and the routes), :class:`~pacto_ng.physics.equilibrium.Equilibrium` solves for
-equilibrium (the problem Newton drives, the warm start, the forward pass) and
-:class:`~pacto_ng.physics.adjoint.Adjoint` runs the backward pass.
+forms and the routes; its spaces come from :mod:`~pacto_ng.physics.spaces`),
+:class:`~pacto_ng.physics.equilibrium.Equilibrium` solves for equilibrium (the problem Newton
+drives, the warm start, the forward pass) and :class:`~pacto_ng.physics.adjoint.Adjoint` runs
+the backward pass.
 """
 from __future__ import annotations
 
@@ -50,14 +51,13 @@ from typing import Callable
 
 import numpy as np
 
-from ..parallel import total
 from .adjoint import Adjoint
 from .body_coupling import BodyCoupling
 from .equilibrium import Equilibrium
 from .linear_system import LinearSystem
-from .mixed import Mixed
 from .newton import NewtonSettings
 from .quadrature import integration_rules
+from .spaces import block_spaces
 from .traits import EnergyTraits, traits_of
 
 _UNDECLARED = object()  # a body without the attribute linear_in
@@ -186,8 +186,7 @@ class Mechanics(Equilibrium, Adjoint):
                  residual_terms: Callable | None = None, symmetric: bool | None = None,
                  residual_density: Callable | None = None, realcompile: bool = False,
                  formulation: str = "displacement"):
-        from ngsolve import (L2, BilinearForm, GridFunction, LinearForm, Parameter, VectorH1,
-                             Variation, dx)
+        from ngsolve import L2, GridFunction, Parameter, dx
 
         if order not in (1, 2, 3, 4):
             raise ValueError(f"element order must be 1, 2 or 3 (got {order})")
@@ -209,34 +208,8 @@ class Mechanics(Equilibrium, Adjoint):
         self.fields = [f if isinstance(f, Field) else Field(f) for f in fields]
         self.inputs = tuple(f.name for f in self.fields)
         self.output = output
-        # the named regions by codimension: boundaries, then (2D) points or (3D) edges, then
-        # (3D) points
-        regions = {"": mesh.GetBoundaries(), "_bbnd": mesh.GetBBoundaries()}
-        if mesh.dim == 3:
-            regions["_bbbnd"] = mesh.GetBBBoundaries()
-        for name in supports.names():
-            if not any(name in known for known in regions.values()):
-                raise ValueError(f"support region '{name}' is not a boundary, edge or point of "
-                                 f"the mesh")
-        kw = {}
-        for axis, names in zip("xyz", supports.per_component(mesh.dim)):
-            for suffix, known in regions.items():
-                on = [n for n in names if n in known]
-                if on:
-                    kw[f"dirichlet{axis}{suffix}"] = "|".join(on)
-        if formulation not in ("displacement", "mixed"):
-            raise ValueError(f"formulation must be 'displacement' or 'mixed' (got "
-                             f"'{formulation}')")
-        if formulation == "mixed":
-            kw.update(Mixed.displacement_options(mesh, order))
-        self.fes = VectorH1(mesh, order=order, **kw)
-        if total(mesh, np.count_nonzero(~np.array(list(self.fes.FreeDofs()), dtype=bool))) == 0:
-            raise ValueError("the structure has no supports: add a clamp or fixed boundary")
-        self.mixed = None
-        self.space = self.fes  # the unknowns: the displacement, or (u, ϑ, p̃) (mixed.py)
-        if formulation == "mixed":
-            self.mixed = Mixed(mesh, self.fes, order)
-            self.space = self.mixed.space
+        # the unknowns: the displacement, or (u, ϑ, p̃) (mixed.py)
+        kw, self.fes, self.mixed, self.space = block_spaces(mesh, order, supports, formulation)
         self.formulation = formulation
         self.free = np.array(list(self.space.FreeDofs()), dtype=bool)
         self.l2 = L2(mesh, order=0)
@@ -251,6 +224,14 @@ class Mechanics(Equilibrium, Adjoint):
         # (the mixed formulation's bubble on simplices is of order + 1)
         self.rules = integration_rules(intorder or 2 * (order + ("orderinner" in kw)))
         self.DX = dx(intrules=self.rules)
+        self._declare(energy, body, residual_density)
+        self.loads, self.springs = tuple(loads), tuple(springs)
+        self._build_forms(body, residual_terms, residual_density)
+        self._start_routes(guard, linear, body, residual_terms)
+
+    def _declare(self, energy, body, residual_density) -> None:
+        """The energy, the body load and the residual density, with what the energy declares
+        (checked against the block's fields)."""
         self._energy, self._body = energy, body
         self._traits = traits_of(energy)
         reads = self._traits.reads
@@ -260,7 +241,12 @@ class Mechanics(Equilibrium, Adjoint):
         # whether the energy reads each field (declared; every field where it declares nothing)
         self._reads = {f.name: reads is None or f.name in reads for f in self.fields}
         self._rdens = residual_density
-        self.loads, self.springs = tuple(loads), tuple(springs)
+
+    def _build_forms(self, body, residual_terms, residual_density) -> None:
+        """The state (:attr:`gfx`, :attr:`gfu`), the tangent's form :attr:`a` (the potential's
+        variation and the non-conservative terms) and the body load's LinearForm, with its
+        coupling ``B p`` where a field enters through it alone."""
+        from ngsolve import BilinearForm, GridFunction, LinearForm, Variation
 
         x = self.space.TrialFunction()
         u, v = self.displacement(x), self.displacement(self.space.TestFunction())
@@ -289,6 +275,11 @@ class Mechanics(Equilibrium, Adjoint):
             self.a += self.hot(self.residual_density(u, v)) * self.DX
         if residual_terms is not None:
             self.a += residual_terms(u, v, self.load)
+
+    def _start_routes(self, guard, linear: bool, body, residual_terms) -> None:
+        """The assembly routes (the linear system of a linear, conservative block with a
+        quadratic energy; the load norm's) and the equilibrium and adjoint solvers."""
+        conservative = self._rdens is None and residual_terms is None
         # a linear, conservative problem: R(u) = K u - s f with K independent of u and s (also
         # with a design-dependent body load: f is then assembled once per design)
         self._lin = None
@@ -297,7 +288,7 @@ class Mechanics(Equilibrium, Adjoint):
         # the regions of the tangent's boundary terms, whose dofs an iterative solver's BDDC
         # keeps coarse: the springs', or every boundary with residual terms (a follower
         # pressure on a face)
-        coarse = None if residual_terms is not None else tuple(sp.where(mesh)
+        coarse = None if residual_terms is not None else tuple(sp.where(self.mesh)
                                                                for sp in self.springs)
         self._start_equilibrium(
             guard, coarse=coarse, fixed_loads=body is None and conservative,

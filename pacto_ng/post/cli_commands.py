@@ -59,13 +59,6 @@ EXPORT_FORMATS = ("stl", "vtk", "vtu", "msh")
 DEFAULT_UNITS = {"stl": "mm", "vtk": "m", "vtu": "m", "msh": "m"}
 
 
-def _boundary_names(mesh) -> list[str]:
-    """The boundary names that have at least one edge (sorted)."""
-    from ngsolve import BND
-
-    return sorted({el.mat for el in mesh.Elements(BND)})
-
-
 def check_units(units, fmt: str) -> str:
     """``--units``: mm or m (None: :data:`DEFAULT_UNITS` of the format)."""
     if units is None:
@@ -143,15 +136,7 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
       ``material`` (named in its field data) and ``E``; the MSH the materials as physical
       groups of the triangles.
     """
-    if fmt not in EXPORT_FORMATS:
-        raise InputError(f"--format: choose from {', '.join(EXPORT_FORMATS)} (got '{fmt}')")
-    units = check_units(units, fmt)
-    if threshold_value is not None:
-        check_threshold(threshold_value)
-    if threshold2 is not None:
-        threshold2 = check_threshold(threshold2, name="--threshold2")
-    if maxh is not None and not maxh > 0:
-        raise InputError(f"--maxh: must be positive, got {maxh:g}")
+    units, threshold2 = _checked_options(fmt, units, threshold_value, maxh, threshold2)
     run = load_run(folder, "export")
     if is_3d(run):
         return export_run_3d(run, fmt, out=out, threshold_value=threshold_value, quiet=quiet,
@@ -163,20 +148,46 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
     th, rm, problem = part_of_run(run, threshold_value, maxh, threshold2)
     warn_if_open(design_seal(problem, run.case.make_setup(run.params), th.threshold,
                              exclude=th.excluded))
-    two = rm.materials is not None
     # the whole mechanism: the symmetry line of the run's own mesh (the part may not reach it)
     line = symmetry_line(problem.mesh) if mirror else None
     part = part_mesh(rm.mesh, line)
     dst = export_destination(run, out, fmt)
-    t = float(run.params.thickness)
-    scale = 1.0 / UNITS[units]
     notes = []
     if mirror and line is None and run.summary.get("symmetric_half_domain"):
         notes.append("not mirrored: the run's symmetry boundary is not a straight line")
+    notes += _write_part(dst, fmt, part, run, problem, units, rm.materials is not None)
+    _say(quiet, f"{dst}: {run.case.name} part"
+                + (" (whole: the half and its mirror image)" if line is not None else "")
+                + _part_description(part, th, rm, run, fmt, units, threshold2)
+                + "".join(f"; {n}" for n in notes))
+    return 0
+
+
+def _checked_options(fmt: str, units, threshold_value, maxh, threshold2) -> tuple:
+    """``(units, threshold2)``: the options checked (InputError), the unit defaulted
+    (:func:`check_units`) and ``threshold2`` as a number."""
+    if fmt not in EXPORT_FORMATS:
+        raise InputError(f"--format: choose from {', '.join(EXPORT_FORMATS)} (got '{fmt}')")
+    units = check_units(units, fmt)
+    if threshold_value is not None:
+        check_threshold(threshold_value)
+    if threshold2 is not None:
+        threshold2 = check_threshold(threshold2, name="--threshold2")
+    if maxh is not None and not maxh > 0:
+        raise InputError(f"--maxh: must be positive, got {maxh:g}")
+    return units, threshold2
+
+
+def _write_part(dst, fmt: str, part: PartMesh, run, problem, units: str, two: bool) -> list:
+    """Write ``part`` to ``dst`` as ``fmt`` (VTK/VTU with the run's final state on it);
+    returns the notes for the line that says what was written."""
+    t = float(run.params.thickness)
+    scale = 1.0 / UNITS[units]
+    notes = []
     if fmt == "stl":
         write_part_stl(dst, part, t, units=units,
                        header=f"pacto_ng {run.case.name} part, thickness {t * scale:g} {units}"
-                              + (", whole (mirrored)" if line is not None else ""))
+                              + (", whole (mirrored)" if part.line is not None else ""))
     elif fmt == "msh":
         write_msh(dst, part, units=units)
     else:
@@ -188,20 +199,26 @@ def export_run(folder, fmt: str, *, out=None, threshold_value=None, maxh=None,
         notes += field_notes
         write_part_vtu(dst, part, point_data=point, cell_data=cell, units=units, fmt=fmt, E=E)
         notes.append("fields " + ", ".join([*point, *cell]) + " of the run's final state")
-    _say(quiet, f"{dst}: {run.case.name} part"
-                + (" (whole: the half and its mirror image)" if line is not None else "")
-                + f", threshold {th.threshold:g}, {len(part.elements)} "
-                f"{'triangles' if all(len(e) == 3 for e in part.elements) else 'elements'}, "
-                f"area {part.area() * scale ** 2:.6g} {units}² ("
-                + ("the half: " if line is not None else "")
-                + f"remeshed {rm.area:.6g} m², thresholded {th.area:.6g} m²), boundaries "
-                f"{', '.join(sorted(set(part.edge_names)))}"
-                + (f", extruded by the thickness {t * scale:g} {units}" if fmt == "stl" else "")
-                + f"; units {units}"
-                + ("; materials " + ", ".join(f"{k} {v:.6g} m²" for k, v in
-                                              material_areas(rm.mesh).items())
-                   + f" (ρ̄2 at {threshold2:g}, {rm.materials})" if two else "")
-                + {"domain": ", on the case's own geometry", "traced": ""}.get(
-                    rm.geometry, f"; {rm.geometry}")
-                + "".join(f"; {n}" for n in notes))
-    return 0
+    return notes
+
+
+def _part_description(part: PartMesh, th, rm, run, fmt: str, units: str,
+                      threshold2: float) -> str:
+    """The exported part for the line that says what was written: threshold, elements, area,
+    boundaries, unit, materials and geometry."""
+    t = float(run.params.thickness)
+    scale = 1.0 / UNITS[units]
+    two = rm.materials is not None
+    return (f", threshold {th.threshold:g}, {len(part.elements)} "
+            f"{'triangles' if all(len(e) == 3 for e in part.elements) else 'elements'}, "
+            f"area {part.area() * scale ** 2:.6g} {units}² ("
+            + ("the half: " if part.line is not None else "")
+            + f"remeshed {rm.area:.6g} m², thresholded {th.area:.6g} m²), boundaries "
+            f"{', '.join(sorted(set(part.edge_names)))}"
+            + (f", extruded by the thickness {t * scale:g} {units}" if fmt == "stl" else "")
+            + f"; units {units}"
+            + ("; materials " + ", ".join(f"{k} {v:.6g} m²" for k, v in
+                                          material_areas(rm.mesh).items())
+               + f" (ρ̄2 at {threshold2:g}, {rm.materials})" if two else "")
+            + {"domain": ", on the case's own geometry", "traced": ""}.get(
+                rm.geometry, f"; {rm.geometry}"))

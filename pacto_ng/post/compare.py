@@ -91,32 +91,23 @@ def _labels(runs) -> list[str]:
             for b, (r, _) in zip(base, runs)]
 
 
+#: the runs' colours, in order (the 11th run takes the first again)
+_COLOURS = ["tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown",
+            "tab:pink", "tab:gray", "tab:olive", "tab:cyan"]
+#: the analysis curves' marker and line style per kind
+_STYLE = {"expected": ("o", "--"), "darcy": ("s", "-"), "fixed": ("x", ":"),
+          "follower": ("^", "-.")}
+
+
 def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True) -> int:
     """``pacto compare``: the designs side by side, their thresholded outlines over each other
     (thesis Fig. 6.7) and, where ``analysis/analysis.json`` exists, their analysis curves in
     one picture (thesis Figs 6.10/6.12).  A run solved on a symmetric half is drawn whole
     (mirrored about its mesh's straight ``symmetry`` boundary) unless ``mirror`` is False."""
-    if len(folders) < 1:
-        raise InputError("compare: give at least one run folder")
-    runs = []
-    for f in folders:
-        run = load_run(f, "compare")
-        if not (run.path / "design.vtu").exists():
-            raise InputError(f"compare: '{f}' has no design.vtu")
-        ana = run.path / "analysis" / "analysis.json"
-        runs.append((run, json.loads(ana.read_text()) if ana.exists() else None))
-    dst = Path(out) if out else Path("compare.png")
-    if dst.suffix.lower() != ".png":
-        raise InputError(f"--out: '{dst}' must end in .png")
-    try:
-        dst.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise InputError(f"--out: cannot create '{dst.parent}' ({err.strerror})") from None
-
+    runs = _read_runs(folders)
+    dst = _destination(out)
     n = len(runs)
     has_curves = any(a is not None for _, a in runs)
-    colours = ["tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown",
-               "tab:pink", "tab:gray", "tab:olive", "tab:cyan"]
     lines = [run_symmetry(r) if mirror else None for r, _ in runs]
     designs = [_mirrored_design(*_design_triangles(r.path / "design.vtu"), ln)
                for (r, _), ln in zip(runs, lines)]
@@ -130,6 +121,48 @@ def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True)
     bottom_h = 4.6
     fig = figure((12.0, top_h + bottom_h))
     top, bottom = fig.subfigures(2, 1, height_ratios=[top_h, bottom_h])
+    _draw_designs(top, runs, designs, labels, nrow, ncol)
+    # outlines over each other (thesis Fig. 6.7)
+    ax = bottom.add_subplot(1, 2, 1) if has_curves else bottom.add_subplot(1, 1, 1)
+    _draw_outlines(ax, runs, designs, lines, labels, allp)
+    if has_curves:
+        _draw_curves(bottom.add_subplot(1, 2, 2), runs)
+    with atomic_path(dst) as tmp:
+        fig.savefig(str(tmp), dpi=130)
+    if not quiet:
+        _print_table(runs, labels)
+        print(f"picture: {dst}")
+    return 0
+
+
+def _read_runs(folders) -> list:
+    """``(run, analysis.json's content or None)`` per folder; InputError without a design."""
+    if len(folders) < 1:
+        raise InputError("compare: give at least one run folder")
+    runs = []
+    for f in folders:
+        run = load_run(f, "compare")
+        if not (run.path / "design.vtu").exists():
+            raise InputError(f"compare: '{f}' has no design.vtu")
+        ana = run.path / "analysis" / "analysis.json"
+        runs.append((run, json.loads(ana.read_text()) if ana.exists() else None))
+    return runs
+
+
+def _destination(out) -> Path:
+    """The picture's path (default ``compare.png``), its folder created."""
+    dst = Path(out) if out else Path("compare.png")
+    if dst.suffix.lower() != ".png":
+        raise InputError(f"--out: '{dst}' must end in .png")
+    try:
+        dst.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError(f"--out: cannot create '{dst.parent}' ({err.strerror})") from None
+    return dst
+
+
+def _draw_designs(top, runs, designs, labels, nrow, ncol) -> None:
+    """The designs' ρ̄ side by side, each titled by its run (and Δ, volume)."""
     for i, ((run, ana), (pts, tri, rho)) in enumerate(zip(runs, designs)):
         ax = top.add_subplot(nrow, ncol, i + 1)
         ax.tripcolor(Triangulation(pts[:, 0], pts[:, 1], tri), facecolors=rho, cmap="gray_r",
@@ -141,11 +174,14 @@ def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True)
         delta = s.get("output_displacement")
         extra = "" if delta is None else \
             f"\nΔ = {delta:.3g} m, volume {s.get('volume_fraction', float('nan')):.3f}"
-        ax.set_title(labels[i] + extra, fontsize=9, color=colours[i % 10])
-    # outlines over each other (thesis Fig. 6.7)
-    ax = bottom.add_subplot(1, 2, 1) if has_curves else bottom.add_subplot(1, 1, 1)
+        ax.set_title(labels[i] + extra, fontsize=9, color=_COLOURS[i % 10])
+
+
+def _draw_outlines(ax, runs, designs, lines, labels, allp) -> None:
+    """The thresholded outlines over each other: the remeshed part's boundary where the run
+    was analysed, else the ρ̄ = 0.5 contour of the nodal (area-weighted) density."""
     for i, ((run, ana), (pts, tri, rho)) in enumerate(zip(runs, designs)):
-        c = colours[i % 10]
+        c = _COLOURS[i % 10]
         rem = run.path / "analysis" / "remeshed.vtu"
         if rem.exists():
             segs = _boundary_segments(rem)
@@ -169,50 +205,49 @@ def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True)
     ax.set_aspect("equal")
     ax.set_title("thresholded designs (remeshed outline, else ρ̄ = 0.5)", fontsize=9)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08), frameon=False)
-    if has_curves:
-        ax = bottom.add_subplot(1, 2, 2)
-        style = {"expected": ("o", "--"), "darcy": ("s", "-"), "fixed": ("x", ":"),
-                 "follower": ("^", "-.")}
-        allpos = True
-        for i, (run, ana) in enumerate(runs):
-            if ana is None:
+
+
+def _draw_curves(ax, runs) -> None:
+    """The analysis curves Δ(p) of the runs that have one: expected and each re-analysis."""
+    allpos = True
+    for i, (run, ana) in enumerate(runs):
+        if ana is None:
+            continue
+        c = _COLOURS[i % 10]
+        P = np.array([r["pressure"] for r in ana["pressures"]])
+        series = {"expected": [r["expected"] for r in ana["pressures"]]}
+        for k in ana["settings"]["kinds"]:
+            series[k] = [r[k]["delta"] for r in ana["pressures"]]
+        for k, vals in series.items():
+            v = np.array([np.nan if x is None else x for x in vals], dtype=float)
+            ok = np.isfinite(v)
+            if not ok.any():
                 continue
-            c = colours[i % 10]
-            P = np.array([r["pressure"] for r in ana["pressures"]])
-            series = {"expected": [r["expected"] for r in ana["pressures"]]}
-            for k in ana["settings"]["kinds"]:
-                series[k] = [r[k]["delta"] for r in ana["pressures"]]
-            for k, vals in series.items():
-                v = np.array([np.nan if x is None else x for x in vals], dtype=float)
-                ok = np.isfinite(v)
-                if not ok.any():
-                    continue
-                allpos &= bool(np.all(v[ok] > 0))
-                m, ls = style.get(k, ("+", "-"))
-                ax.plot(P[ok], v[ok], marker=m, ls=ls, color=c,
-                        mfc="none" if k == "expected" else c)
-        for k, (m, ls) in style.items():
-            ax.plot([], [], marker=m, ls=ls, color="k", mfc="none" if k == "expected" else "k",
-                    label=k)
-        ax.set_xscale("log")
-        if allpos:
-            ax.set_yscale("log")
-        ax.set_xlabel("pressure (Pa)")
-        ax.set_ylabel("output displacement Δ (m)")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8, title="colour: run", title_fontsize=8)
-        ax.set_title("expected (optimisation) and the Neo-Hookean re-analyses", fontsize=9)
-    with atomic_path(dst) as tmp:
-        fig.savefig(str(tmp), dpi=130)
-    if not quiet:
-        print(f"{'run':40s} {'case':12s} {'model':11s} {'load':>9s} {'Δ (m)':>11s} "
-              f"{'gap darcy':>10s} {'gap follower':>13s}")
-        for (run, ana), lab in zip(runs, labels):
-            gaps = (ana or {}).get("gap_at_largest_pressure", {})
-            g = lambda k: "—" if gaps.get(k) is None else f"{100 * gaps[k]:+.1f} %"
-            d = run.summary.get("output_displacement")
-            print(f"{str(run.path)[-40:]:40s} {run.case.name:12s} {run.params.model:11s} "
-                  f"{run.load:9.3g} {fmt_value(d, '11.4g'):>11s} {g('darcy'):>10s} "
-                  f"{g('follower'):>13s}")
-        print(f"picture: {dst}")
-    return 0
+            allpos &= bool(np.all(v[ok] > 0))
+            m, ls = _STYLE.get(k, ("+", "-"))
+            ax.plot(P[ok], v[ok], marker=m, ls=ls, color=c,
+                    mfc="none" if k == "expected" else c)
+    for k, (m, ls) in _STYLE.items():
+        ax.plot([], [], marker=m, ls=ls, color="k", mfc="none" if k == "expected" else "k",
+                label=k)
+    ax.set_xscale("log")
+    if allpos:
+        ax.set_yscale("log")
+    ax.set_xlabel("pressure (Pa)")
+    ax.set_ylabel("output displacement Δ (m)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, title="colour: run", title_fontsize=8)
+    ax.set_title("expected (optimisation) and the Neo-Hookean re-analyses", fontsize=9)
+
+
+def _print_table(runs, labels) -> None:
+    """One line per run: case, model, load, Δ and the re-analyses' gaps."""
+    print(f"{'run':40s} {'case':12s} {'model':11s} {'load':>9s} {'Δ (m)':>11s} "
+          f"{'gap darcy':>10s} {'gap follower':>13s}")
+    for (run, ana), lab in zip(runs, labels):
+        gaps = (ana or {}).get("gap_at_largest_pressure", {})
+        g = lambda k: "—" if gaps.get(k) is None else f"{100 * gaps[k]:+.1f} %"
+        d = run.summary.get("output_displacement")
+        print(f"{str(run.path)[-40:]:40s} {run.case.name:12s} {run.params.model:11s} "
+              f"{run.load:9.3g} {fmt_value(d, '11.4g'):>11s} {g('darcy'):>10s} "
+              f"{g('follower'):>13s}")

@@ -179,17 +179,7 @@ def part_fields(problem, part: PartMesh) -> tuple[dict, dict, list]:
     from ngsolve import GridFunction
 
     mesh, mech = problem.mesh, problem.mech
-    half_p = ~part.mirrored_point
-    half_c = ~part.mirrored_cell
-    cen = part.centroids()
-    # a point inside the part next to every vertex: the centroid of one of its elements
-    inward = np.empty_like(part.points)
-    for k, e in enumerate(part.elements):
-        inward[e] = cen[k]
-    vp = part.source_point[half_p]  # the half's vertices, in the order of their numbers
-    vc = part.source_cell[half_c]
-    mp_v = _locate(mesh, part.points[vp], inward[vp])
-    mp_c = _locate(mesh, cen[vc], cen[vc])
+    vp, vc, mp_v, mp_c = _sampling_points(mesh, part)
     R = _reflection(part.line) if part.line is not None else None
     point, cell, notes = {}, {}, []
 
@@ -222,9 +212,42 @@ def part_fields(problem, part: PartMesh) -> tuple[dict, dict, list]:
                      f"equilibrium on its final design at the full load ({problem.failure})")
         return point, cell, notes
     point["u"] = on_points(np.asarray(mech.gfu(mp_v)).reshape(-1, 2))
+    cell.update(_measure_cells(problem, part, mp_c, len(vc), R))
+    for key, val in {**point, **cell}.items():
+        if not np.all(np.isfinite(val)):
+            raise ValueError(f"the field {key} on the part has non-finite values")
+    return point, cell, notes
+
+
+def _sampling_points(mesh, part: PartMesh) -> tuple:
+    """``(vp, vc, mp_v, mp_c)``: the half's vertices and cells (in the order of their numbers)
+    and the run mesh's points where the fields are read for them: every vertex (moved towards
+    an element's centroid where it falls outside by round-off, :func:`_locate`), every cell's
+    centroid."""
+    half_p = ~part.mirrored_point
+    half_c = ~part.mirrored_cell
+    cen = part.centroids()
+    # a point inside the part next to every vertex: the centroid of one of its elements
+    inward = np.empty_like(part.points)
+    for k, e in enumerate(part.elements):
+        inward[e] = cen[k]
+    vp = part.source_point[half_p]  # the half's vertices, in the order of their numbers
+    vc = part.source_cell[half_c]
+    mp_v = _locate(mesh, part.points[vp], inward[vp])
+    mp_c = _locate(mesh, cen[vc], cen[vc])
+    return vp, vc, mp_v, mp_c
+
+
+def _measure_cells(problem, part: PartMesh, mp_c, n_half: int, R) -> dict:
+    """The run model's strain and stress measures on the part's cells: element means read at
+    ``mp_c`` (the ``n_half`` cells of the half), the mirror image's rotated by ``R``; in-plane
+    components ``{name}_xx``, ``_yy``, ``_xy``."""
+    from ngsolve import GridFunction
+
+    mech, cell = problem.mech, {}
     comps = tensor_components(2)
     for name, cf in strain_stress_measures(problem).items():
-        T = np.empty((len(vc), 2, 2))
+        T = np.empty((n_half, 2, 2))
         for (i, j), _ in comps:
             gf = GridFunction(mech.l2)
             gf.Set(cf[i, j])  # element mean (P0 projection), as design.vtu
@@ -236,10 +259,7 @@ def part_fields(problem, part: PartMesh) -> tuple[dict, dict, list]:
             full[m] = np.einsum("ij,njk,lk->nil", R, full[m], R)
         for (i, j), comp in comps:
             cell[f"{name}_{comp}"] = full[:, i, j].copy()
-    for key, val in {**point, **cell}.items():
-        if not np.all(np.isfinite(val)):
-            raise ValueError(f"the field {key} on the part has non-finite values")
-    return point, cell, notes
+    return cell
 
 
 def part_polydata(part: PartMesh):

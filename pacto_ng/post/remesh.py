@@ -189,12 +189,35 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
         If no solid touches the clamp boundary, or ``maxh`` is not positive.
     """
     import ngsolve
-    from netgen.meshing import Element0D
 
     if maxh <= 0:
         raise ValueError("maxh must be positive")
     if not 0.0 < wet_fraction <= 1.0:
         raise ValueError(f"wet_fraction must lie in (0, 1], got {wet_fraction!r}")
+    kept, dropped = _clamped_pieces(th, clamp)
+    src = th.source
+    seg, names = outer_boundary(src)
+    diam = float(np.ptp(seg.reshape(-1, 2), axis=0).max())
+    locator = BoundaryLocator(seg, names, 1e-8 * max(diam, th.h))
+    ngm, geometry, materials = _part_mesh(th, kept, maxh, locator, domain, stiff,
+                                          min_spacing, spline_tol)
+    coords = np.asarray(ngm.Coordinates(), dtype=float)
+    sample = pressure_sampler(pressure, src) if pressure is not None else None
+    if sample is not None and p_in is None:
+        p_in = float(np.max(sample(np.asarray(src.ngmesh.Coordinates(), dtype=float))))
+    probe = th.h if probe is None else float(probe)
+    wetted = _wet(ngm, coords, src, locator, geometry == "domain", sample, p_in, probe,
+                  wet_fraction, wet_boundaries)
+    ports = _named_points(ngm, coords, src)
+    mesh = ngsolve.Mesh(ngm)
+    area = ngsolve.Integrate(ngsolve.CF(1.0), mesh)
+    return Remeshed(mesh, float(area), th.area, float(dropped), ports, wetted, p_in,
+                    geometry, materials)
+
+
+def _clamped_pieces(th: Thresholded, clamp) -> tuple[list, float]:
+    """``(kept, dropped area)``: the solid pieces that touch a ``clamp`` boundary (every piece
+    when ``clamp`` is empty), and the area of the others, which would float."""
     clamp = (clamp,) if isinstance(clamp, str) else tuple(clamp)
     comps = list(th.components)
     if not comps:
@@ -206,32 +229,33 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
                              f"(threshold {th.threshold:g})")
     else:
         kept = comps
-    dropped = sum(c.area for c in comps if c not in kept)
+    return kept, sum(c.area for c in comps if c not in kept)
 
+
+def _part_mesh(th: Thresholded, kept, maxh, locator, domain, stiff, min_spacing, spline_tol):
+    """``(ngm, geometry, materials)``: the Netgen mesh of the kept pieces, on the domain's own
+    geometry when ``domain`` is given and that works, else on the traced one
+    (:attr:`Remeshed.geometry` says which, and why)."""
     src = th.source
-    seg, names = outer_boundary(src)
-    diam = float(np.ptp(seg.reshape(-1, 2), axis=0).max())
-    locator = BoundaryLocator(seg, names, 1e-8 * max(diam, th.h))
-    ngm, geometry, materials = None, "traced", None
     if domain is not None:
         try:
             part = domain_shape(th, kept, domain, min_spacing, spline_tol)
             ngm, materials = _generate_part(part, maxh, th.threshold, stiff, domain, src)
-            geometry = "domain"
+            return ngm, "domain", materials
         except (ValueError, *_mesher_errors()) as err:  # the traced part instead
             what = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
             geometry = f"traced (the part on the domain's geometry failed: {what})"
-    if ngm is None:
-        shape = build_geometry(kept, th.h, min_spacing=min_spacing, spline_tol=spline_tol,
-                               locator=locator)
-        ngm, materials = _generate_part(shape, maxh, th.threshold, stiff, None, src)
+    else:
+        geometry = "traced"
+    shape = build_geometry(kept, th.h, min_spacing=min_spacing, spline_tol=spline_tol,
+                           locator=locator)
+    ngm, materials = _generate_part(shape, maxh, th.threshold, stiff, None, src)
+    return ngm, geometry, materials
 
-    # -- the wetting rule, segment by segment ----------------------------------------------
-    coords = np.asarray(ngm.Coordinates(), dtype=float)
-    sample = pressure_sampler(pressure, src) if pressure is not None else None
-    if sample is not None and p_in is None:
-        p_in = float(np.max(sample(np.asarray(src.ngmesh.Coordinates(), dtype=float))))
-    probe = th.h if probe is None else float(probe)
+
+def _segments(ngm, coords):
+    """The boundary segments of ``ngm``: ``(segs, mid, length, normal)``, their midpoints,
+    lengths and unit normals pointing out of the solid."""
     centroid = {}
     for el in ngm.Elements2D():
         vs = [v.nr - 1 for v in el.vertices]
@@ -247,9 +271,17 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
     inner = np.array([centroid[(min(a, b), max(a, b))] for a, b in ends])
     flip = np.einsum("ij,ij->i", normal, inner - mid) > 0
     normal[flip] *= -1.0  # outward from the solid
+    return segs, mid, length, normal
+
+
+def _wet(ngm, coords, src, locator, on_domain: bool, sample, p_in, probe, wet_fraction,
+         wet_boundaries) -> float:
+    """The wetting rule (module docstring), segment by segment: the wetted segments of ``ngm``
+    are renamed ``pressure``; returns their length."""
+    segs, mid, length, normal = _segments(ngm, coords)
     current = [ngm.GetBCName(s.index - 1) for s in segs]
     internal = np.array([c == INTERFACE for c in current])
-    if geometry == "domain":
+    if on_domain:
         # names are the domain's: wetted by name wherever the part runs along a wetted edge
         # (an outer inlet, or a chamber's wall); everywhere else by the pressure beyond it (a
         # probe point outside the source mesh sees none)
@@ -271,7 +303,15 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
         for s, w in zip(segs, wet):
             if w:
                 s.index = idx
-    # -- named points --------------------------------------------------------------------
+    return float(length[wet].sum())
+
+
+def _named_points(ngm, coords, src) -> dict:
+    """Every named point of the source as the nearest vertex of ``ngm`` (added as a point
+    element unless the part already has it): ``{name: (source position, vertex position)}``."""
+    import ngsolve
+    from netgen.meshing import Element0D
+
     # (a part on the domain's geometry already has the domain's named vertices it kept: a
     # second point element of the same name would count a port's spring and reading twice)
     ports, have = {}, named_points(ngsolve.Mesh(ngm))
@@ -284,8 +324,4 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
             k = int(np.argmin(np.hypot(coords[:, 0] - have[name][0],
                                        coords[:, 1] - have[name][1])))
         ports[name] = ((px, py), tuple(coords[k]))
-    mesh = ngsolve.Mesh(ngm)
-    area = ngsolve.Integrate(ngsolve.CF(1.0), mesh)
-    return Remeshed(mesh, float(area), th.area, float(dropped), ports,
-                    float(length[wet].sum()), p_in, geometry, materials)
-
+    return ports

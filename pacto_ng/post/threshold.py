@@ -221,14 +221,7 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
     area = cell_areas(grid)
     h = element_size(grid, area)
     keep = included_elements(mesh, exclude)
-    nodal = area_weighted_nodal(grid, rho, area)
-    if keep is not None:
-        # the average over the kept elements only (vertices of excluded elements alone keep
-        # the full average)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            inner = area_weighted_nodal(grid, rho, np.where(keep, area, 0.0))
-        nodal = np.where(np.isfinite(inner), inner, nodal)
-    nodal = np.where(np.abs(nodal - threshold) <= _TIE, threshold + _TIE, nodal)
+    nodal = _nodal_density(grid, rho, area, keep, threshold)
     grid.point_data["rho"] = nodal
     base = grid if keep is None else grid.extract_cells(np.flatnonzero(keep))
     solid = base.clip_scalar(scalars="rho", value=threshold, invert=False)
@@ -236,13 +229,41 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
         raise ValueError(f"no element reaches the threshold {threshold} (max nodal density "
                          f"{nodal.max():.3g})")
     solid_area = float(cell_areas(solid).sum())
+    raw = _labelled_loops(solid, mesh, exclude if keep is not None else (), h)
+    paths, depth = _nesting([p for p, _ in raw])
+    loops = [Loop(p, lab, d) for (p, lab), d in zip(raw, depth)]
+    kept, removed = _without_specks(loops, paths, 4.0 * h * h if min_area is None else min_area)
+    comps = _components(kept)
+    excluded = frozenset() if keep is None else frozenset(
+        (exclude,) if isinstance(exclude, str) else exclude)
+    return Thresholded(tuple(comps), solid_area, threshold, nodal, solid, h, mesh, float(removed),
+                       excluded)
+
+
+def _nodal_density(grid, rho, area, keep, threshold: float) -> np.ndarray:
+    """The element densities smoothed to the vertices (area-weighted; over the kept elements
+    only where ``keep`` is given), values at the threshold tie-broken to solid."""
+    nodal = area_weighted_nodal(grid, rho, area)
+    if keep is not None:
+        # the average over the kept elements only (vertices of excluded elements alone keep
+        # the full average)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            inner = area_weighted_nodal(grid, rho, np.where(keep, area, 0.0))
+        nodal = np.where(np.isfinite(inner), inner, nodal)
+    return np.where(np.abs(nodal - threshold) <= _TIE, threshold + _TIE, nodal)
+
+
+def _labelled_loops(solid, mesh, exclude, h: float) -> list:
+    """The boundary of the clipped solid as closed loops ``(points, labels)``, each
+    counter-clockwise, every edge labelled with the source's outer boundary it lies on (the
+    walls of the ``exclude`` faces count as outer boundary)."""
     edges = solid.extract_feature_edges(boundary_edges=True, non_manifold_edges=False,
                                         feature_edges=False, manifold_edges=False)
     chains = _polylines(edges.strip(join=True))
     ids = _close_loops(chains)
     pts2 = np.asarray(edges.points)[:, :2]
 
-    seg, names = outer_boundary(mesh, exclude if keep is not None else ())
+    seg, names = outer_boundary(mesh, exclude)
     diam = float(np.ptp(pts2, axis=0).max()) if len(pts2) else 1.0
     locator = BoundaryLocator(seg, names, 1e-8 * max(diam, h))
 
@@ -253,19 +274,26 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
             p = p[::-1]
         mid = 0.5 * (p + np.roll(p, -1, axis=0))
         raw.append((p, tuple(locator.locate(mid))))
+    return raw
 
-    # nesting depth by point-in-polygon tests (loops do not cross)
+
+def _nesting(polygons) -> tuple[list, list]:
+    """``(paths, depth)``: a matplotlib Path per polygon and the number of the others that
+    enclose it, by point-in-polygon tests (the polygons do not cross)."""
     from matplotlib.path import Path
 
-    paths = [Path(p) for p, _ in raw]
+    paths = [Path(p) for p in polygons]
     depth = []
-    for i, (p, _) in enumerate(raw):
+    for i, p in enumerate(polygons):
         probe = 0.5 * (p[0] + p[1])  # an edge midpoint: never a vertex of another loop
         depth.append(sum(1 for j, pa in enumerate(paths) if j != i and pa.contains_point(probe)))
-    loops = [Loop(p, lab, d) for (p, lab), d in zip(raw, depth)]
+    return paths, depth
 
-    if min_area is None:
-        min_area = 4.0 * h * h
+
+def _without_specks(loops: list, paths: list, min_area: float) -> tuple[list, float]:
+    """``(kept, removed)``: the loops that enclose at least ``min_area`` and lie inside no
+    loop that encloses less, their depths counted among themselves (a filled pinhole no
+    longer counts), and the net area removed (islands positive, pinholes negative)."""
     # a loop is kept if it and every loop enclosing it are large enough
     large = [lp.area >= min_area for lp in loops]
     for i, lp in enumerate(loops):
@@ -276,12 +304,15 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
     removed = sum((-1) ** lp.depth * lp.area for lp, k in zip(loops, large) if not k)
     kept = [lp for lp, k in zip(loops, large) if k]
     # nesting among the kept loops only (a filled pinhole no longer counts)
+    _, kdepth = _nesting([lp.points for lp in kept])
+    return [Loop(lp.points, lp.labels, d) for lp, d in zip(kept, kdepth)], removed
+
+
+def _components(kept: list) -> list:
+    """The solid pieces: every outer loop with the holes directly inside it, largest first."""
+    from matplotlib.path import Path
+
     kpaths = [Path(lp.points) for lp in kept]
-    kdepth = []
-    for i, lp in enumerate(kept):
-        probe = 0.5 * (lp.points[0] + lp.points[1])
-        kdepth.append(sum(1 for j, pa in enumerate(kpaths) if j != i and pa.contains_point(probe)))
-    kept = [Loop(lp.points, lp.labels, d) for lp, d in zip(kept, kdepth)]
     comps = []
     for i, lp in enumerate(kept):
         if lp.is_hole:
@@ -293,8 +324,4 @@ def threshold(mesh, rho, threshold: float = 0.5, *, min_area: float | None = Non
                 holes.append(hl)
         comps.append(Component(lp, tuple(holes)))
     comps.sort(key=lambda c: -c.area)
-    excluded = frozenset() if keep is None else frozenset(
-        (exclude,) if isinstance(exclude, str) else exclude)
-    return Thresholded(tuple(comps), solid_area, threshold, nodal, solid, h, mesh, float(removed),
-                       excluded)
-
+    return comps
