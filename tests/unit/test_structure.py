@@ -13,6 +13,8 @@ PACKAGE = Path(__file__).resolve().parents[2] / "pacto_ng"
 MAX_LOCAL_IMPORTS = 10
 #: the most lines a module may have
 MAX_LINES = 450
+#: the most lines a function may have, from its ``def`` to its last line, docstring included
+MAX_FUNCTION_LINES = 80
 
 
 def _modules(package: Path = PACKAGE) -> dict[str, Path]:
@@ -140,4 +142,15 @@ def test_package_imports_stand_at_the_top(graph):
 def test_no_module_over_the_line_limit():
     long = {str(p.relative_to(PACKAGE.parent)): n for p in PACKAGE.rglob("*.py")
             if (n := len(p.read_text().splitlines())) > MAX_LINES}
+    assert long == {}
+
+
+def test_no_function_over_the_line_limit():
+    long = {}
+    for path in PACKAGE.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > MAX_FUNCTION_LINES:
+                    long[f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {node.name}"] = n
     assert long == {}

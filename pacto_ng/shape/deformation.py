@@ -1,0 +1,137 @@
+"""The shape of a part as a deformation of its mesh, and shape derivatives on it.
+
+The part's reference mesh Ω0 is moved by a deformation ``d`` in a VectorH1 space ``X`` of the
+mesh (order 1 by default): the current shape is ``Ω = (id + d)(Ω0)``, set with NGSolve's
+``mesh.SetDeformation``, so that every form assembled afterwards integrates over Ω.  A
+functional ``J(Ω) = ∫_Ω f dx + ∫_∂Ω g ds`` has the shape derivative in a direction
+``V ∈ X`` (Hadamard; Sokolowski and Zolésio 1992, *Introduction to Shape Optimization*, §2.31
+and §2.33; Allaire, Dapogny and Jouve 2021, *Handbook of Numerical Analysis* 22, "Shape and
+topology optimization", eq. 3.6)
+
+    dJ[V] = d/dt J((id + tV)(Ω))|_{t=0}
+          = ∫_Ω (f' + f div V) dx + ∫_∂Ω (g' + g div_Γ V) ds,
+
+with ``f'``, ``g'`` the derivatives of the integrands as the points move (the material
+derivatives; a finite element function moves with the mesh).  NGSolve's
+``SumOfIntegrals.DiffShape(ψ)`` gives this linear form in the test function ``ψ`` of ``X``;
+assembled, ``dJ[V] = dJ · V`` on the coefficients.  The derivative is of the *discrete*
+functional: it equals a central difference of ``J`` under ``SetDeformation(±hV)`` up to
+O(h²) when the same quadrature serves both (:func:`shape_dx`, :func:`shape_ds`: every
+integral here carries ``bonus_intorder = 2``, without which the two differ by ~6e-5, see the
+NGSolve notes).
+
+Dofs on held regions (a clamp, a pressure inlet) are zeroed in every gradient: the shape may
+not move there.  ``hold`` is a tuple of region names (every component held) or a
+:class:`~pacto_ng.physics.mechanics.Supports` (``clamp`` every component, ``fix_x``/``fix_y``/
+``fix_z`` one: a symmetry line slides along itself).
+"""
+from __future__ import annotations
+
+import numpy as np
+from ngsolve import CF, GridFunction, Integrate, LinearForm, VectorH1, ds, dx
+
+from ..physics.mechanics import Supports
+
+#: extra quadrature order of every form whose shape derivative is taken (the NGSolve notes:
+#: the t-derivative of an integrand has a higher degree than the integrand)
+BONUS_INTORDER = 2
+
+
+def shape_dx():
+    """The volume measure of every shape-differentiated integral: ``dx`` with
+    :data:`BONUS_INTORDER`."""
+    return dx(bonus_intorder=BONUS_INTORDER)
+
+
+def shape_ds(region: str):
+    """The measure on the boundary ``region`` of every shape-differentiated integral: ``ds``
+    with :data:`BONUS_INTORDER`."""
+    return ds(region, bonus_intorder=BONUS_INTORDER)
+
+
+def dirichlet_options(mesh, supports: Supports) -> dict:
+    """The VectorH1 keyword arguments (``dirichletx``, ``dirichlety_bbnd``, ...) that fix the
+    components ``supports`` names: boundaries, and (2D) named points or (3D) named edges and
+    points.  ValueError for a name that is none of the mesh's regions."""
+    regions = {"": mesh.GetBoundaries(), "_bbnd": mesh.GetBBoundaries()}
+    if mesh.dim == 3:
+        regions["_bbbnd"] = mesh.GetBBBoundaries()
+    for name in supports.names():
+        if not any(name in known for known in regions.values()):
+            raise ValueError(f"region '{name}' is not a boundary, edge or point of the mesh")
+    kw = {}
+    for axis, names in zip("xyz", supports.per_component(mesh.dim)):
+        for suffix, known in regions.items():
+            on = [n for n in names if n in known]
+            if on:
+                kw[f"dirichlet{axis}{suffix}"] = "|".join(on)
+    return kw
+
+
+class ShapeSpace:
+    """The deformation ``d`` of a part's mesh (see the module).
+
+    Parameters
+    ----------
+    mesh : ngsolve.Mesh
+        The part's reference mesh Ω0 (2D or 3D).
+    order : int
+        Order of the VectorH1 space ``X`` of ``d`` and of the gradients.
+    hold : tuple of str or Supports
+        The regions that may not move (every component for a tuple of names).
+
+    Attributes: ``mesh``, ``space`` (``X``), ``deformation`` (the GridFunction of ``d``),
+    ``held`` (numpy mask of the held dofs), ``ndof``.
+    """
+
+    def __init__(self, mesh, *, order: int = 1, hold: tuple[str, ...] | Supports = ()):
+        supports = hold if isinstance(hold, Supports) else Supports(clamp=tuple(hold))
+        self.mesh = mesh
+        self.space = VectorH1(mesh, order=int(order), **dirichlet_options(mesh, supports))
+        self.held = ~np.array(list(self.space.FreeDofs()), dtype=bool)
+        self.deformation = GridFunction(self.space)
+        self.ndof = self.space.ndof
+
+    def set(self, values) -> None:
+        """Move the mesh to ``Ω = (id + d)(Ω0)``, ``d`` given by its coefficients ``values``."""
+        values = np.asarray(values, dtype=float)
+        if values.shape != (self.ndof,):
+            raise ValueError(f"shape: {values.shape} coefficients for a space of {self.ndof}")
+        self.deformation.vec.FV().NumPy()[:] = values
+        self.mesh.SetDeformation(self.deformation)
+
+    def direction(self, field, on: str | None = None) -> np.ndarray:
+        """The coefficients of a vector CoefficientFunction ``field`` set into ``X`` on the
+        reference mesh (only the dofs of the boundary ``on``, if given, the rest zero), held
+        dofs zeroed: a direction ``V`` for a derivative or a check."""
+        gf = GridFunction(self.space)
+        self.mesh.UnsetDeformation()
+        if on is None:
+            gf.Set(field)
+        else:
+            gf.Set(field, definedon=self.mesh.Boundaries(on))
+        self.mesh.SetDeformation(self.deformation)
+        out = gf.vec.FV().NumPy().copy()
+        out[self.held] = 0.0
+        return out
+
+    def derivative(self, integrals) -> np.ndarray:
+        """``dJ`` of ``J = integrals`` (a SumOfIntegrals of the current shape's fields and
+        coefficients) as the vector on ``X`` with ``dJ[V] = dJ · V``, held dofs zeroed."""
+        lf = LinearForm(self.space)
+        lf += integrals.DiffShape(self.space.TestFunction())
+        lf.Assemble()
+        out = lf.vec.FV().NumPy().copy()
+        out[self.held] = 0.0
+        return out
+
+
+def volume_integrals(thickness: float = 1.0):
+    """The part's volume ``t ∫_Ω 1 dx`` (``t`` the thickness of a 2D part, 1 in 3D) as an
+    integral, whose shape derivative is ``t ∫_Ω div V dx`` (the module's formula, ``f = 1``)."""
+    return (float(thickness) * CF(1.0)) * shape_dx()
+
+
+def volume(mesh, thickness: float = 1.0) -> float:
+    """The volume ``t |Ω|`` of the current shape (:func:`volume_integrals`)."""
+    return float(Integrate(volume_integrals(thickness), mesh))

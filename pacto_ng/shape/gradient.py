@@ -1,0 +1,323 @@
+"""A part's output displacement on its current shape, and its shape gradient by the adjoint.
+
+State.  On the current shape Ω of the part (:class:`~pacto_ng.shape.deformation.ShapeSpace`
+moves the mesh) the displacement ``u ∈ U`` (VectorH1 of order ``p``, zero where ``supports``
+fix it) solves, for every test function ``v``,
+
+    R(u; v) = t ∫_Ω ∂φ/∂G(∇u) : ∇v dx + t ∫_Γp P a(u) · v ds = 0,
+
+with the run's strain-energy density ``φ`` (:func:`~pacto_ng.physics.energy.make_energy` of
+the run's :class:`~pacto_ng.params.Parameters` on solid material everywhere,
+:func:`~pacto_ng.post.part_analysis.solid_fields`, as
+:class:`~pacto_ng.post.part_analysis.PartAnalysis` builds it), the thickness ``t`` of a 2D
+part (1 in 3D), the wall pressure ``P`` on ``Γp`` with ``N`` the solid's outward normal
+(:func:`~pacto_ng.post.part_analysis.outward_normal`) and
+
+* ``fixed``: ``a(u) = N`` (the potential ``t ∫ P N · u ds``: a symmetric tangent);
+* ``follower``: ``a(u) = cof(F̃) N``, ``F̃ = I + ∇_Γ u`` (``Grad(u).Trace()``; Nanson's
+  formula ``n da = cof(F) N dA``, exact with the surface gradient: Bonet and Wood 2008,
+  *Nonlinear continuum mechanics for finite element analysis*, 2nd ed., §4.2.5; the terms of
+  :func:`~pacto_ng.post.part_analysis.follower_terms`): an unsymmetric tangent.
+
+Newton's method with load continuation and the ``det F`` guard
+(:func:`~pacto_ng.physics.newton.solve_with_continuation`) solves it, warm-started from the
+last shape's state; the tangent ``K = ∂R/∂u`` comes from ``AssembleLinearization`` and is
+factorised once and refactorised numerically (``Update``) with the same ordering afterwards.
+
+Output.  ``Δ = Σ_k w_k d_k · ū_k`` over the ports (:class:`~pacto_ng.physics.loads.Port`:
+region, direction ``d_k``, weight ``w_k``), ``ū_k`` the mean of ``u`` over a named boundary
+``Γ_k`` (``∫_Γk u ds / |Γ_k|``) or its value at a named point.
+
+Shape gradient (Céa's Lagrangian method; Allaire, Dapogny and Jouve 2021, *Handbook of
+Numerical Analysis* 22, §3.3; the discrete version: the state and adjoint are finite element
+functions that move with the mesh).  With the adjoint ``λ ∈ U`` solving the transposed
+tangent system ``Kᵀ λ = ∂Δ/∂u`` (one solve with the state's factorisation), the Lagrangian
+
+    L(Ω) = Σ_k w_k ∫_Γk (d_k · u - I_k/|Γ_k|) ds / |Γ_k| - R(u; λ),   I_k = ∫_Γk d_k · u ds,
+
+(boundary ports only: a named point is a mesh vertex that moves with ``u``, whose value there
+has no explicit shape dependence) is stationary in ``u`` and ``λ``, and its explicit shape
+derivative (coefficients ``I_k``, ``|Γ_k|`` frozen) is the total one:
+``dΔ[V] = ∂L/∂Ω[V]``, from
+:meth:`~pacto_ng.shape.deformation.ShapeSpace.derivative` (``DiffShape``).  The first term
+differentiates the mean: ``d(I/A) = dI/A - I dA/A²``.
+
+The displacement formulation throughout (the mixed one of
+:func:`~pacto_ng.physics.mixed.formulation_for` is not shape-differentiated here); ports with
+output springs are refused (their spring energy is not shape-differentiated here either).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from ngsolve import (L2, VOL, BilinearForm, CF, Cof, Grad, GridFunction, Id, InnerProduct,
+                     Integrate, LinearForm, Parameter, Variation, VectorH1, dx)
+
+from ..errors import InputError
+from ..parallel import free_norm
+from ..physics.energy import make_energy
+from ..physics.equilibrium import NewtonFailure
+from ..physics.loads import Port
+from ..physics.mechanics import Supports
+from ..physics.newton import solve_with_continuation
+from ..physics.quadrature import integration_rules
+from ..post.part_analysis import outward_normal, solid_fields
+from .deformation import (ShapeSpace, dirichlet_options, shape_ds, shape_dx, volume,
+                          volume_integrals)
+
+KINDS = ("fixed", "follower")
+
+
+def _ports(mesh, ports) -> tuple[Port, ...]:
+    """``ports`` as a tuple of Ports on named boundaries or points of ``mesh`` (ValueError
+    otherwise, or for a port with an output spring)."""
+    ports = (ports,) if isinstance(ports, Port) else tuple(ports)
+    if not ports or not all(isinstance(p, Port) for p in ports):
+        raise ValueError("ports: give a Port or a non-empty tuple of Ports")
+    points = mesh.GetBBBoundaries() if mesh.dim == 3 else mesh.GetBBoundaries()
+    for p in ports:
+        if p.spring > 0:
+            raise ValueError(f"port '{p.region}': output springs are not shape-differentiated")
+        if p.region not in mesh.GetBoundaries() and p.region not in points:
+            raise ValueError(f"port '{p.region}' is neither a boundary nor a named point of the "
+                             f"{mesh.dim}D mesh")
+        if len(p.direction) != mesh.dim:
+            raise ValueError(f"port '{p.region}': {len(p.direction)} direction components on "
+                             f"a {mesh.dim}D mesh")
+    return ports
+
+
+class PartResponse:
+    """The state, the output ``Δ`` and its shape gradient of a part (see the module).
+
+    Parameters
+    ----------
+    mesh : ngsolve.Mesh
+        The part (2D: plane strain or stress and thickness from ``params``; 3D).  Its current
+        deformation (``SetDeformation``) is the shape every :meth:`solve` sees.
+    params : pacto_ng.params.Parameters
+        The run's parameters: model (not ``auto``), E1, ν, plane, thickness, material, Newton's
+        settings, order.
+    supports : Supports
+        Dirichlet conditions of the displacement by region name.
+    ports : Port or tuple of Port
+        The output (boundaries or named points, no springs).
+    pressure : float
+        The wall pressure ``P`` (negative: suction).
+    kind : {"fixed", "follower"}
+        The pressure's load.
+    boundary : str
+        The wetted wall ``Γp``.
+    order : int, optional
+        Displacement order (default ``params.order``, else 1).
+
+    Attributes: ``u``, ``lam`` (GridFunctions of the state and the adjoint), ``delta`` (the
+    last solve's ``Δ``), ``result`` (its :class:`~pacto_ng.physics.newton.NewtonResult`),
+    ``free`` (numpy mask of the free displacement dofs), ``thickness``, ``kind``.
+    """
+
+    def __init__(self, mesh, *, params, supports: Supports, ports, pressure: float,
+                 kind: str = "fixed", boundary: str = "pressure", order: int | None = None):
+        if kind not in KINDS:
+            raise ValueError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
+        if boundary not in mesh.GetBoundaries():
+            raise ValueError(f"the part has no '{boundary}' boundary to apply the pressure on")
+        if not math.isfinite(pressure):
+            raise ValueError(f"pressure must be finite (got {pressure!r})")
+        if params.model == "auto":
+            raise InputError("model: auto is chosen by a run; give the model the run used")
+        if params.formulation == "mixed":
+            raise InputError("formulation: the shape gradient is of the displacement "
+                             "formulation; set formulation=displacement")
+        self.mesh, self.kind, self.boundary = mesh, kind, boundary
+        self.ports = _ports(mesh, ports)
+        self.thickness = float(params.thickness) if mesh.dim == 2 else 1.0
+        self.fes = VectorH1(mesh, order=int(order or params.order or 1),
+                            **dirichlet_options(mesh, supports))
+        self.free = np.array(list(self.fes.FreeDofs()), dtype=bool)
+        if self.free.all():
+            raise ValueError("the part has no supports: add a clamp or fixed boundary")
+        values = solid_fields(mesh)
+        l2 = L2(mesh, order=0)
+        self.coeffs = {name: GridFunction(l2) for name in values}
+        for name, vals in values.items():
+            self.coeffs[name].vec.FV().NumPy()[:] = vals
+        energy, guard, linear = make_energy(params, Parameter(params.penal), tuple(values))
+        self.energy = energy
+        self.linear = bool(linear) and kind == "fixed"
+        self.normal = outward_normal(mesh, boundary)
+        self.sign = math.copysign(1.0, pressure)
+        self.pressure = abs(float(pressure))
+        self.load = Parameter(self.pressure)  # the load factor of Newton's continuation
+        self.settings = params.newton.settings()
+        self.u, self.lam = GridFunction(self.fes), GridFunction(self.fes)
+        self.a = self._tangent_form()
+        self._inverse = None
+        self._tangent_current = False
+        self._trial = GridFunction(self.fes)
+        self._guard = None if guard is None else guard(Grad(self._trial), self.coeffs)
+        self._points = mesh.MapToAllElements(integration_rules(2 * self.fes.globalorder), VOL)
+        self.delta, self.result = math.nan, None
+        self._output, self._sizes = None, ()
+
+    # -- the forms -----------------------------------------------------------------------------
+    def _traction(self, u):
+        """``a(u)``: ``N`` (fixed) or ``cof(I + ∇_Γ u) N`` (follower)."""
+        if self.kind == "fixed":
+            return self.normal
+        return Cof(Id(self.mesh.dim) + Grad(u).Trace()) * self.normal
+
+    def _tangent_form(self):
+        """The residual ``R(u; v)`` as a BilinearForm (Variation of the potential, and the
+        follower term as a residual term)."""
+        u, v = self.fes.TnT()
+        t, P = self.thickness, self.sign * self.load
+        a = BilinearForm(self.fes, symmetric=self.kind == "fixed")
+        a += Variation(t * self.energy(Grad(u), self.coeffs) * shape_dx())
+        if self.kind == "fixed":
+            a += Variation(t * P * InnerProduct(self.normal, u) * shape_ds(self.boundary))
+        else:
+            a += t * P * InnerProduct(self._traction(u), v) * shape_ds(self.boundary)
+        return a
+
+    def _outputs(self):
+        """``(f, [(port, |Γ_k| or None)])``: the vector with ``Δ = f · u`` (and ``∂Δ/∂u``) on
+        the current shape, and each port's boundary measure (None for a named point)."""
+        mesh, v = self.mesh, self.fes.TestFunction()
+        lf, sizes = LinearForm(self.fes), []
+        for p in self.ports:
+            d = CF(tuple(float(c) for c in p.direction))
+            if p.region in mesh.GetBoundaries():
+                size = float(Integrate(CF(1.0) * shape_ds(p.region), mesh))
+                lf += (p.weight / size) * InnerProduct(d, v) * shape_ds(p.region)
+            else:
+                size = None
+                points = mesh.BBBoundaries if mesh.dim == 3 else mesh.BBoundaries
+                lf += p.weight * InnerProduct(d, v) * dx(definedon=points(p.region))
+            sizes.append((p, size))
+        lf.Assemble()
+        return lf.vec, sizes
+
+    # -- the problem Newton drives (pacto_ng.physics.newton) ---------------------------------
+    def residual(self, vec, out, load):
+        self.load.Set(load)
+        self.a.Apply(vec, out)
+
+    def assemble_tangent(self, vec, load):
+        self.load.Set(load)
+        self.a.AssembleLinearization(vec)
+        if self._inverse is None:
+            inverse = "sparsecholesky" if self.kind == "fixed" else "umfpack"
+            self._inverse = self.a.mat.Inverse(self.fes.FreeDofs(), inverse=inverse)
+        else:
+            self._inverse.Update()  # the same sparsity: numeric refactorisation only
+
+    def solve_tangent(self, rhs, out):
+        out.data = self._inverse * rhs
+
+    def admissible(self, vec) -> bool:
+        if self._guard is None:
+            return bool(np.all(np.isfinite(vec.FV().NumPy())))
+        self._trial.vec.data = vec
+        vals = np.asarray(self._guard(self._points))
+        return bool(np.all(np.isfinite(vals)) and np.all(vals > 0.0))
+
+    def load_norm(self, load):
+        """``|R(0)|`` on the free dofs at load factor ``load``: the external load."""
+        zero, out = self.u.vec.CreateVector(), self.u.vec.CreateVector()
+        zero[:] = 0.0
+        self.residual(zero, out, load)
+        return free_norm(out, self.free)
+
+    # -- the response --------------------------------------------------------------------------
+    def solve(self) -> float:
+        """Equilibrium on the current shape (warm-started from the last one's) and ``Δ``;
+        NewtonFailure if Newton does not reach the pressure."""
+        self.result = solve_with_continuation(self, self.u.vec, self.pressure, self.settings,
+                                              warm=self.result is not None, linear=self.linear)
+        if not self.result.converged:
+            raise NewtonFailure(self.result)
+        self.load.Set(self.pressure)
+        # the factorised tangent is the equilibrium's own if the problem is linear and Newton
+        # assembled it on this shape
+        self._tangent_current = self.linear and self.result.iterations > 0
+        self._output, self._sizes = self._outputs()
+        self.delta = float(InnerProduct(self._output, self.u.vec))
+        return self.delta
+
+    def adjoint(self) -> None:
+        """``λ`` with ``Kᵀ λ = ∂Δ/∂u`` at the last equilibrium (the tangent refactorised at
+        the converged state unless it is that already)."""
+        if self.result is None:
+            raise RuntimeError("solve the state before its adjoint")
+        if not self._tangent_current:
+            self.assemble_tangent(self.u.vec, self.pressure)
+            self._tangent_current = True
+        inverse = self._inverse if self.kind == "fixed" else self._inverse.T
+        self.lam.vec.data = inverse * self._output
+
+    def lagrangian(self):
+        """``L`` of the module at the last state and adjoint, as integrals over the current
+        shape (their ``DiffShape`` is the shape gradient of ``Δ``)."""
+        u, lam, t = self.u, self.lam, self.thickness
+        P = self.sign * self.pressure
+        L = (-t * self.energy(Grad(u), self.coeffs).Diff(u, lam)) * shape_dx()
+        L += (-t * P * InnerProduct(self._traction(u), lam)) * shape_ds(self.boundary)
+        for p, size in self._sizes:
+            if size is None:
+                continue  # a named point: no explicit shape dependence
+            d = CF(tuple(float(c) for c in p.direction))
+            mean = float(Integrate(InnerProduct(d, u) * shape_ds(p.region), self.mesh)) / size
+            L += (p.weight / size) * (InnerProduct(d, u) - mean) * shape_ds(p.region)
+        return L
+
+    def gradient(self, space: ShapeSpace) -> np.ndarray:
+        """``dΔ/dV`` on ``space`` (its held dofs zeroed) at the last equilibrium: the adjoint
+        solve and the shape derivative of :meth:`lagrangian`."""
+        self.adjoint()
+        return space.derivative(self.lagrangian())
+
+
+class ShapeResponse:
+    """Block ``shape -> Δ``: the coefficients of the mesh deformation ``d`` on ``space`` to
+    the part's output (:class:`PartResponse`).
+
+    forward: ``SetDeformation(d)`` (:meth:`ShapeSpace.set`), equilibrium, ``Δ``.
+    backward: ``ḡ dΔ/dV`` on ``space`` (held dofs zero; the module's Lagrangian).
+    """
+
+    def __init__(self, response: PartResponse, space: ShapeSpace, *, inputs=("shape",),
+                 output: str = "delta"):
+        if space.mesh is not response.mesh:
+            raise ValueError("the shape space and the response must be on the same mesh")
+        self.response, self.space = response, space
+        self.inputs, self.output = tuple(inputs), output
+
+    def forward(self, shape) -> float:
+        self.space.set(shape)
+        return self.response.solve()
+
+    def backward(self, grad_output) -> tuple[np.ndarray]:
+        return (float(grad_output) * self.response.gradient(self.space),)
+
+
+class ShapeVolume:
+    """Block ``shape -> t |Ω|``, the part's volume
+    (:func:`~pacto_ng.shape.deformation.volume`; ``t`` the thickness of a 2D part, 1 in 3D).
+
+    forward: ``SetDeformation(d)``, ``t ∫_Ω dx``.
+    backward: ``ḡ t ∫_Ω div V dx`` on ``space`` (``DiffShape``; held dofs zero).
+    """
+
+    def __init__(self, space: ShapeSpace, *, thickness: float = 1.0, inputs=("shape",),
+                 output: str = "volume"):
+        self.space, self.thickness = space, float(thickness)
+        self.inputs, self.output = tuple(inputs), output
+
+    def forward(self, shape) -> float:
+        self.space.set(shape)
+        return volume(self.space.mesh, self.thickness)
+
+    def backward(self, grad_output) -> tuple[np.ndarray]:
+        return (float(grad_output) * self.space.derivative(volume_integrals(self.thickness)),)
