@@ -290,6 +290,8 @@ def _part_3d(problem, setup, rho, requested, maxh, threshold2, connect, pressure
     t = float(t)
     note = f"threshold {start:g}" + ("" if t == start else
                                     f" lowered to {t:.3g}: above it the part misses an output")
+    if rm.maxh != maxh:
+        note += f"; Netgen could not mesh the part at maxh {maxh:.4g}, meshed at {rm.maxh:.4g}"
     choice = {"requested": requested, "used": t, "lowered": t != start, "note": note,
               "exclude": tuple(exclude)}
     volumes = problem.field.areas  # element volumes in 3D

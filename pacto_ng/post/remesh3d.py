@@ -53,6 +53,7 @@ class Remeshed3D:
     dropped: int = 0  # tetrahedra of the pieces not joined to the clamp through faces
     materials: str | None = None  # two materials: how they were assigned ("element-wise")
     ports: dict = field(default_factory=dict)  # named point -> (source position, new vertex)
+    maxh: float = 0.0  # the element size Netgen meshed it with (MESH_RETRY)
 
 
 def _bounding_faces(source, exclude):
@@ -101,29 +102,47 @@ _MESHER = ("import sys\n"
            "sys.exit(3) if m.ne == 0 else m.Save(sys.argv[3])\n")
 
 
+#: the element sizes (fractions of the requested one) tried in turn when Netgen's mesher
+#: crashes on a part's surface: a finer size resolves a thin wall it could not close
+MESH_RETRY = (1.0, 0.7, 0.5)
+
+
 def _netgen_stl(surface, maxh: float, timeout: float):
     """The Netgen tetrahedral mesh of the closed ``surface`` (its STL meshed in a child
-    process, read back from a .vol file); ValueError when Netgen fails."""
-    from netgen.meshing import Mesh as NGMesh
-
+    process, read back from a .vol file) and the element size that gave it: ``maxh``, or
+    after a crash of the mesher the next size of :data:`MESH_RETRY`; ValueError when every
+    size fails, or at once when one takes longer than ``timeout`` s."""
     with tempfile.TemporaryDirectory() as tmp:
-        stl, vol = Path(tmp) / "part.stl", Path(tmp) / "part.vol"
+        stl = Path(tmp) / "part.stl"
         surf = surface.copy()
         surf.clear_data()
         surf.save(str(stl), binary=True)
-        try:
-            proc = subprocess.run([sys.executable, "-c", _MESHER, str(stl), repr(float(maxh)),
-                                   str(vol)], capture_output=True, timeout=timeout)
-        except subprocess.TimeoutExpired:
-            raise ValueError(f"Netgen could not mesh the part at maxh {maxh:g} within "
-                             f"{timeout:g} s") from None
-        if proc.returncode != 0 or not vol.is_file():
-            why = ("no tetrahedra" if proc.returncode == 3 else
-                   f"its mesher stopped with exit code {proc.returncode}")
-            raise ValueError(f"Netgen could not mesh the part at maxh {maxh:g} ({why}; a "
-                             f"thin or self-touching part: try another --maxh or --threshold)")
-        gen = NGMesh()
-        gen.Load(str(vol))
+        tried = []
+        for h in (f * maxh for f in MESH_RETRY):
+            why = _mesh_stl(stl, h, Path(tmp) / "part.vol", timeout)
+            if not isinstance(why, str):
+                return why, h
+            tried.append(f"{h:.3g}: {why}")
+    raise ValueError(f"Netgen could not mesh the part (maxh {'; '.join(tried)}; a thin or "
+                     f"self-touching part: try another --maxh or --threshold)")
+
+
+def _mesh_stl(stl: Path, maxh: float, vol: Path, timeout: float):
+    """One try of the child-process mesher: the Netgen mesh, or why it failed (a string);
+    ValueError after ``timeout`` s."""
+    from netgen.meshing import Mesh as NGMesh
+
+    try:
+        proc = subprocess.run([sys.executable, "-c", _MESHER, str(stl), repr(float(maxh)),
+                               str(vol)], capture_output=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        raise ValueError(f"Netgen could not mesh the part at maxh {maxh:g} within "
+                         f"{timeout:g} s") from None
+    if proc.returncode != 0 or not vol.is_file():
+        return ("no tetrahedra" if proc.returncode == 3 else
+                f"its mesher stopped with exit code {proc.returncode}")
+    gen = NGMesh()
+    gen.Load(str(vol))
     return gen
 
 
@@ -200,7 +219,7 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
     import ngsolve
     from netgen.meshing import Element0D, FaceDescriptor, Mesh as NGMesh
 
-    gen = _netgen_stl(surface, maxh, timeout)
+    gen, meshed_at = _netgen_stl(surface, maxh, timeout)
     pts = np.asarray(gen.Coordinates(), dtype=float)
     tris = np.asarray(gen.Elements2D().NumPy()["nodes"], dtype=np.int64)[:, :3] - 1
     tets = np.asarray(gen.Elements3D().NumPy()["nodes"], dtype=np.int64)[:, :4] - 1
@@ -256,4 +275,4 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
         ports[name] = (tuple(map(float, point)), tuple(map(float, pts[k])))
     mesh = ngsolve.Mesh(new)
     return Remeshed3D(mesh, float(ngsolve.Integrate(1.0, mesh)), areas, dropped,
-                      None if stiff_at is None else "element-wise", ports)
+                      None if stiff_at is None else "element-wise", ports, meshed_at)

@@ -186,3 +186,30 @@ def test_unmeshed_edges_counts_segments_without_a_triangle():
     m.Add(Element1D([p[1], p[3]], index=1))  # an edge of a face with no triangle
     m.Add(Element1D([p[3], p[2]], index=1))
     assert _unmeshed_edges(m) == 2
+
+
+def test_a_3d_mesher_crash_is_retried_finer(monkeypatch):
+    """Netgen's STL mesher crashes on some part surfaces (a thin wall); the part is meshed
+    again at the next, finer size of MESH_RETRY, and the size that worked is returned."""
+    import pyvista as pv
+
+    from pacto_ng.post import remesh3d
+
+    real = remesh3d._mesh_stl
+    sizes = []
+
+    def crash_first(stl, maxh, vol, timeout):
+        sizes.append(maxh)
+        if len(sizes) == 1:
+            return "its mesher stopped with exit code -6"
+        return real(stl, maxh, vol, timeout)
+
+    monkeypatch.setattr(remesh3d, "_mesh_stl", crash_first)
+    cube = pv.Cube(center=(0.5, 0.5, 0.5)).triangulate()
+    gen, used = remesh3d._netgen_stl(cube, 0.5, 60.0)
+    assert sizes == [0.5, 0.5 * remesh3d.MESH_RETRY[1]]
+    assert used == sizes[1] and gen.ne > 0
+
+    monkeypatch.setattr(remesh3d, "_mesh_stl", lambda *a: "no tetrahedra")
+    with pytest.raises(ValueError, match=r"^Netgen could not mesh the part \(maxh 0\.5: no "):
+        remesh3d._netgen_stl(cube, 0.5, 60.0)
