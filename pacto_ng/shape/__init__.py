@@ -1,8 +1,12 @@
 """Body-fitted shape refinement of a part: the mesh moved by a deformation
-(:mod:`~pacto_ng.shape.deformation`) and the shape gradient of the part's output by the
-adjoint (:mod:`~pacto_ng.shape.gradient`), as blocks of a :class:`~pacto_ng.core.Chain`."""
+(:mod:`~pacto_ng.shape.deformation`), the shape gradient of the part's output by the adjoint
+(:mod:`~pacto_ng.shape.gradient`) as blocks of a :class:`~pacto_ng.core.Chain`, the descent
+field and step control (:mod:`~pacto_ng.shape.riesz`) and the descent loop with the volume
+bounded (:mod:`~pacto_ng.shape.refine`; no remeshing yet, no command yet)."""
 from .deformation import ShapeSpace, volume, volume_integrals
 from .gradient import PartResponse, ShapeResponse, ShapeVolume
+from .refine import RefineResult, refine
+from .riesz import Quality, RieszMap, step_length
 
-__all__ = ["PartResponse", "ShapeResponse", "ShapeSpace", "ShapeVolume", "volume",
-           "volume_integrals"]
+__all__ = ["PartResponse", "Quality", "RefineResult", "RieszMap", "ShapeResponse",
+           "ShapeSpace", "ShapeVolume", "refine", "step_length", "volume", "volume_integrals"]

@@ -1,0 +1,200 @@
+"""Body-fitted refinement of a part's shape: a descent loop on the mesh deformation that
+maximises the part's output ``Δ`` with its volume bounded, without remeshing.
+
+Problem.  ``min_d f(d) = -Δ(d)/|Δ(0)|`` subject to ``c(d) = V(d)/V_max - 1 ≤ 0``, ``d`` the
+deformation of :class:`~pacto_ng.shape.deformation.ShapeSpace`, ``Δ`` the output of
+:class:`~pacto_ng.shape.gradient.PartResponse`, ``V`` the part's volume (the thickness times
+the area in 2D).  The inequality is treated by the augmented Lagrangian of Rockafellar
+(1973, *J. Optim. Theory Appl.* 12, "The multiplier method of Hestenes and Powell applied to
+convex programming"; Nocedal and Wright 2006, *Numerical Optimization*, 2nd ed., ch. 17):
+the merit
+
+    M(d; λ) = f(d) + (max(0, λ + μ c(d))² - λ²) / (2μ),
+
+with the multiplier ``λ ≥ 0`` (start 0) and the fixed penalty ``μ``; its shape derivative is
+``dM = df + max(0, λ + μc) dc``.  Each step (one descent step per multiplier update, a
+common simplification in shape optimisation, where an exact inner minimisation is too dear):
+
+1. the state and adjoint on the current shape, ``dΔ`` and ``dV``
+   (:meth:`~pacto_ng.shape.gradient.PartResponse.gradient`,
+   :meth:`~pacto_ng.shape.deformation.ShapeSpace.derivative`);
+2. the descent field ``θ``, the Riesz representative of ``-dM``
+   (:class:`~pacto_ng.shape.riesz.RieszMap`; ``dM(θ) < 0``), scaled to a largest coefficient
+   of 1, so that (order-1 shape space) the step ``s`` is the largest move of a vertex
+   coordinate;
+3. the step control: ``s`` no larger than the trial step with ``min det(I + ∇₀d) ≥ q_min``
+   (:func:`~pacto_ng.shape.riesz.step_length`); below ``min_step`` the loop stops with the
+   status ``mesh_quality`` (the mesh would need remeshing, which this loop does not do);
+4. the trial shape ``d + sθ`` is accepted if the merit at the same ``λ`` decreases (a plain
+   decrease), else ``s`` is halved (a trial whose Newton solve fails is rejected too); below
+   ``min_step`` the status is ``no_descent``.  The trial step of the next iteration is twice
+   the accepted one, at most ``step_max``;
+5. the multiplier update ``λ ← max(0, λ + μ c)`` at the accepted shape.
+
+The loop stops after ``steps`` accepted steps (status ``steps``) or when the merit changes by
+less than ``rtol`` relative to ``max(1, |M|)`` with the constraint met to ``vtol``
+(``converged``).  The bound is met only approximately while ``λ`` settles: measured on the
+plate with a pressurised hole of the tests (μ = 1000), 0.05 % above a bound of 95 % of the
+start after 5 steps, 0.6 % above a bound of 100 % after 8; with μ = 100, 3 % above the
+latter.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..physics.equilibrium import NewtonFailure
+from .deformation import ShapeSpace, volume, volume_integrals
+from .gradient import PartResponse
+from .riesz import Quality, RieszMap, step_length
+
+STATUSES = ("converged", "steps", "mesh_quality", "no_descent")
+
+
+@dataclass
+class RefineResult:
+    """The outcome of :func:`refine`: ``status`` (one of :data:`STATUSES`), the final
+    deformation's coefficients ``shape`` (the space is left at it), its ``delta`` and
+    ``volume``, the last ``multiplier`` and the ``history``: one dict per accepted shape
+    (step 0 the start) with ``step``, ``delta``, ``volume``, ``det`` (the lowest
+    ``det(I + ∇₀d)``), ``length`` (the step ``s``), ``merit`` and ``merit_before`` (both at
+    the multiplier the step used), ``multiplier`` (after the update), ``trials``."""
+
+    status: str
+    shape: np.ndarray
+    delta: float
+    volume: float
+    multiplier: float
+    history: list[dict] = field(default_factory=list)
+
+
+class _Loop:
+    """The state of one refinement: the current shape and its response, merit and
+    multiplier (see the module)."""
+
+    def __init__(self, response: PartResponse, space: ShapeSpace, volume_max: float,
+                 penalty: float, riesz: RieszMap):
+        self.response, self.space, self.riesz = response, space, riesz
+        self.quality = Quality(space)
+        self.volume_max, self.penalty = float(volume_max), float(penalty)
+        self.thickness = response.thickness
+        self.multiplier = 0.0
+        self.shape = space.deformation.vec.FV().NumPy().copy()
+        self.delta, self.volume = self.evaluate(self.shape)
+        self.scale = abs(self.delta)
+        if not self.scale > 0:
+            raise ValueError("refine: the output Δ is zero on the starting shape")
+        self.state = response.u.vec.CreateVector()
+        self.state.data = response.u.vec
+
+    def evaluate(self, shape) -> tuple[float, float]:
+        """``(Δ, V)`` on the shape ``shape`` (the mesh is left at it)."""
+        self.space.set(shape)
+        return self.response.solve(), volume(self.space.mesh, self.thickness)
+
+    def constraint(self, vol: float) -> float:
+        return vol / self.volume_max - 1.0
+
+    def merit(self, delta: float, vol: float) -> float:
+        """``M`` at the current multiplier."""
+        lam, mu = self.multiplier, self.penalty
+        return (-delta / self.scale
+                + (max(0.0, lam + mu * self.constraint(vol)) ** 2 - lam * lam) / (2 * mu))
+
+    def direction(self) -> np.ndarray:
+        """``θ`` for ``-dM`` at the current (accepted, solved) shape, largest coefficient 1."""
+        d_delta = self.response.gradient(self.space)
+        d_volume = self.space.derivative(volume_integrals(self.thickness))
+        weight = max(0.0, self.multiplier + self.penalty * self.constraint(self.volume))
+        theta = self.riesz(d_delta / self.scale - weight * d_volume / self.volume_max)
+        largest = float(np.max(np.abs(theta)))
+        if not largest > 0:
+            raise ValueError("refine: the shape derivative vanishes on the free dofs")
+        return theta / largest
+
+    def search(self, theta, length: float, min_step: float, q_min: float):
+        """Step control and backtracking from the trial step ``length``: ``(status, s, q,
+        trials)``, status None for an accepted step (the loop's shape moved to it).  Every
+        trial shape is measured before it is solved: none below ``q_min`` is accepted."""
+        s, q = step_length(self.quality, self.shape, theta, length, q_min=q_min)
+        if s < min_step:
+            return "mesh_quality", s, q, 0
+        before, trials = self.merit(self.delta, self.volume), 0
+        while s >= min_step:
+            trial = self.shape + s * theta
+            q = self.quality(trial)
+            if q >= q_min:
+                trials += 1
+                try:
+                    delta, vol = self.evaluate(trial)
+                except NewtonFailure:
+                    delta, vol = math.nan, math.nan
+                if math.isfinite(delta) and self.merit(delta, vol) < before:
+                    self.shape, self.delta, self.volume = trial, delta, vol
+                    self.state.data = self.response.u.vec
+                    return None, s, q, trials
+                self.response.u.vec.data = self.state  # the next solve starts from the last
+            s *= 0.5
+        self.evaluate(self.shape)
+        return "no_descent", s, q, trials
+
+    def record(self, step: int, length: float, det: float, merits: tuple[float, float],
+               trials: int) -> dict:
+        """The history entry of the current shape; ``merits`` before and after the step."""
+        return {"step": step, "delta": self.delta, "volume": self.volume, "det": det,
+                "length": length, "merit_before": merits[0], "merit": merits[1],
+                "multiplier": self.multiplier, "trials": trials}
+
+
+def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, steps: int = 20,
+           step: float = 0.02, step_max: float | None = None, min_step: float | None = None,
+           q_min: float = 0.3, penalty: float = 1000.0, rtol: float = 1e-5, vtol: float = 1e-3,
+           alpha: float = 1.0, kind: str = "elasticity",
+           say: Callable[[str], None] | None = None) -> RefineResult:
+    """Maximise ``Δ`` with ``t|Ω| ≤ volume_max`` by descent on the shape (see the module).
+
+    ``response`` and ``space`` on the same mesh, ``space`` at the starting deformation;
+    ``step`` the first trial step and ``step_max`` the largest (default ``4 step``), both in
+    lengths of the mesh; ``min_step`` (default ``step / 1024``); ``q_min`` the lowest
+    Jacobian allowed; ``penalty`` ``μ``; ``alpha`` and ``kind`` those of the
+    :class:`~pacto_ng.shape.riesz.RieszMap`; ``say`` receives one line per step."""
+    if space.mesh is not response.mesh:
+        raise ValueError("the shape space and the response must be on the same mesh")
+    if not (volume_max > 0 and step > 0 and penalty > 0 and 0 < q_min < 1 and steps >= 0):
+        raise ValueError("refine: volume_max, step and penalty must be positive, q_min in "
+                         "(0, 1) and steps non-negative")
+    step_max = 4.0 * step if step_max is None else float(step_max)
+    min_step = step / 1024.0 if min_step is None else float(min_step)
+    loop = _Loop(response, space, volume_max, penalty, RieszMap(space, alpha=alpha, kind=kind))
+    start = loop.merit(loop.delta, loop.volume)
+    history = [loop.record(0, 0.0, loop.quality(loop.shape), (start, start), 0)]
+    status, length = "steps", float(step)
+    for k in range(1, steps + 1):
+        theta = loop.direction()
+        before = loop.merit(loop.delta, loop.volume)
+        stop, s, q, trials = loop.search(theta, length, min_step, q_min)
+        if stop is not None:
+            status = stop
+            _say(say, f"step {k}: stopped ({stop}; step {s:.3g}, lowest det {q:.3f})")
+            break
+        after = loop.merit(loop.delta, loop.volume)
+        loop.multiplier = max(0.0, loop.multiplier + penalty * loop.constraint(loop.volume))
+        history.append(loop.record(k, s, q, (before, after), trials))
+        _say(say, f"step {k}: Δ {loop.delta:.6g}, volume {loop.volume:.6g} "
+                  f"(bound {volume_max:.6g}), merit {after:.6g}, lowest det {q:.3f}, "
+                  f"step {s:.3g} ({trials} trial{'s' if trials > 1 else ''})")
+        length = min(2.0 * s, step_max)
+        if (abs(after - before) <= rtol * max(1.0, abs(after))
+                and loop.constraint(loop.volume) <= vtol):
+            status = "converged"
+            break
+    return RefineResult(status, loop.shape.copy(), loop.delta, loop.volume, loop.multiplier,
+                        history)
+
+
+def _say(say: Callable[[str], None] | None, line: str) -> None:
+    if say is not None:
+        say(line)
