@@ -30,7 +30,7 @@ import sys
 
 from pacto_ng import Case, Parameters, Setup
 from pacto_ng.cases import pa_gripper
-from pacto_ng.cases.pa_inverter import PA_DEFAULTS
+from pacto_ng.derive import PRESSURE_DEFAULTS
 
 
 def _setup(p: Parameters) -> Setup:
@@ -41,7 +41,7 @@ CASE = Case(
     name="mm-gripper",
     summary="two-material pressure-actuated gripper (E1 soft, E2 stiff), minimise -Δ/SE",
     source="Thesis §6.4 (eq. 6.1); Pinskier, Kumar et al. (2023); Sigmund & Torquato (1997)",
-    defaults=PA_DEFAULTS.replace(maxh=0.002, E1=3e8, E2=3e9, E0=3e2, load=5e5,
+    defaults=PRESSURE_DEFAULTS.replace(maxh=0.002, E1=3e8, E2=3e9, E0=3e2, load=5e5,
                                  volfrac2=0.1, beta_every=7, move=0.1),
     geometry=pa_gripper._geometry,
     setup=_setup,

@@ -10,7 +10,7 @@ first L/20 of the top edge with a passive solid block of L/20 x H/20 under it.  
 bottom-right corner, Δ = -u_x (towards the inlet) with an output spring k_ss = k_out = 1e4 N/m.
 E1 = 3e9 Pa, E0 = 1e-6 E1, ν = 0.4, plane strain, t = 1e-3 m, volume fraction 0.2, triangles of
 0.004 m (thesis Table 6.1); load 1e6 Pa by default (the thesis ran 1e5–1e7 Pa).  Helmholtz
-filter of radius 0.012 m and continuation as in ``PA_DEFAULTS``, but the penalty starts at 2.
+filter of radius 0.012 m and continuation as in ``pacto_ng.derive.PRESSURE_DEFAULTS``, but the penalty starts at 2.
 
 Objective ``mechanism``: minimise -sΔ/SE (thesis eq. 3.9, the multi-criteria form of Kumar et
 al. 2020).  ``--set objective=output_se`` instead maximises Δ subject to SE <= se_max, the form
@@ -30,27 +30,8 @@ from dataclasses import dataclass
 
 from pacto_ng import (Case, domain_size, InputError, Parameters, Port, Pressure, Settings,
                       Setup, Spring, Supports, setting)
+from pacto_ng.derive import PRESSURE_DEFAULTS, mechanism_scales
 from pacto_ng.geometries import pa_mechanism as geo
-
-#: default strain-energy limit of objective output_se in units of P_in² t A / E1 (A: the
-#: domain area) — the energy scale of a pressure P_in on a body of modulus E1; the default
-#: mechanism designs store 14–18 of these units (measured), so 15 gives designs of similar SE
-SE_FACTOR = 15.0
-
-#: the parameters shared by pa-inverter, pa-gripper and mm-gripper: thesis Table 6.1, and a
-#: continuation that gives clean designs at the thesis mesh (measured, docs/benchmarks.md):
-#: p = 1 -> 3 in steps of 0.04, then β = 1 -> 32 doubling every 15 iterations, move limit 0.05
-#: (0.1 oscillates from the start); the filter radius is a length (3 thesis mesh sizes), so
-#: that finer meshes resolve the same design.  The run stops once -Δ/SE changes by less than
-#: 0.1 % in each of 5 iterations (obj_tol): on the final problem GCMMA lowers it by 0.02-0.1 %
-#: per iteration for tens of iterations while the design barely changes (docs/benchmarks.md,
-#: "Convergence at defaults")
-PA_DEFAULTS = Parameters(
-    model="linear", maxh=0.004, plane="strain", thickness=1e-3, E1=3e9, E0=3e3, nu=0.4,
-    volfrac=0.2, filter="helmholtz", filter_radius=0.012, penal=3.0, penal_start=1.0,
-    penal_step=0.04, beta=1.0, beta_max=32.0, beta_every=15, load=1e6, k_out=1e4,
-    iterations=160, move=0.05, tol=0.01, obj_tol=1e-3)
-
 
 @dataclass(frozen=True)
 class Options(Settings):
@@ -59,29 +40,6 @@ class Options(Settings):
     output_width: float = setting(0.0, "m", "the output spring and port spread over this length "
                                   "of the right edge from the output corner (0: the corner "
                                   "point, the case's definition)", range="[0, inf)")
-
-
-def se_default(p: Parameters, width: float, height: float) -> float:
-    """Default limit of objective ``output_se``: ``SE_FACTOR · P_in² t W H / E1``."""
-    L, H = domain_size(p, width, height)
-    return SE_FACTOR * p.load ** 2 * p.thickness * L * H / p.E1
-
-
-def objective_ref(p: Parameters, width: float, height: float, ratio: float) -> float:
-    """Typical magnitude of the objective, which the run scales to 10 (Setup.objective_ref).
-
-    ``-Δ/SE`` is of order ``ratio / (P_in W t)`` (dimensionless ``ratio``; the default designs
-    reach 8–11 for the inverter and grippers, 0.24 for the PneuNet); for ``output_se`` the
-    objective ``-Δ`` is of order that times the SE limit.  0 for other objectives.
-    """
-    W, _ = domain_size(p, width, height)
-    mech = ratio / (p.load * W * p.thickness)
-    objective = p.objective or "mechanism"
-    if objective == "mechanism":
-        return mech
-    if objective == "output_se":
-        return mech * (p.se_max or se_default(p, width, height))
-    return 0.0
 
 
 def _geometry(p: Parameters):
@@ -100,13 +58,13 @@ def _setup(p: Parameters) -> Setup:
     # over the edge, whose reaction is a traction instead of a point force
     out = "output_edge" if p.output_width > 0 else "output"
     zero = ("zero_pressure", "fixed") + (("output_edge",) if p.output_width > 0 else ())
+    se_max, objective_ref = mechanism_scales(p, 0.2, 0.1, 3.0)
     return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",)),
                  springs=(Spring(out, p.k_out, (1.0, 0.0)),),
                  port=Port(out, (-1.0, 0.0)), solid=("block",),
                  objective="mechanism",
                  pressure=Pressure(inlet=("inlet",), zero=zero),
-                 se_max=se_default(p, 0.2, 0.1),
-                 objective_ref=objective_ref(p, 0.2, 0.1, 3.0))
+                 se_max=se_max, objective_ref=objective_ref)
 
 
 CASE = Case(
@@ -122,7 +80,7 @@ CASE = Case(
     # its design at the part's order (the threshold -10.9 %, the remesh -16.2 % of it: hinges
     # one element wide), with it 15.4 % less, greyness 0.016, the part's motion 3.9 % below
     # the standard chain's (docs/benchmarks.md, "The part at defaults")
-    defaults=PA_DEFAULTS.replace(penal_start=2.0, beta_max=64.0, iterations=220, robust=1),
+    defaults=PRESSURE_DEFAULTS.replace(penal_start=2.0, beta_max=64.0, iterations=220, robust=1),
     geometry=_geometry,
     setup=_setup,
     options=Options(),

@@ -17,12 +17,12 @@ from __future__ import annotations
 import sys
 
 from pacto_ng import Case, Parameters, Port, Pressure, Setup, Spring, Supports
-from pacto_ng.cases.pa_inverter import PA_DEFAULTS, SE_FACTOR
+from pacto_ng.derive import PRESSURE_DEFAULTS, se_default
 from pacto_ng.geometries import solids
 
 LENGTH, HEIGHT, DEPTH = 0.2, 0.1, 0.04
 #: the 2D cases' settings that carry over (the mesh, the plane and the thickness do not)
-DEFAULTS_3D = PA_DEFAULTS.replace(maxh=0.005, plane="strain", thickness=1e-3, k_out=2e5,
+DEFAULTS_3D = PRESSURE_DEFAULTS.replace(maxh=0.005, plane="strain", thickness=1e-3, k_out=2e5,
                                   penal_start=2.0)
 
 
@@ -38,7 +38,7 @@ def setup_3d(p: Parameters, *, gripper: bool) -> Setup:
                  solid=("block", "jaw_pad") if gripper else ("block",),
                  void=("jaw_void",) if gripper else (), objective="mechanism",
                  pressure=Pressure(inlet=("inlet",), zero=zero),
-                 se_max=SE_FACTOR * p.load ** 2 * volume / p.E1,
+                 se_max=se_default(p, volume),
                  # -Δ/SE is of order 3 / (P_in L D/2), as the 2D cases' 3 / (P_in L t)
                  objective_ref=3.0 / (p.load * LENGTH * 0.5 * DEPTH))
 

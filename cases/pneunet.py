@@ -26,7 +26,7 @@ import sys
 
 from pacto_ng import Case, domain_size, Parameters, Port, Pressure, Setup, Spring, Supports
 from pacto_ng.geometries import pneunet as geo
-from pacto_ng.cases.pa_inverter import objective_ref, se_default
+from pacto_ng.derive import mechanism_scales
 
 
 def _geometry(p: Parameters):
@@ -37,14 +37,14 @@ def _geometry(p: Parameters):
 def member_setup(p: Parameters, width: float = 0.1, height: float = 0.05,
                  ratio: float = 0.1) -> Setup:
     """The member's set-up on its ``width`` x ``height`` domain (geometries/pneunet.py's
-    layout), ``ratio`` the objective's typical magnitude (pa_inverter.objective_ref); also
+    layout), ``ratio`` the objective's typical magnitude (pacto_ng.derive.objective_ref); also
     pneunet-silicone's."""
+    se_max, objective_ref = mechanism_scales(p, width, height, ratio)
     return Setup(supports=Supports(clamp=("fixed",)),
                  springs=(Spring("output", p.k_out, (0.0, 1.0)),),
                  port=Port("output", (0.0, -1.0)), void=("chamber",), objective="mechanism",
                  pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
-                 se_max=se_default(p, width, height),
-                 objective_ref=objective_ref(p, width, height, ratio))
+                 se_max=se_max, objective_ref=objective_ref)
 
 
 CASE = Case(

@@ -26,7 +26,7 @@ from __future__ import annotations
 import sys
 
 from pacto_ng import Case, Parameters, Port, Pressure, Setup, Spring, Supports
-from pacto_ng.cases.pa_inverter import SE_FACTOR
+from pacto_ng.derive import se_default
 from pacto_ng.geometries import solids
 
 LENGTH, HEIGHT, DEPTH = 0.1, 0.05, 0.03
@@ -42,7 +42,7 @@ def _setup(p: Parameters) -> Setup:
                  springs=(Spring("tip", p.k_out, (0.0, 1.0, 0.0)),),
                  port=Port("tip", (0.0, -1.0, 0.0)), void=("chamber",), objective="mechanism",
                  pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed", "tip")),
-                 se_max=SE_FACTOR * p.load ** 2 * volume / p.E1,
+                 se_max=se_default(p, volume),
                  # -Δ/SE is of order 0.1 / (P_in L D/2), as the 2D case's 0.1 / (P_in L t)
                  objective_ref=0.1 / (p.load * LENGTH * 0.5 * DEPTH))
 

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Callable
 
 from .builders import Builder, standard_chain
-from .derive import MECHANISM_RATIO, derive_settings
+from .derive import MECHANISM_RATIO, derive_settings, domain_size
 from .errors import InputError
 from .geometry import bounding_sides
 from .meshing import mesh_geometry
@@ -336,14 +336,6 @@ def available_cases() -> list[Case]:
         if importlib.util.find_spec(mod) is not None:
             out.append(get_case(name))
     return out
-
-
-def domain_size(params: Parameters, width: float, height: float) -> tuple[float, float]:
-    """``(width, height)``, or ``(nelx, nely)`` with ``unit_elements`` (1 x 1 elements, the
-    set-up of the classic MATLAB codes)."""
-    if params.unit_elements:
-        return float(params.nelx), float(params.nely)
-    return width, height
 
 
 def mesh_for(case: Case, params: Parameters):

@@ -1,7 +1,9 @@
 """Settings nobody gave, derived from the case: the mesh size from the domain (and a given
 filter radius), the filter radius from the mesh size, the penalty and projection continuation
 when a case sets none (:func:`derive_settings`), and the constant of the objective's scale of
-a pressure-driven mechanism (:meth:`pacto_ng.case.Case.derived_objective_ref`).
+a pressure-driven mechanism (:meth:`pacto_ng.case.Case.derived_objective_ref`); and the
+library's defaults for pressure-actuated mechanisms that the built-in cases start from
+(:data:`PRESSURE_DEFAULTS`, :func:`se_default`, :func:`objective_ref`).
 
 Each derived value is recorded with how it came about (:attr:`pacto_ng.params.Parameters.derived`;
 ``--show-parameters`` prints it); a setting given by the case, ``--set``, an option or a run's
@@ -25,9 +27,28 @@ FILTER_ELEMENTS = 3.0
 #: side: the smallest member the design may have (the built-in pressure cases: 1/5.5-1/8,
 #: e.g. pa-inverter 0.012 m of 0.1 m, pneunet-silicone 0.002 m of 0.015 m)
 FILTER_SHARE = 1.0 / 8.0
+#: default strain-energy limit of objective output_se in units of P_in² V / E1 (V: the domain's
+#: volume, t W H in 2D) -- the energy scale of a pressure P_in on a body of modulus E1; the
+#: default mechanism designs store 14-18 of these units (measured), so 15 gives designs of
+#: similar SE
+SE_FACTOR = 15.0
+
+#: the parameters the pressure-actuated mechanisms start from (pa-inverter, pa-gripper,
+#: mm-gripper, pa-inverter-3d): thesis Table 6.1, and a continuation that gives clean designs
+#: at the thesis mesh (measured, docs/benchmarks.md): p = 1 -> 3 in steps of 0.04, then
+#: β = 1 -> 32 doubling every 15 iterations, move limit 0.05 (0.1 oscillates from the start);
+#: the filter radius is a length (3 thesis mesh sizes), so that finer meshes resolve the same
+#: design.  The run stops once -Δ/SE changes by less than 0.1 % in each of 5 iterations
+#: (obj_tol): on the final problem GCMMA lowers it by 0.02-0.1 % per iteration for tens of
+#: iterations while the design barely changes (docs/benchmarks.md, "Convergence at defaults")
+PRESSURE_DEFAULTS = Parameters(
+    model="linear", maxh=0.004, plane="strain", thickness=1e-3, E1=3e9, E0=3e3, nu=0.4,
+    volfrac=0.2, filter="helmholtz", filter_radius=0.012, penal=3.0, penal_start=1.0,
+    penal_step=0.04, beta=1.0, beta_max=32.0, beta_every=15, load=1e6, k_out=1e4,
+    iterations=160, move=0.05, tol=0.01, obj_tol=1e-3)
+
 #: the penalty and the projection continuation: a case that gives none of a group's
-#: settings gets it.  The penalty as the built-in pressure cases' (cases/pa_inverter.py
-#: ``PA_DEFAULTS``, pneunet, soft-finger, jaw-gripper): p = 1 -> 3 in steps of 0.04.  β from 1
+#: settings gets it.  The penalty as the built-in pressure cases' (:data:`PRESSURE_DEFAULTS`, pneunet, soft-finger, jaw-gripper): p = 1 -> 3 in steps of 0.04.  β from 1
 #: doubling every 15 iterations, or as soon as the objective settles (``beta_settle``, as the
 #: 3D built-in cases), to 64: on tests/cases/user_finger.py the built-in 2D cases' end, 32
 #: every 15, left greyness 0.026 after 132 iterations, this one 0.011 after 100 (measured
@@ -39,6 +60,49 @@ PROJECTION = ({"beta_max": 64.0, "beta_every": 15, "beta_settle": 3e-3},
 #: ... and with either, their move limit (0.1 oscillates), objective tolerance and iteration
 #: cap, each where the case gives none
 CONTINUATION_OPTIMISER = {"move": 0.05, "obj_tol": 1e-3, "iterations": 160}
+
+
+def domain_size(params: Parameters, width: float, height: float) -> tuple[float, float]:
+    """``(width, height)``, or ``(nelx, nely)`` with ``unit_elements`` (1 x 1 elements, the
+    set-up of the classic MATLAB codes)."""
+    if params.unit_elements:
+        return float(params.nelx), float(params.nely)
+    return width, height
+
+
+def se_default(p: Parameters, volume: float) -> float:
+    """Default limit of objective ``output_se``: ``SE_FACTOR · P_in² V / E1`` for a domain of
+    volume ``V`` (``t W H`` in 2D: :func:`domain_size`)."""
+    return SE_FACTOR * p.load ** 2 * volume / p.E1
+
+
+def objective_ref(p: Parameters, length: float, width: float, ratio: float,
+                  se_max: float) -> float:
+    """Typical magnitude of the objective, which the run scales to 10 (Setup.objective_ref).
+
+    ``-Δ/SE`` is of order ``ratio / (P_in L w)`` (``L`` the domain's length, ``w`` the
+    thickness in 2D or the depth in 3D; dimensionless ``ratio``: the default designs reach
+    8-11 for the inverter and grippers, 0.24 for the PneuNet); for ``output_se`` the
+    objective ``-Δ`` is of order that times the SE limit ``se_max`` (``p.se_max`` wins where
+    set).  0 for other objectives.
+    """
+    mech = ratio / (p.load * length * width)
+    objective = p.objective or "mechanism"
+    if objective == "mechanism":
+        return mech
+    if objective == "output_se":
+        return mech * (p.se_max or se_max)
+    return 0.0
+
+
+def mechanism_scales(p: Parameters, width: float, height: float,
+                     ratio: float) -> tuple[float, float]:
+    """``(se_max, objective_ref)`` of a 2D pressure-driven mechanism on a ``width`` x
+    ``height`` domain (:func:`domain_size`) of thickness ``p.thickness``: :func:`se_default`
+    and :func:`objective_ref` with ``L = W``, ``w = t``."""
+    W, H = domain_size(p, width, height)
+    se_max = se_default(p, p.thickness * W * H)
+    return se_max, objective_ref(p, W, p.thickness, ratio, se_max)
 
 
 def derive_settings(case, params: Parameters) -> Parameters:

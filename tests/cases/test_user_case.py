@@ -9,14 +9,14 @@ import pytest
 
 import pacto_ng as pn
 from pacto_ng.case import available_cases, load_case_file
-from pacto_ng.cases.pa_inverter import PA_DEFAULTS
+from pacto_ng.derive import PRESSURE_DEFAULTS
 from pacto_ng.cli import main
 
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
 FINGER = Path(__file__).with_name("user_finger.py")
 HEIGHT, LENGTH, THICKNESS, PRESSURE = 0.016, 0.08, 0.015, 1e4  # as in user_finger.py
-PENALTY = ("penal_start", "penal_step", "move", "obj_tol", "iterations")  # as PA_DEFAULTS
+PENALTY = ("penal_start", "penal_step", "move", "obj_tol", "iterations")  # as PRESSURE_DEFAULTS
 CONTINUATION = PENALTY + ("beta_max", "beta_every", "beta_settle")
 
 
@@ -35,9 +35,9 @@ def test_the_user_case_resolves_with_settings_derived_from_it(finger):
     # pressure cases; β as theirs to twice their end, doubling early once the objective
     # settles (the 3D cases' beta_settle)
     for name in PENALTY:
-        assert getattr(params, name) == getattr(PA_DEFAULTS, name), name
-    assert params.beta_every == PA_DEFAULTS.beta_every
-    assert params.beta_max == 2 * PA_DEFAULTS.beta_max
+        assert getattr(params, name) == getattr(PRESSURE_DEFAULTS, name), name
+    assert params.beta_every == PRESSURE_DEFAULTS.beta_every
+    assert params.beta_max == 2 * PRESSURE_DEFAULTS.beta_max
     assert params.beta_settle == pn.get_case("pneunet-3d").defaults.beta_settle
     assert "30 elements across 0.016 m" in params.derived["maxh"]
     # what the case gave is kept
@@ -62,7 +62,7 @@ def test_a_given_setting_is_never_derived(finger):
     assert params.beta == 2.0
     assert not {"beta_max", "beta_every", "beta_settle"} & set(params.derived)
     assert params.beta_max == pn.Parameters().beta_max
-    assert params.penal_start == PA_DEFAULTS.penal_start and "penal_start" in params.derived
+    assert params.penal_start == PRESSURE_DEFAULTS.penal_start and "penal_start" in params.derived
 
 
 def test_no_continuation_is_derived_where_the_case_gives_both(finger):
