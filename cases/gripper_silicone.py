@@ -22,7 +22,6 @@ from __future__ import annotations
 import sys
 
 from pacto_ng import Case, domain_size, Parameters, Setup
-from pacto_ng.cases.pa_gripper import gripper_setup
 from pacto_ng.geometries import pa_mechanism as geo
 
 WIDTH, HEIGHT = 0.04, 0.02
@@ -34,7 +33,7 @@ def _geometry(p: Parameters):
 
 
 def _setup(p: Parameters) -> Setup:
-    return gripper_setup(p, WIDTH, HEIGHT)
+    return geo.gripper_setup(p, WIDTH, HEIGHT)
 
 
 CASE = Case(

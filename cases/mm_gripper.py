@@ -28,13 +28,18 @@ from __future__ import annotations
 import dataclasses
 import sys
 
-from pacto_ng import Case, Parameters, Setup
-from pacto_ng.cases import pa_gripper
+from pacto_ng import Case, domain_size, Parameters, Setup
 from pacto_ng.derive import PRESSURE_DEFAULTS
+from pacto_ng.geometries import pa_mechanism as geo
+
+
+def _geometry(p: Parameters):
+    L, H = domain_size(p, 0.2, 0.1)
+    return geo.layout(L, H, gripper=True)
 
 
 def _setup(p: Parameters) -> Setup:
-    return dataclasses.replace(pa_gripper.gripper_setup(p), materials=2)
+    return dataclasses.replace(geo.gripper_setup(p), materials=2)
 
 
 CASE = Case(
@@ -43,7 +48,7 @@ CASE = Case(
     source="Thesis §6.4 (eq. 6.1); Pinskier, Kumar et al. (2023); Sigmund & Torquato (1997)",
     defaults=PRESSURE_DEFAULTS.replace(maxh=0.002, E1=3e8, E2=3e9, E0=3e2, load=5e5,
                                  volfrac2=0.1, beta_every=7, move=0.1),
-    geometry=pa_gripper._geometry,
+    geometry=_geometry,
     setup=_setup,
     load_unit="Pa",
 )

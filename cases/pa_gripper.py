@@ -20,29 +20,16 @@ pa-inverter (see its docstring).
 """
 from __future__ import annotations
 
-
 import sys
 
-from pacto_ng import Case, domain_size, Parameters, Port, Pressure, Setup, Spring, Supports
+from pacto_ng import Case, domain_size, Parameters
+from pacto_ng.derive import PRESSURE_DEFAULTS
 from pacto_ng.geometries import pa_mechanism as geo
-from pacto_ng.derive import PRESSURE_DEFAULTS, mechanism_scales
 
 
 def _geometry(p: Parameters):
     L, H = domain_size(p, 0.2, 0.1)
     return geo.layout(L, H, gripper=True)
-
-
-def gripper_setup(p: Parameters, width: float = 0.2, height: float = 0.1) -> Setup:
-    """The gripper's set-up on its ``width`` x ``height`` half (geometries/pa_mechanism.py's
-    layout with ``gripper=True``); also gripper-silicone's."""
-    se_max, objective_ref = mechanism_scales(p, width, height, 3.0)
-    return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",)),
-                 springs=(Spring("output", p.k_out, (0.0, 1.0)),),
-                 port=Port("output", (0.0, -1.0)), solid=("block", "jaw_pad"),
-                 void=("jaw_void",), objective="mechanism",
-                 pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
-                 se_max=se_max, objective_ref=objective_ref)
 
 
 CASE = Case(
@@ -51,7 +38,7 @@ CASE = Case(
     source="Thesis §6.2 (Table 6.1); Kumar, Frouws & Langelaar (2020), Struct Multidisc Optim 61",
     defaults=PRESSURE_DEFAULTS.replace(maxh=0.002),
     geometry=_geometry,
-    setup=gripper_setup,
+    setup=geo.gripper_setup,
     load_unit="Pa",
 )
 

@@ -24,23 +24,23 @@ from __future__ import annotations
 import sys
 
 from pacto_ng import Case, Parameters, Setup
-from pacto_ng.cases.pa_inverter_3d import DEFAULTS_3D, DEPTH, HEIGHT, LENGTH, setup_3d
+from pacto_ng.derive import PRESSURE_DEFAULTS_3D
 from pacto_ng.geometries import solids
 
 
 def _geometry(p: Parameters):
-    return solids.pa_mechanism(LENGTH, HEIGHT, DEPTH, gripper=True)
+    return solids.pa_mechanism(*solids.PA_MECHANISM, gripper=True)
 
 
 def _setup(p: Parameters) -> Setup:
-    return setup_3d(p, gripper=True)
+    return solids.pa_mechanism_setup(p, gripper=True)
 
 
 CASE = Case(
     name="pa-gripper-3d",
     summary="3D pressure-actuated gripper (Darcy), minimise -Δ/SE, the jaw closes",
     source="the 2D pa-gripper (thesis §6.2; Kumar, Frouws & Langelaar 2020) in 3D",
-    defaults=DEFAULTS_3D.replace(penal_step=0.1, beta_every=10, robust=1),
+    defaults=PRESSURE_DEFAULTS_3D.replace(penal_step=0.1, beta_every=10, robust=1),
     geometry=_geometry,
     setup=_setup,
     load_unit="Pa",

@@ -16,39 +16,16 @@ from __future__ import annotations
 
 import sys
 
-from pacto_ng import Case, Parameters, Port, Pressure, Setup, Spring, Supports
-from pacto_ng.derive import PRESSURE_DEFAULTS, se_default
+from pacto_ng import Case, Parameters, Setup
+from pacto_ng.derive import PRESSURE_DEFAULTS_3D
 from pacto_ng.geometries import solids
 
-LENGTH, HEIGHT, DEPTH = 0.2, 0.1, 0.04
-#: the 2D cases' settings that carry over (the mesh, the plane and the thickness do not)
-DEFAULTS_3D = PRESSURE_DEFAULTS.replace(maxh=0.005, plane="strain", thickness=1e-3, k_out=2e5,
-                                  penal_start=2.0)
-
-
-def setup_3d(p: Parameters, *, gripper: bool) -> Setup:
-    """The set-up of pa-inverter-3d and (``gripper``) pa-gripper-3d."""
-    volume = LENGTH * HEIGHT * 0.5 * DEPTH
-    direction = (0.0, 1.0, 0.0) if gripper else (1.0, 0.0, 0.0)
-    zero = ("zero_pressure", "fixed") + (() if gripper else ("output",))
-    return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",),
-                                   fix_z=("symmetry_z",)),
-                 springs=(Spring("output", p.k_out, direction),),
-                 port=Port("output", tuple(-c for c in direction)),
-                 solid=("block", "jaw_pad") if gripper else ("block",),
-                 void=("jaw_void",) if gripper else (), objective="mechanism",
-                 pressure=Pressure(inlet=("inlet",), zero=zero),
-                 se_max=se_default(p, volume),
-                 # -Δ/SE is of order 3 / (P_in L D/2), as the 2D cases' 3 / (P_in L t)
-                 objective_ref=3.0 / (p.load * LENGTH * 0.5 * DEPTH))
-
-
 def _geometry(p: Parameters):
-    return solids.pa_mechanism(LENGTH, HEIGHT, DEPTH)
+    return solids.pa_mechanism(*solids.PA_MECHANISM)
 
 
 def _setup(p: Parameters) -> Setup:
-    return setup_3d(p, gripper=False)
+    return solids.pa_mechanism_setup(p, gripper=False)
 
 
 CASE = Case(
@@ -60,7 +37,7 @@ CASE = Case(
     # chamber opened to the outside through a grey wall (leak 0.025, the seal check failed);
     # with it the part is sealed and moves +10.3 % off the design (docs/benchmarks.md, "Per
     # case at defaults")
-    defaults=DEFAULTS_3D.replace(leak_max=1e-3),
+    defaults=PRESSURE_DEFAULTS_3D.replace(leak_max=1e-3),
     geometry=_geometry,
     setup=_setup,
     load_unit="Pa",

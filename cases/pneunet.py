@@ -24,27 +24,13 @@ from __future__ import annotations
 
 import sys
 
-from pacto_ng import Case, domain_size, Parameters, Port, Pressure, Setup, Spring, Supports
+from pacto_ng import Case, domain_size, Parameters
 from pacto_ng.geometries import pneunet as geo
-from pacto_ng.derive import mechanism_scales
 
 
 def _geometry(p: Parameters):
     L, H = domain_size(p, 0.1, 0.05)
     return geo.layout(L, H, chamber=(0.2 * L, 0.2 * H, 0.8 * L, 0.4 * H))
-
-
-def member_setup(p: Parameters, width: float = 0.1, height: float = 0.05,
-                 ratio: float = 0.1) -> Setup:
-    """The member's set-up on its ``width`` x ``height`` domain (geometries/pneunet.py's
-    layout), ``ratio`` the objective's typical magnitude (pacto_ng.derive.objective_ref); also
-    pneunet-silicone's."""
-    se_max, objective_ref = mechanism_scales(p, width, height, ratio)
-    return Setup(supports=Supports(clamp=("fixed",)),
-                 springs=(Spring("output", p.k_out, (0.0, 1.0)),),
-                 port=Port("output", (0.0, -1.0)), void=("chamber",), objective="mechanism",
-                 pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
-                 se_max=se_max, objective_ref=objective_ref)
 
 
 CASE = Case(
@@ -59,7 +45,7 @@ CASE = Case(
                         iterations=220, move=0.05, tol=0.01,
                         obj_tol=1e-3),
     geometry=_geometry,
-    setup=member_setup,
+    setup=geo.member_setup,
     load_unit="Pa",
 )
 

@@ -27,7 +27,6 @@ from __future__ import annotations
 import sys
 
 from pacto_ng import Case, domain_size, Parameters, Setup
-from pacto_ng.cases.pneunet import member_setup
 from pacto_ng.geometries import pneunet as geo
 
 WIDTH, HEIGHT = 0.04, 0.015
@@ -39,7 +38,7 @@ def _geometry(p: Parameters):
 
 
 def _setup(p: Parameters) -> Setup:
-    return member_setup(p, WIDTH, HEIGHT, 0.24)
+    return geo.member_setup(p, WIDTH, HEIGHT, 0.24)
 
 
 CASE = Case(

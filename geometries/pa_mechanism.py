@@ -10,7 +10,12 @@ of the jaw pad (L, 0.2H) (gripper).  The cases put zero pressure on the whole to
 (docs/theory.md §6, "pa-inverter"): they list "fixed" among the zero-pressure boundaries as
 well.
 """
+from pacto_ng.derive import mechanism_scales
+from pacto_ng.params import Parameters
+from pacto_ng.physics.loads import Port, Spring
+from pacto_ng.physics.mechanics import Supports
 from pacto_ng.mesh import Layout, Region, Segment
+from pacto_ng.setup import Pressure, Setup
 
 
 def layout(width: float = 0.2, height: float = 0.1, clamp: float | None = None,
@@ -37,3 +42,15 @@ def layout(width: float = 0.2, height: float = 0.1, clamp: float | None = None,
     else:
         points = (("output", (L, 0.0)),)
     return Layout(L, H, segments=segments, regions=tuple(regions), points=points)
+
+
+def gripper_setup(p: Parameters, width: float = 0.2, height: float = 0.1) -> Setup:
+    """The gripper's set-up on its ``width`` x ``height`` half (geometries/pa_mechanism.py's
+    layout with ``gripper=True``): the set-up of pa-gripper and gripper-silicone."""
+    se_max, objective_ref = mechanism_scales(p, width, height, 3.0)
+    return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",)),
+                 springs=(Spring("output", p.k_out, (0.0, 1.0)),),
+                 port=Port("output", (0.0, -1.0)), solid=("block", "jaw_pad"),
+                 void=("jaw_void",), objective="mechanism",
+                 pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
+                 se_max=se_max, objective_ref=objective_ref)

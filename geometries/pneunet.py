@@ -4,7 +4,12 @@ pressure inlet "inlet"; the left edge "fixed" (clamped), the rest of the outer b
 "zero_pressure"; port "output" at the bottom-right corner.  The case puts zero pressure on the
 *whole* outer boundary (docs/theory.md §6): a boundary has one name, so the case lists both
 "zero_pressure" and "fixed" as zero-pressure boundaries."""
+from pacto_ng.derive import mechanism_scales
 from pacto_ng.mesh import Layout, Region, Segment
+from pacto_ng.params import Parameters
+from pacto_ng.physics.loads import Port, Spring
+from pacto_ng.physics.mechanics import Supports
+from pacto_ng.setup import Pressure, Setup
 
 
 def layout(width: float = 0.1, height: float = 0.05,
@@ -17,3 +22,17 @@ def layout(width: float = 0.1, height: float = 0.05,
                             Segment("zero_pressure", (L, H), (0.0, H))),
                   regions=(Region("chamber", "void", *chamber, boundary="inlet"),),
                   points=(("output", (L, 0.0)),))
+
+
+def member_setup(p: Parameters, width: float = 0.1, height: float = 0.05,
+                 ratio: float = 0.1) -> Setup:
+    """The member's set-up on its ``width`` x ``height`` domain (geometries/pneunet.py's
+    layout), ``ratio`` the objective's typical magnitude
+    (:func:`pacto_ng.derive.objective_ref`): the set-up of the cases on this layout (pneunet,
+    pneunet-silicone)."""
+    se_max, objective_ref = mechanism_scales(p, width, height, ratio)
+    return Setup(supports=Supports(clamp=("fixed",)),
+                 springs=(Spring("output", p.k_out, (0.0, 1.0)),),
+                 port=Port("output", (0.0, -1.0)), void=("chamber",), objective="mechanism",
+                 pressure=Pressure(inlet=("inlet",), zero=("zero_pressure", "fixed")),
+                 se_max=se_max, objective_ref=objective_ref)

@@ -20,6 +20,14 @@ normal direction, and no fluid crosses them.
 """
 from __future__ import annotations
 
+from pacto_ng.derive import se_default
+from pacto_ng.params import Parameters
+from pacto_ng.physics.loads import Port, Spring
+from pacto_ng.physics.mechanics import Supports
+from pacto_ng.setup import Pressure, Setup
+
+#: the pressure-actuated mechanism's body L x H x D (its quarter: H and D/2), metres
+PA_MECHANISM = (0.2, 0.1, 0.04)
 #: OCC pads bounding boxes by 1e-7; the domains are millimetres and larger
 _TOL = 1e-6
 
@@ -124,3 +132,22 @@ def pa_mechanism(length: float = 0.2, height: float = 0.1, depth: float = 0.04,
     else:
         _name_faces(shape, (0, L, ((L, 0, 0), (L, output_height * H, Dh))), "output")
     return shape
+
+
+def pa_mechanism_setup(p: Parameters, *, gripper: bool) -> Setup:
+    """The set-up of :func:`pa_mechanism` of the size :data:`PA_MECHANISM`: pa-inverter-3d and
+    (``gripper``) pa-gripper-3d."""
+    length, height, depth = PA_MECHANISM
+    volume = length * height * 0.5 * depth
+    direction = (0.0, 1.0, 0.0) if gripper else (1.0, 0.0, 0.0)
+    zero = ("zero_pressure", "fixed") + (() if gripper else ("output",))
+    return Setup(supports=Supports(clamp=("fixed",), fix_y=("symmetry",),
+                                   fix_z=("symmetry_z",)),
+                 springs=(Spring("output", p.k_out, direction),),
+                 port=Port("output", tuple(-c for c in direction)),
+                 solid=("block", "jaw_pad") if gripper else ("block",),
+                 void=("jaw_void",) if gripper else (), objective="mechanism",
+                 pressure=Pressure(inlet=("inlet",), zero=zero),
+                 se_max=se_default(p, volume),
+                 # -Δ/SE is of order 3 / (P_in L D/2), as the 2D cases' 3 / (P_in L t)
+                 objective_ref=3.0 / (p.load * length * 0.5 * depth))

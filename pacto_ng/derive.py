@@ -47,6 +47,12 @@ PRESSURE_DEFAULTS = Parameters(
     penal_step=0.04, beta=1.0, beta_max=32.0, beta_every=15, load=1e6, k_out=1e4,
     iterations=160, move=0.05, tol=0.01, obj_tol=1e-3)
 
+#: ... and in 3D (pa-inverter-3d, pa-gripper-3d): the 2D settings that carry over (the mesh,
+#: the plane and the thickness do not), the output spring of the quarter model, the penalty
+#: from 2
+PRESSURE_DEFAULTS_3D = PRESSURE_DEFAULTS.replace(maxh=0.005, plane="strain", thickness=1e-3,
+                                                 k_out=2e5, penal_start=2.0)
+
 #: the penalty and the projection continuation: a case that gives none of a group's
 #: settings gets it.  The penalty as the built-in pressure cases' (:data:`PRESSURE_DEFAULTS`, pneunet, soft-finger, jaw-gripper): p = 1 -> 3 in steps of 0.04.  β from 1
 #: doubling every 15 iterations, or as soon as the objective settles (``beta_settle``, as the
