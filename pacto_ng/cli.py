@@ -16,6 +16,7 @@
                   [--kinds darcy,fixed,follower] [--quiet]
     pacto export DIR --format stl|vtk|vtu|msh [--out FILE] [--units mm|m] [--no-mirror]
                  [--threshold T] [--threshold2 T2] [--maxh H]
+    pacto refine DIR [--steps N] [--overwrite] [--quiet]
     pacto compare DIR1 DIR2 ... [--out FILE.png]
 
 Bad input gives a one-line error on stderr and exit code 2; a run stopped by a Newton failure
@@ -172,7 +173,7 @@ def _main(argv) -> int:
         path = write_template(args.name)
         print(f"wrote {path}: run it with 'pacto run {path}'")
         return 0
-    if args.command in ("analyse", "export", "compare"):
+    if args.command in ("analyse", "export", "refine", "compare"):
         return _commands().post_command(args)
     if args.command == "resume":
         return _commands().resume_with_part(args)

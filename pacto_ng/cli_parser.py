@@ -109,8 +109,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _post_parsers(sub):
-    """analyse, export, compare: from a finished run to a part (pacto_ng.post.cli_commands,
-    pacto_ng.post.compare)."""
+    """analyse, export, refine, compare: from a finished run to a part
+    (pacto_ng.post.cli_commands, pacto_ng.post.refine_run, pacto_ng.post.compare)."""
     a = sub.add_parser("analyse", help="analyse the part of a finished run (pressure cases), "
                        "or a case's own geometry as built", description="Make the part of a "
                        "finished run's final design (threshold, body-fitted remesh, seal check) "
@@ -175,10 +175,26 @@ def _post_parsers(sub):
     x.add_argument("--maxh", type=float, help="element size (default: the analysis's, else half "
                    "the run's)")
     x.add_argument("--quiet", action="store_true")
+    _refine_parser(sub)
     c = sub.add_parser("compare", help="designs side by side and their analysis curves")
     c.add_argument("dirs", nargs="+", help="finished run folders")
     c.add_argument("--out", help="picture (default compare.png)")
     c.add_argument("--quiet", action="store_true")
+
+
+def _refine_parser(sub):
+    """refine: a finished 2D pressure run's part, its shape refined (pacto_ng.post.refine_run)."""
+    f = sub.add_parser("refine", help="refine the shape of a finished 2D pressure run's part",
+                       description="Make the part of a finished 2D pressure run as 'pacto "
+                       "analyse' does and move its boundary to raise the output displacement "
+                       "at the run's load with no more volume than the part starts with (the "
+                       "clamp, the ports and the symmetry lines held; no remeshing); writes "
+                       "DIR/refine/ (history.csv, summary.json, refined.vtu, refined.png).")
+    f.add_argument("dir", help="a finished run folder (2D, a pressure case)")
+    f.add_argument("--steps", type=int, default=20, help="descent steps (default 20)")
+    f.add_argument("--overwrite", action="store_true", help="replace the files of an earlier "
+                   "DIR/refine/ (by default it is refused)")
+    f.add_argument("--quiet", action="store_true", help="no progress lines")
 
 
 def params_from_args(case, args) -> Parameters:

@@ -1,6 +1,6 @@
 """The ``pacto`` commands that optimise or post-process a design: ``run`` and ``resume`` (the
-optimisation, then its part), ``sweep``, ``evaluate``, ``analyse``, ``export`` and ``compare``,
-each from the parsed arguments (:mod:`pacto_ng.cli_parser`) to its exit code.
+optimisation, then its part), ``sweep``, ``evaluate``, ``analyse``, ``export``, ``refine``
+and ``compare``, each from the parsed arguments (:mod:`pacto_ng.cli_parser`) to its exit code.
 
 They need :mod:`pacto_ng.runner` and :mod:`pacto_ng.post`, about 0.5 s to import (pyvista,
 meshio): :mod:`pacto_ng.cli` imports this module for these commands only, so that
@@ -20,6 +20,7 @@ from .post.analysis_options import parse_pressures
 from .post.as_built import analyse_as_built
 from .post.cli_commands import export_run
 from .post.compare import compare_runs
+from .post.refine_run import refine_run
 from .post.part_stage import finish_run
 from .runner import optimise_case, resume_run
 from .sweep import run_sweep
@@ -27,9 +28,12 @@ from .sweep_plan import parse_loads, parse_models
 
 
 def post_command(args) -> int:
-    """``pacto analyse``, ``pacto export`` and ``pacto compare``."""
+    """``pacto analyse``, ``pacto export``, ``pacto refine`` and ``pacto compare``."""
     if args.command == "analyse":
         return _analyse_command(args)
+    if args.command == "refine":
+        return refine_run(args.dir, steps=args.steps, quiet=args.quiet,
+                          overwrite=args.overwrite)
     if args.command == "export":
         return export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
                           maxh=args.maxh, quiet=args.quiet, threshold2=args.threshold2,

@@ -2,7 +2,8 @@
 (:mod:`~pacto_ng.shape.deformation`), the shape gradient of the part's output by the adjoint
 (:mod:`~pacto_ng.shape.gradient`) as blocks of a :class:`~pacto_ng.core.Chain`, the descent
 field and step control (:mod:`~pacto_ng.shape.riesz`) and the descent loop with the volume
-bounded (:mod:`~pacto_ng.shape.refine`; no remeshing yet, no command yet)."""
+bounded (:mod:`~pacto_ng.shape.refine`; no remeshing yet; the command ``pacto refine RUN``:
+:mod:`pacto_ng.post.refine_run`)."""
 from .deformation import ShapeSpace, volume, volume_integrals
 from .gradient import PartResponse, ShapeResponse, ShapeVolume
 from .refine import RefineResult, refine

@@ -36,15 +36,18 @@ tangent system ``Kᵀ λ = ∂Δ/∂u`` (one solve with the state's factorisatio
     L(Ω) = Σ_k w_k ∫_Γk (d_k · u - I_k/|Γ_k|) ds / |Γ_k| - R(u; λ),   I_k = ∫_Γk d_k · u ds,
 
 (boundary ports only: a named point is a mesh vertex that moves with ``u``, whose value there
-has no explicit shape dependence) is stationary in ``u`` and ``λ``, and its explicit shape
+has no explicit shape dependence; nor has the term ``k (d̂ · u)(d̂ · λ)`` of an output spring
+``k/2 (d̂ · u)²`` at a named point, which is in ``R`` and ``K`` but not written in ``L``) is
+stationary in ``u`` and ``λ``, and its explicit shape
 derivative (coefficients ``I_k``, ``|Γ_k|`` frozen) is the total one:
 ``dΔ[V] = ∂L/∂Ω[V]``, from
 :meth:`~pacto_ng.shape.deformation.ShapeSpace.derivative` (``DiffShape``).  The first term
 differentiates the mean: ``d(I/A) = dI/A - I dA/A²``.
 
 The displacement formulation throughout (the mixed one of
-:func:`~pacto_ng.physics.mixed.formulation_for` is not shape-differentiated here); ports with
-output springs are refused (their spring energy is not shape-differentiated here either).
+:func:`~pacto_ng.physics.mixed.formulation_for` is not shape-differentiated here); an output
+spring on a boundary port is refused (its energy, a mean square over the boundary, is not
+shape-differentiated here either); one at a named point adds its energy to ``R``.
 """
 from __future__ import annotations
 
@@ -77,8 +80,9 @@ def _ports(mesh, ports) -> tuple[Port, ...]:
         raise ValueError("ports: give a Port or a non-empty tuple of Ports")
     points = mesh.GetBBBoundaries() if mesh.dim == 3 else mesh.GetBBoundaries()
     for p in ports:
-        if p.spring > 0:
-            raise ValueError(f"port '{p.region}': output springs are not shape-differentiated")
+        if p.spring > 0 and p.region not in points:
+            raise ValueError(f"port '{p.region}': output springs on a boundary are not "
+                             f"shape-differentiated (springs at a named point are)")
         if p.region not in mesh.GetBoundaries() and p.region not in points:
             raise ValueError(f"port '{p.region}' is neither a boundary nor a named point of the "
                              f"{mesh.dim}D mesh")
@@ -102,7 +106,7 @@ class PartResponse:
     supports : Supports
         Dirichlet conditions of the displacement by region name.
     ports : Port or tuple of Port
-        The output (boundaries or named points, no springs).
+        The output (boundaries or named points; output springs at named points only).
     pressure : float
         The wall pressure ``P`` (negative: suction).
     kind : {"fixed", "follower"}
@@ -179,6 +183,9 @@ class PartResponse:
             a += Variation(t * P * InnerProduct(self.normal, u) * shape_ds(self.boundary))
         else:
             a += t * P * InnerProduct(self._traction(u), v) * shape_ds(self.boundary)
+        for p in self.ports:  # output springs, at named points only (_ports)
+            for spring in p.springs():
+                a += Variation(spring.energy(self.mesh, u))
         return a
 
     def _outputs(self):
