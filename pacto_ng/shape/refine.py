@@ -29,6 +29,23 @@ common simplification in shape optimisation, where an exact inner minimisation i
    decrease), else ``s`` is halved (a trial whose Newton solve fails is rejected too); below
    ``min_step`` the status is ``no_descent``.  The trial step of the next iteration is twice
    the accepted one, at most ``step_max``;
+   with a box ``bounds`` (the run's design domain), every trial shape is projected into it
+   before anything is measured: each vertex's moved position ``x0 + d + sθ`` is clipped
+   coordinate by coordinate into ``[low, high]`` (the projection onto a box, exact and
+   componentwise), so the step is taken along the projection arc
+   ``P(d + sθ)`` of a projected-gradient method (Bertsekas 1999, *Nonlinear Programming*,
+   2nd ed., §2.3, with a plain decrease in place of Armijo's rule); the step control of 3
+   and the accept test act on the projected trial, and a vertex on the box's side slides
+   along it.  Held dofs are never moved by the projection.  The direction of step 2 is
+   that of the active set: the vertex coordinates on a side of the box that the field ``θ``
+   would move out are held (zero in ``θ``) and ``θ`` solved again on the other dofs (the
+   Riesz problem restricted, still a descent direction; Bertsekas 1982, *SIAM J. Control
+   Optim.* 20, "Projected Newton methods for optimization problems with simple
+   constraints"): the field then slides along the side instead of pressing the elements
+   behind a clipped vertex flat.  Order-1 shape spaces only: there the dofs are the vertex
+   displacements (component ``k`` of vertex ``i`` is dof ``k·nv + i``), and the vertices,
+   with them every straight edge, stay in the box (a curved edge of the reference mesh
+   could bulge past a side by its own curvature: the bound is on the vertices);
 5. the multiplier update ``λ ← max(0, λ + μ c)`` at the accepted shape.
 
 The loop stops after ``steps`` accepted steps (status ``steps``) or when the merit changes by
@@ -52,6 +69,8 @@ from .gradient import PartResponse
 from .riesz import Quality, RieszMap, step_length
 
 STATUSES = ("converged", "steps", "mesh_quality", "no_descent")
+#: a vertex coordinate within this share of the box's size of one of its sides is on it
+ACTIVE_TOL = 1e-9
 
 
 @dataclass
@@ -76,8 +95,9 @@ class _Loop:
     multiplier (see the module)."""
 
     def __init__(self, response: PartResponse, space: ShapeSpace, volume_max: float,
-                 penalty: float, riesz: RieszMap):
+                 penalty: float, riesz: RieszMap, bounds=None):
         self.response, self.space, self.riesz = response, space, riesz
+        self.box = None if bounds is None else _Box(space, bounds)
         self.quality = Quality(space)
         self.volume_max, self.penalty = float(volume_max), float(penalty)
         self.thickness = response.thickness
@@ -109,22 +129,33 @@ class _Loop:
         d_delta = self.response.gradient(self.space)
         d_volume = self.space.derivative(volume_integrals(self.thickness))
         weight = max(0.0, self.multiplier + self.penalty * self.constraint(self.volume))
-        theta = self.riesz(d_delta / self.scale - weight * d_volume / self.volume_max)
+        g = d_delta / self.scale - weight * d_volume / self.volume_max
+        theta = self.riesz(g)
+        if self.box is not None:
+            active = self.box.active(self.shape, theta)
+            if np.any(active):
+                theta = self.riesz(g, hold=active)
         largest = float(np.max(np.abs(theta)))
         if not largest > 0:
             raise ValueError("refine: the shape derivative vanishes on the free dofs")
         return theta / largest
 
+    def project(self, values) -> np.ndarray:
+        """``values`` projected into the box (unchanged without one)."""
+        return values if self.box is None else self.box.project(values)
+
     def search(self, theta, length: float, min_step: float, q_min: float):
         """Step control and backtracking from the trial step ``length``: ``(status, s, q,
         trials)``, status None for an accepted step (the loop's shape moved to it).  Every
-        trial shape is measured before it is solved: none below ``q_min`` is accepted."""
-        s, q = step_length(self.quality, self.shape, theta, length, q_min=q_min)
+        trial shape (projected into the box, if any) is measured before it is solved: none
+        below ``q_min`` is accepted."""
+        s, q = step_length(lambda values: self.quality(self.project(values)), self.shape,
+                           theta, length, q_min=q_min)
         if s < min_step:
             return "mesh_quality", s, q, 0
         before, trials = self.merit(self.delta, self.volume), 0
         while s >= min_step:
-            trial = self.shape + s * theta
+            trial = self.project(self.shape + s * theta)
             q = self.quality(trial)
             if q >= q_min:
                 trials += 1
@@ -152,7 +183,7 @@ class _Loop:
 def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, steps: int = 20,
            step: float = 0.02, step_max: float | None = None, min_step: float | None = None,
            q_min: float = 0.3, penalty: float = 1000.0, rtol: float = 1e-5, vtol: float = 1e-3,
-           alpha: float = 1.0, kind: str = "elasticity",
+           alpha: float = 1.0, kind: str = "elasticity", bounds=None,
            say: Callable[[str], None] | None = None) -> RefineResult:
     """Maximise ``Δ`` with ``t|Ω| ≤ volume_max`` by descent on the shape (see the module).
 
@@ -160,7 +191,10 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, step
     ``step`` the first trial step and ``step_max`` the largest (default ``4 step``), both in
     lengths of the mesh; ``min_step`` (default ``step / 1024``); ``q_min`` the lowest
     Jacobian allowed; ``penalty`` ``μ``; ``alpha`` and ``kind`` those of the
-    :class:`~pacto_ng.shape.riesz.RieszMap`; ``say`` receives one line per step."""
+    :class:`~pacto_ng.shape.riesz.RieszMap`; ``bounds`` ``(low, high)``, the lowest and
+    highest corner of a box (one coordinate per dimension of the mesh) that every vertex of
+    the part is kept in: each trial shape is projected into it (step 4 of the module; an
+    order-1 ``space`` only); ``say`` receives one line per step."""
     if space.mesh is not response.mesh:
         raise ValueError("the shape space and the response must be on the same mesh")
     if not (volume_max > 0 and step > 0 and penalty > 0 and 0 < q_min < 1 and steps >= 0):
@@ -168,7 +202,8 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, step
                          "(0, 1) and steps non-negative")
     step_max = 4.0 * step if step_max is None else float(step_max)
     min_step = step / 1024.0 if min_step is None else float(min_step)
-    loop = _Loop(response, space, volume_max, penalty, RieszMap(space, alpha=alpha, kind=kind))
+    loop = _Loop(response, space, volume_max, penalty, RieszMap(space, alpha=alpha, kind=kind),
+                 bounds)
     start = loop.merit(loop.delta, loop.volume)
     history = [loop.record(0, 0.0, loop.quality(loop.shape), (start, start), 0)]
     status, length = "steps", float(step)
@@ -193,6 +228,45 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, step
             break
     return RefineResult(status, loop.shape.copy(), loop.delta, loop.volume, loop.multiplier,
                         history)
+
+
+class _Box:
+    """The projection of an order-1 shape space's coefficients that keeps every vertex's
+    moved position ``x0 + d`` in the box ``bounds = (low, high)`` (held dofs untouched)."""
+
+    def __init__(self, space: ShapeSpace, bounds):
+        mesh, dim = space.mesh, space.mesh.dim
+        low, high = (np.asarray(b, dtype=float).reshape(-1) for b in bounds)
+        if low.shape != (dim,) or high.shape != (dim,) or not np.all(low <= high):
+            raise ValueError(f"refine: bounds must be (low, high) with {dim} coordinates "
+                             f"each and low <= high")
+        if space.space.globalorder != 1 or space.ndof != dim * mesh.nv:
+            raise ValueError("refine: bounds need an order-1 shape space (its dofs the "
+                             "vertex displacements)")
+        # dof k·nv + i is component k of vertex i (VectorH1 of order 1: tests/shape)
+        self.dofs = np.arange(dim * mesh.nv).reshape(dim, mesh.nv).T
+        self.points = np.array([v.point for v in mesh.vertices], dtype=float)[:, :dim]
+        self.low, self.high, self.held = low, high, space.held[self.dofs]
+        self.tol = ACTIVE_TOL * float(np.max(high - low))
+
+    def active(self, values, theta) -> np.ndarray:
+        """The dof mask of the active set at the shape ``values``: the vertex coordinates on
+        a side of the box (to :data:`ACTIVE_TOL` of its size) that ``theta`` moves out."""
+        moved = self.points + np.asarray(values, dtype=float)[self.dofs]
+        step = np.asarray(theta, dtype=float)[self.dofs]
+        out = (((moved >= self.high - self.tol) & (step > 0))
+               | ((moved <= self.low + self.tol) & (step < 0)))
+        mask = np.zeros(len(values), dtype=bool)
+        mask[self.dofs[out]] = True
+        return mask
+
+    def project(self, values) -> np.ndarray:
+        """The coefficients with every free vertex coordinate clipped into the box."""
+        out = np.array(values, dtype=float)
+        moved = self.points + out[self.dofs]
+        clipped = np.clip(moved, self.low, self.high) - self.points
+        out[self.dofs] = np.where(self.held, out[self.dofs], clipped)
+        return out
 
 
 def _say(say: Callable[[str], None] | None, line: str) -> None:

@@ -27,7 +27,8 @@ on the moved mesh).  The step control takes the largest ``s = s_max / 2^k`` with
 from __future__ import annotations
 
 import numpy as np
-from ngsolve import VOL, BilinearForm, Det, Grad, GridFunction, Id, InnerProduct, Sym, dx
+from ngsolve import (VOL, BilinearForm, BitArray, Det, Grad, GridFunction, Id, InnerProduct,
+                     Sym, dx)
 
 from ..physics.quadrature import integration_rules
 from .deformation import ShapeSpace
@@ -68,23 +69,34 @@ class RieszMap:
         self.field = GridFunction(space.space)
         self.inverse = None
 
-    def __call__(self, g) -> np.ndarray:
+    def __call__(self, g, hold=None) -> np.ndarray:
         """The coefficients of ``θ`` with ``b(θ, ψ) = g · ψ`` on the current shape (held dofs
-        of ``θ`` zero; the entries of ``g`` on held dofs are ignored)."""
+        of ``θ`` zero; the entries of ``g`` on held dofs are ignored).  ``hold``, a boolean
+        mask of dofs, holds these too for this call only (``θ`` solves the same problem on
+        the smaller space: the active set of a box bound, :func:`~.refine.refine`)."""
         g = np.asarray(g, dtype=float)
         if g.shape != (self.space.ndof,):
             raise ValueError(f"riesz: {g.shape} entries for a space of {self.space.ndof}")
+        held = self.space.held if hold is None else self.space.held | np.asarray(hold, bool)
         self.form.Assemble()
-        if self.inverse is None:
-            self.inverse = self.form.mat.Inverse(self.space.space.FreeDofs(),
-                                                 inverse="sparsecholesky")
+        if hold is not None and np.any(held & ~self.space.held):
+            free = BitArray(self.space.ndof)
+            free.Clear()
+            for dof in np.flatnonzero(~held):
+                free.Set(int(dof))
+            inverse = self.form.mat.Inverse(free, inverse="sparsecholesky")
         else:
-            self.inverse.Update()  # the same sparsity: numeric refactorisation only
+            if self.inverse is None:
+                self.inverse = self.form.mat.Inverse(self.space.space.FreeDofs(),
+                                                     inverse="sparsecholesky")
+            else:
+                self.inverse.Update()  # the same sparsity: numeric refactorisation only
+            inverse = self.inverse
         rhs = self.field.vec.CreateVector()
         rhs.FV().NumPy()[:] = g
-        self.field.vec.data = self.inverse * rhs
+        self.field.vec.data = inverse * rhs
         out = self.field.vec.FV().NumPy().copy()
-        out[self.space.held] = 0.0
+        out[held] = 0.0
         return out
 
 

@@ -14,7 +14,10 @@ Independent references:
 * the refinement of the plate with a pressurised hole (the plate of test_shape_gradient.py,
   linear, fixed pressure, the mean x-displacement of the right edge as output) is checked for
   what any descent method must give: a larger output, a merit that decreases at every step,
-  Jacobians above the bound and the volume bound met to a stated tolerance.
+  Jacobians above the bound and the volume bound met to a stated tolerance;
+* the box bound: the order-1 VectorH1 dofs are the vertex displacements (component k of
+  vertex i at dof k·nv + i, checked on an affine field), and the bounded refinement's vertices,
+  read from the deformation field itself (not through that layout), lie in the box.
 
 Not checked: a closed-form optimum.  The candidate (the pressurised thick ring of Lamé with a
 free outer surface, maximising the outer radial displacement at fixed area) has no bounded
@@ -99,6 +102,21 @@ def test_riesz_field_slides_on_symmetry_lines():
     on_bottom = field(mesh(0.5 * (A + B), 0.0))
     assert abs(on_left[0]) < 1e-12 and abs(on_left[1]) > 1e-6
     assert abs(on_bottom[1]) < 1e-12 and abs(on_bottom[0]) > 1e-6
+
+
+def test_riesz_field_with_extra_held_dofs(plate_mesh):
+    """``hold`` (the active set of a box bound): θ zero on those dofs and the space's held
+    ones, still g·θ > 0, and the space's own factorisation is left for the next call."""
+    space = ShapeSpace(plate_mesh, hold=("left",))
+    g = space.derivative(CF(1.0) * ng.dx(bonus_intorder=2))
+    riesz = RieszMap(space)
+    plain = riesz(g)
+    hold = np.zeros(space.ndof, dtype=bool)
+    hold[np.flatnonzero(~space.held)[::3]] = True
+    theta = riesz(g, hold=hold)
+    assert np.all(theta[hold | space.held] == 0.0) and float(g @ theta) > 0.0
+    assert np.max(np.abs(theta - plain)) > 1e-3 * np.max(np.abs(plain))
+    np.testing.assert_allclose(riesz(g), plain, rtol=0, atol=1e-12 * np.max(np.abs(plain)))
 
 
 def test_riesz_refuses_bad_settings(plate_mesh):
@@ -189,3 +207,70 @@ def test_refinement_stops_when_the_quality_bound_cannot_be_met(plate_mesh):
     assert result.status == "mesh_quality"
     assert len(result.history) == 1 and not np.any(result.shape)
     assert math.isfinite(result.delta)
+
+
+# -- the box bound -------------------------------------------------------------------------------
+#: the plate's own bounding box
+BOX = (np.array([0.0, 0.0]), np.array([1.0, 0.5]))
+
+
+def moved_vertices(mesh, space):
+    """The vertices moved by the space's deformation, evaluated from the field at the
+    reference vertices (deformation unset), not through the dof layout."""
+    ref = np.array([v.point for v in mesh.vertices], dtype=float)
+    mesh.UnsetDeformation()
+    try:
+        motion = np.asarray(space.deformation(mesh(ref[:, 0], ref[:, 1])), dtype=float)
+    finally:
+        mesh.SetDeformation(space.deformation)
+    return ref + motion.reshape(len(ref), -1)
+
+
+def outside(points, box) -> float:
+    return float(np.max(np.maximum(np.maximum(box[0] - points, points - box[1]), 0.0)))
+
+
+def test_order_one_dofs_are_the_vertex_displacements():
+    """The layout the box projection relies on: dof k·nv + i is component k of vertex i."""
+    mesh = ng.Mesh(unit_square.GenerateMesh(maxh=0.3))
+    space = ShapeSpace(mesh)
+    d = space.direction(CF((x + 2 * y, 3 * x - y)))
+    p = np.array([v.point for v in mesh.vertices])
+    assert space.ndof == 2 * mesh.nv
+    np.testing.assert_allclose(d[:mesh.nv], p[:, 0] + 2 * p[:, 1], rtol=0, atol=1e-14)
+    np.testing.assert_allclose(d[mesh.nv:], 3 * p[:, 0] - p[:, 1], rtol=0, atol=1e-14)
+
+
+def test_the_box_bound_keeps_the_part_in_and_the_output_grows():
+    """Five steps at the plate's own volume.  Measured: unbounded, Δ 0.0086 → 0.0994 with a
+    vertex 0.128 out of the plate's box; bounded by the box, Δ 0.0086 → 0.0311, every vertex
+    in the box (1.1e-16), volume 3.7 % below the bound."""
+    results = {}
+    for bounds in (None, BOX):
+        mesh = plate()
+        space, response = ShapeSpace(mesh, hold=("left",)), plate_response(mesh)
+        start = volume(mesh, response.thickness)
+        with compute(THREADS):
+            result = refine(response, space, volume_max=start, steps=5, step=0.02,
+                            q_min=Q_MIN, bounds=bounds)
+        results[bounds is not None] = result, outside(moved_vertices(mesh, space), BOX)
+    (free, free_out), (boxed, boxed_out) = results[False], results[True]
+    print(f"unbounded: Δ {free.delta:.4g}, {free_out:.3g} out; bounded: Δ {boxed.delta:.4g}, "
+          f"{boxed_out:.3g} out")
+    assert free_out > 0.05  # the unbounded refinement leaves the box
+    assert boxed_out <= 1e-12
+    assert boxed.status == "steps" and len(boxed.history) == 6
+    assert boxed.delta > 2.0 * boxed.history[0]["delta"]
+    for before, after in zip(boxed.history, boxed.history[1:]):
+        assert after["merit"] < after["merit_before"] and after["det"] >= Q_MIN
+        assert after["delta"] > before["delta"]
+
+
+def test_the_box_bound_refuses_bad_boxes_and_higher_orders(plate_mesh):
+    response = plate_response(plate_mesh)
+    with pytest.raises(ValueError, match="coordinates"):
+        refine(response, ShapeSpace(plate_mesh, hold=("left",)), volume_max=1.0, steps=0,
+               bounds=((0.0, 0.0, 0.0), (1.0, 0.5, 1.0)))
+    with pytest.raises(ValueError, match="order-1"):
+        refine(response, ShapeSpace(plate_mesh, order=2, hold=("left",)), volume_max=1.0,
+               steps=0, bounds=BOX)
