@@ -31,6 +31,7 @@ import numpy as np
 from ngsolve import CF, GridFunction, Integrate, LinearForm, VectorH1, ds, dx
 
 from ..physics.mechanics import Supports
+from ..physics.spaces import dirichlet_options
 
 #: extra quadrature order of every form whose shape derivative is taken (the NGSolve notes:
 #: the t-derivative of an integrand has a higher degree than the integrand)
@@ -47,25 +48,6 @@ def shape_ds(region: str):
     """The measure on the boundary ``region`` of every shape-differentiated integral: ``ds``
     with :data:`BONUS_INTORDER`."""
     return ds(region, bonus_intorder=BONUS_INTORDER)
-
-
-def dirichlet_options(mesh, supports: Supports) -> dict:
-    """The VectorH1 keyword arguments (``dirichletx``, ``dirichlety_bbnd``, ...) that fix the
-    components ``supports`` names: boundaries, and (2D) named points or (3D) named edges and
-    points.  ValueError for a name that is none of the mesh's regions."""
-    regions = {"": mesh.GetBoundaries(), "_bbnd": mesh.GetBBoundaries()}
-    if mesh.dim == 3:
-        regions["_bbbnd"] = mesh.GetBBBoundaries()
-    for name in supports.names():
-        if not any(name in known for known in regions.values()):
-            raise ValueError(f"region '{name}' is not a boundary, edge or point of the mesh")
-    kw = {}
-    for axis, names in zip("xyz", supports.per_component(mesh.dim)):
-        for suffix, known in regions.items():
-            on = [n for n in names if n in known]
-            if on:
-                kw[f"dirichlet{axis}{suffix}"] = "|".join(on)
-    return kw
 
 
 class ShapeSpace:

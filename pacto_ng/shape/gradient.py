@@ -65,9 +65,9 @@ from ..physics.loads import Port
 from ..physics.mechanics import Supports
 from ..physics.newton import solve_with_continuation
 from ..physics.quadrature import integration_rules
+from ..physics.spaces import dirichlet_options
 from ..post.part_analysis import outward_normal, solid_fields
-from .deformation import (ShapeSpace, dirichlet_options, shape_ds, shape_dx, volume,
-                          volume_integrals)
+from .deformation import ShapeSpace, shape_ds, shape_dx, volume, volume_integrals
 
 KINDS = ("fixed", "follower")
 

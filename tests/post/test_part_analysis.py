@@ -23,6 +23,7 @@ from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
 from pacto_ng.post.part_analysis import (PartAnalysis, outward_normal, pressure_body_force,
                                         solid_fields)
+from rings import quarter_ring
 
 A, B, E, NU = 0.5, 1.0, 1e6, 0.3
 LINEAR = Parameters(model="linear", E1=E, E0=1e-3 * E, E2=E, nu=NU, thickness=1.0,
@@ -40,22 +41,7 @@ def lame_sphere(P):
 
 
 def ring_quarter(maxh, curve=2):
-    """The quarter ring a <= r <= b: edges left (x = 0), bottom (y = 0), pressure (r = a),
-    outer (r = b); points inner (a, 0) and outer_point (b, 0)."""
-    import ngsolve as ng
-    from netgen import occ
-
-    shape = (occ.Circle((0, 0), B).Face() - occ.Circle((0, 0), A).Face()) \
-        * occ.MoveTo(0, 0).Rectangle(B, B).Face()
-    for e in shape.edges:
-        c = e.center
-        e.name = ("left" if abs(c.x) < 1e-9 else "bottom" if abs(c.y) < 1e-9 else
-                  "pressure" if np.hypot(c.x, c.y) < 0.5 * (A + B) else "outer")
-    shape.vertices.Nearest((A, 0, 0)).name = "inner"
-    shape.vertices.Nearest((B, 0, 0)).name = "outer_point"
-    mesh = ng.Mesh(occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
-    mesh.Curve(curve)
-    return mesh
+    return quarter_ring(A, B, maxh, curve)
 
 
 def sphere_octant(maxh):

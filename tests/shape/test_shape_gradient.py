@@ -41,6 +41,7 @@ from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
 from pacto_ng.shape import PartResponse, ShapeResponse, ShapeSpace, ShapeVolume
 from pacto_ng.threads import compute
+from rings import quarter_ring
 
 E, NU = 1.0, 0.3
 #: the systems here have at most a few thousand unknowns: one NGSolve thread (measured on the
@@ -159,18 +160,8 @@ A, B, P = 0.5, 1.0, 1e-3
 
 
 def ring(maxh, order):
-    """The quarter ring a <= r <= b: edges left (x = 0), bottom (y = 0), pressure (r = a),
-    outer (r = b); the point inner at (a, 0)."""
-    shape = (occ.Circle((0, 0), B).Face() - occ.Circle((0, 0), A).Face()) \
-        * occ.MoveTo(0, 0).Rectangle(B, B).Face()
-    for e in shape.edges:
-        c = e.center
-        e.name = ("left" if abs(c.x) < 1e-9 else "bottom" if abs(c.y) < 1e-9 else
-                  "pressure" if math.hypot(c.x, c.y) < 0.5 * (A + B) else "outer")
-    shape.vertices.Nearest((A, 0, 0)).name = "inner"
-    mesh = ng.Mesh(occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
-    mesh.Curve(order)
-    return mesh
+    """The quarter ring a <= r <= b (tests/rings.py), curved to ``order``."""
+    return quarter_ring(A, B, maxh, order)
 
 
 def lame_inner(a):
