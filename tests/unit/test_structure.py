@@ -154,3 +154,15 @@ def test_no_function_over_the_line_limit():
                 if n > MAX_FUNCTION_LINES:
                     long[f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {node.name}"] = n
     assert long == {}
+
+
+def test_every_subpackage_is_installed():
+    """pyproject.toml lists its packages by hand: a subpackage missing there is absent from
+    an installed (non-editable) pacto_ng, while the tests, run from the source tree, pass."""
+    import tomllib
+
+    listed = set(tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text())
+                 ["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(PACKAGE.parent).parts)
+             for p in PACKAGE.rglob("__init__.py")}
+    assert found <= listed, sorted(found - listed)
