@@ -188,8 +188,10 @@ def _refine_parser(sub):
                        description="Make the part of a finished 2D pressure run as 'pacto "
                        "analyse' does and move its boundary to raise the output displacement "
                        "at the run's load with no more volume than the part starts with (the "
-                       "clamp, the ports and the symmetry lines held; no remeshing); writes "
-                       "DIR/refine/ (history.csv, summary.json, refined.vtu, refined.png).")
+                       "clamp, the ports and the symmetry lines held; the part remeshed when its "
+                       "mesh would fold), then check it on an independent remesh; writes "
+                       "DIR/refine/ (history.csv, summary.json, refined.vtu, refined.png, "
+                       "refined.stl).")
     f.add_argument("dir", help="a finished run folder (2D, a pressure case)")
     f.add_argument("--steps", type=int, default=20, help="descent steps (default 20)")
     f.add_argument("--overwrite", action="store_true", help="replace the files of an earlier "

@@ -82,6 +82,19 @@ class ShapeSpace:
         self.deformation.vec.FV().NumPy()[:] = values
         self.mesh.SetDeformation(self.deformation)
 
+    def moved_points(self) -> np.ndarray:
+        """The mesh's vertices at their moved positions ``x0 + d(x0)``, (nv, dim).  ``d`` is
+        read at the reference vertices with the deformation unset (a finite element function
+        moves with the mesh: the NGSolve notes, "Shape derivatives")."""
+        ref = np.array([v.point for v in self.mesh.vertices], dtype=float)
+        self.mesh.UnsetDeformation()
+        try:
+            where = self.mesh(*(ref[:, k] for k in range(ref.shape[1])))
+            motion = np.asarray(self.deformation(where), dtype=float).reshape(ref.shape)
+        finally:
+            self.mesh.SetDeformation(self.deformation)
+        return ref + motion
+
     def direction(self, field, on: str | None = None) -> np.ndarray:
         """The coefficients of a vector CoefficientFunction ``field`` set into ``X`` on the
         reference mesh (only the dofs of the boundary ``on``, if given, the rest zero), held

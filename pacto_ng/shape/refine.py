@@ -23,8 +23,9 @@ common simplification in shape optimisation, where an exact inner minimisation i
    of 1, so that (order-1 shape space) the step ``s`` is the largest move of a vertex
    coordinate;
 3. the step control: ``s`` no larger than the trial step with ``min det(I + ∇₀d) ≥ q_min``
-   (:func:`~pacto_ng.shape.riesz.step_length`); below ``min_step`` the loop stops with the
-   status ``mesh_quality`` (the mesh would need remeshing, which this loop does not do);
+   (:func:`~pacto_ng.shape.riesz.step_length`); below ``quality_step`` (default
+   ``min_step``) the loop stops with the status ``mesh_quality``: the mesh needs remeshing
+   (:func:`~pacto_ng.shape.remesh.remesh_moved`), which a caller does and then goes on;
 4. the trial shape ``d + sθ`` is accepted if the merit at the same ``λ`` decreases (a plain
    decrease), else ``s`` is halved (a trial whose Newton solve fails is rejected too); below
    ``min_step`` the status is ``no_descent``.  The trial step of the next iteration is twice
@@ -95,16 +96,17 @@ class _Loop:
     multiplier (see the module)."""
 
     def __init__(self, response: PartResponse, space: ShapeSpace, volume_max: float,
-                 penalty: float, riesz: RieszMap, bounds=None):
+                 penalty: float, riesz: RieszMap, bounds=None, *, multiplier: float = 0.0,
+                 scale: float | None = None):
         self.response, self.space, self.riesz = response, space, riesz
         self.box = None if bounds is None else _Box(space, bounds)
         self.quality = Quality(space)
         self.volume_max, self.penalty = float(volume_max), float(penalty)
         self.thickness = response.thickness
-        self.multiplier = 0.0
+        self.multiplier = float(multiplier)
         self.shape = space.deformation.vec.FV().NumPy().copy()
         self.delta, self.volume = self.evaluate(self.shape)
-        self.scale = abs(self.delta)
+        self.scale = abs(self.delta) if scale is None else float(scale)
         if not self.scale > 0:
             raise ValueError("refine: the output Δ is zero on the starting shape")
         self.state = response.u.vec.CreateVector()
@@ -144,14 +146,16 @@ class _Loop:
         """``values`` projected into the box (unchanged without one)."""
         return values if self.box is None else self.box.project(values)
 
-    def search(self, theta, length: float, min_step: float, q_min: float):
+    def search(self, theta, length: float, min_step: float, q_min: float,
+               quality_step: float):
         """Step control and backtracking from the trial step ``length``: ``(status, s, q,
         trials)``, status None for an accepted step (the loop's shape moved to it).  Every
         trial shape (projected into the box, if any) is measured before it is solved: none
-        below ``q_min`` is accepted."""
+        below ``q_min`` is accepted; a step the quality bounds below ``quality_step`` stops
+        the loop (``mesh_quality``)."""
         s, q = step_length(lambda values: self.quality(self.project(values)), self.shape,
                            theta, length, q_min=q_min)
-        if s < min_step:
+        if s < quality_step:
             return "mesh_quality", s, q, 0
         before, trials = self.merit(self.delta, self.volume), 0
         while s >= min_step:
@@ -183,7 +187,8 @@ class _Loop:
 def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, steps: int = 20,
            step: float = 0.02, step_max: float | None = None, min_step: float | None = None,
            q_min: float = 0.3, penalty: float = 1000.0, rtol: float = 1e-5, vtol: float = 1e-3,
-           alpha: float = 1.0, kind: str = "elasticity", bounds=None,
+           alpha: float = 1.0, kind: str = "elasticity", bounds=None, multiplier: float = 0.0,
+           scale: float | None = None, quality_step: float | None = None,
            say: Callable[[str], None] | None = None) -> RefineResult:
     """Maximise ``Δ`` with ``t|Ω| ≤ volume_max`` by descent on the shape (see the module).
 
@@ -194,7 +199,12 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, step
     :class:`~pacto_ng.shape.riesz.RieszMap`; ``bounds`` ``(low, high)``, the lowest and
     highest corner of a box (one coordinate per dimension of the mesh) that every vertex of
     the part is kept in: each trial shape is projected into it (step 4 of the module; an
-    order-1 ``space`` only); ``say`` receives one line per step."""
+    order-1 ``space`` only); ``multiplier`` the starting ``λ`` and ``scale`` the ``|Δ(0)|``
+    of the objective (default: this start's ``|Δ|``), both to go on from an earlier
+    refinement of the same part on another mesh; ``quality_step`` (default ``min_step``) the
+    step below which a step bounded by the mesh's quality stops the loop with the status
+    ``mesh_quality`` (a caller that remeshes then gives a larger one: small steps that the
+    quality bound allows make little progress); ``say`` receives one line per step."""
     if space.mesh is not response.mesh:
         raise ValueError("the shape space and the response must be on the same mesh")
     if not (volume_max > 0 and step > 0 and penalty > 0 and 0 < q_min < 1 and steps >= 0):
@@ -202,15 +212,16 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, step
                          "(0, 1) and steps non-negative")
     step_max = 4.0 * step if step_max is None else float(step_max)
     min_step = step / 1024.0 if min_step is None else float(min_step)
+    quality_step = min_step if quality_step is None else float(quality_step)
     loop = _Loop(response, space, volume_max, penalty, RieszMap(space, alpha=alpha, kind=kind),
-                 bounds)
+                 bounds, multiplier=multiplier, scale=scale)
     start = loop.merit(loop.delta, loop.volume)
     history = [loop.record(0, 0.0, loop.quality(loop.shape), (start, start), 0)]
     status, length = "steps", float(step)
     for k in range(1, steps + 1):
         theta = loop.direction()
         before = loop.merit(loop.delta, loop.volume)
-        stop, s, q, trials = loop.search(theta, length, min_step, q_min)
+        stop, s, q, trials = loop.search(theta, length, min_step, q_min, quality_step)
         if stop is not None:
             status = stop
             _say(say, f"step {k}: stopped ({stop}; step {s:.3g}, lowest det {q:.3f})")

@@ -25,7 +25,7 @@ from pacto_ng.cli import main
 
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
-FILES = ("history.csv", "summary.json", "refined.vtu", "refined.png")
+FILES = ("history.csv", "summary.json", "refined.vtu", "refined.png", "refined.stl")
 
 
 @pytest.fixture(scope="module")
@@ -69,13 +69,41 @@ def test_refine_writes_its_files_and_raises_the_output(refined):
     with open(folder / "history.csv") as f:
         rows = list(csv.DictReader(f))
     assert [int(r["step"]) for r in rows] == [0, 1, 2, 3]
-    assert set(rows[0]) == {"step", "delta", "volume", "det", "length", "merit"}
+    assert set(rows[0]) == {"step", "mesh", "delta", "volume", "det", "length", "merit"}
     assert float(rows[-1]["delta"]) == pytest.approx(s["delta_after"], rel=1e-9)
     assert all(float(b["merit"]) < float(a["merit"]) for a, b in zip(rows, rows[1:]))
     # one progress line per step, and the last line
     assert sum(line.strip().startswith("step ") for line in lines) == 3
     assert lines[-1].startswith("refined: Δ ") and "status steps" in lines[-1]
     assert lines[-1].endswith(f"— {folder}")
+
+
+def test_the_refined_part_is_checked_on_an_independent_remesh(refined):
+    """summary.json's ``check``: the refined shape meshed afresh (finer, other vertices) and
+    analysed again gives the refinement's Δ to 2 % (the goal the refinement is held to)."""
+    run, _, lines = refined
+    s = json.loads((run / "refine" / "summary.json").read_text())
+    check = s["check"]
+    assert check["maxh"] < s["part"]["maxh"] and check["elements"] > s["part"]["elements"]
+    assert check["difference"] == pytest.approx(
+        (check["delta"] - s["delta_after"]) / s["delta_after"], rel=1e-12)
+    assert abs(check["difference"]) <= 0.02
+    assert s["remeshes"] == 0  # three steps leave the mesh fit to move
+    assert any(line.strip().startswith("an independent remesh of the refined part")
+               for line in lines)
+
+
+def test_the_refined_stl_is_the_whole_part_closed_in_mm(refined):
+    """refined.stl: a closed surface (every edge shared by two triangles) in mm, whose
+    enclosed volume is the refined part's (PneuNet's member has no symmetry line, so the
+    part is whole as it is) to the polygon's exactness."""
+    import pyvista as pv
+
+    run, _, _ = refined
+    s = json.loads((run / "refine" / "summary.json").read_text())
+    surface = pv.read(run / "refine" / "refined.stl")
+    assert surface.n_open_edges == 0
+    assert surface.volume * 1e-9 == pytest.approx(s["volume_after"], rel=1e-6)
 
 
 def test_the_refined_vtu_is_the_moved_part(refined):

@@ -1,0 +1,85 @@
+"""The moved part meshed anew (pacto_ng/shape/remesh.py): the same polygon, names, materials
+and named points, on fresh triangles.
+
+The checks are exact properties of the construction: the new mesh's geometry is the moved
+mesh's boundary polygon, so its area, the length of each named boundary and each material's
+area equal the moved mesh's (integrated by NGSolve on the moved mesh, an independent route)
+to round-off, and a named point sits at its moved position.
+"""
+import numpy as np
+import ngsolve
+import pytest
+from netgen.occ import X, Y, Box, Circle, Glue, OCCGeometry, Rectangle
+from ngsolve import BBND, CF, Integrate, ds, dx, x, y
+
+from pacto_ng.shape import ShapeSpace, remesh_moved
+
+
+def _plate():
+    """A 2 × 1 plate with a hole of radius 0.25: ``fixed`` on the left, ``pressure`` on the
+    hole, the corner point ``tip`` named."""
+    face = Rectangle(2, 1).Face()
+    face.edges.Min(X).name = "fixed"
+    face.edges.Max(X).name = "load"
+    hole = Circle((1, 0.5), 0.25).Face()
+    hole.edges.name = "pressure"
+    part = face - hole
+    part.vertices.Max(X + Y).name = "tip"
+    return ngsolve.Mesh(OCCGeometry(part, dim=2).GenerateMesh(maxh=0.1))
+
+
+def _moved(mesh, field):
+    """The ShapeSpace of ``mesh`` (``fixed`` held) moved by the CoefficientFunction ``field``."""
+    space = ShapeSpace(mesh, hold=("fixed",))
+    gf = ngsolve.GridFunction(space.space)
+    gf.Set(field)
+    space.set(gf.vec.FV().NumPy())
+    return space
+
+
+def test_the_new_mesh_keeps_the_moved_polygon_its_names_and_points():
+    mesh = _plate()
+    space = _moved(mesh, CF((0.1 * x * y, 0.05 * x * x)))
+    points = space.moved_points()
+    new = remesh_moved(mesh, points, 0.05)
+    assert new.ne > mesh.ne  # finer: fresh triangles, not the old ones
+    assert Integrate(CF(1.0) * dx, new) == pytest.approx(Integrate(CF(1.0) * dx, mesh),
+                                                         rel=1e-12)
+    for name in ("fixed", "load", "pressure", "default"):
+        assert Integrate(CF(1.0) * ds(name), new) == pytest.approx(
+            Integrate(CF(1.0) * ds(name), mesh), rel=1e-12), name
+    assert set(new.GetMaterials()) == set(mesh.GetMaterials())
+    tip = [el for el in new.Elements(BBND) if el.mat == "tip"]
+    assert len(tip) == 1
+    old = [el.vertices[0].nr for el in mesh.Elements(BBND) if el.mat == "tip"][0]
+    np.testing.assert_allclose(new.vertices[tip[0].vertices[0].nr].point, points[old],
+                               atol=1e-14)
+
+
+def test_two_materials_keep_their_areas_and_interface():
+    """Two faces (``soft`` and ``stiff``) glued along an ``interface``: each material's area
+    and the interface's length are the moved mesh's."""
+    soft = Rectangle(1, 1).Face()
+    soft.faces.name = "soft"
+    stiff = Rectangle(1, 1).Face().Move((1, 0, 0))
+    stiff.faces.name = "stiff"
+    stiff.edges.Min(X).name = "interface"
+    soft.edges.Min(X).name = "fixed"
+    mesh = ngsolve.Mesh(OCCGeometry(Glue([soft, stiff]), dim=2).GenerateMesh(maxh=0.2))
+    space = _moved(mesh, CF((0.05 * x * y, 0.1 * x * x * (1 - y))))
+    new = remesh_moved(mesh, space.moved_points(), 0.1)
+    for name in ("soft", "stiff"):
+        assert Integrate(CF(1.0) * dx(name), new) == pytest.approx(
+            Integrate(CF(1.0) * dx(name), mesh), rel=1e-12), name
+    assert "interface" in new.GetBoundaries()
+    assert Integrate(CF(1.0) * ds("interface"), new) == pytest.approx(
+        Integrate(CF(1.0) * ds("interface"), mesh), rel=1e-12)
+
+
+def test_refusals():
+    mesh = _plate()
+    with pytest.raises(ValueError, match="points for a mesh"):
+        remesh_moved(mesh, np.zeros((3, 2)), 0.1)
+    cube = ngsolve.Mesh(OCCGeometry(Box((0, 0, 0), (1, 1, 1))).GenerateMesh(maxh=0.5))
+    with pytest.raises(ValueError, match="only 2D"):
+        remesh_moved(cube, np.zeros((cube.nv, 3)), 0.1)
