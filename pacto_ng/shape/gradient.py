@@ -44,6 +44,29 @@ derivative (coefficients ``I_k``, ``|Γ_k|`` frozen) is the total one:
 :meth:`~pacto_ng.shape.deformation.ShapeSpace.derivative` (``DiffShape``).  The first term
 differentiates the mean: ``d(I/A) = dI/A - I dA/A²``.
 
+The mechanism ratio.  The runs minimise ``-s Δ/SE``
+(:class:`~pacto_ng.responses.MechanismRatio`), ``SE`` the stored strain energy of the state
+
+    SE = t ∫_Ω φ(∇u) dx,      ∂SE/∂u [v] = t ∫_Ω ∂φ/∂G(∇u) : ∇v dx
+
+(the potential of the residual's first term, ``½ u · K u`` for the linear model; an output
+spring's energy is not part of it, as in :class:`~pacto_ng.responses.StrainEnergy`), summed
+by the quadrature of the assembled forms, which ``DiffShape`` uses too (``Integrate`` takes
+another: 1e-6 apart on a curved 2D mesh, and central differences 1e-5 to 2.5e-5 off).
+For ``J = Δ/SE`` the adjoint solves
+
+    Kᵀ λ = ∂J/∂u = (∂Δ/∂u - J ∂SE/∂u) / SE
+
+(the same factorisation), and the Lagrangian, ``J`` and ``SE`` frozen as coefficients as
+``I_k`` and ``|Γ_k|`` are,
+
+    L(Ω) = (L_Δ(Ω) - J t ∫_Ω φ(∇u) dx) / SE - R(u; λ),
+
+``L_Δ`` the port terms of ``L`` above, is stationary in ``u`` and ``λ``; its explicit shape
+derivative is ``dJ[V]`` (the quotient rule ``d(Δ/SE) = (dΔ - J dSE)/SE`` on the explicit
+parts).  Both objectives share the code: ``∂J = α ∂Δ - β ∂SE`` with ``(α, β) = (1, 0)`` for
+``Δ`` and ``(1/SE, Δ/SE²)`` for ``Δ/SE``.
+
 The displacement formulation throughout (the mixed one of
 :func:`~pacto_ng.physics.mixed.formulation_for` is not shape-differentiated here); an output
 spring on a boundary port is refused (its energy, a mean square over the boundary, is not
@@ -70,6 +93,8 @@ from ..post.part_analysis import outward_normal, solid_fields
 from .deformation import ShapeSpace, shape_ds, shape_dx, volume, volume_integrals
 
 KINDS = ("fixed", "follower")
+#: the objectives whose shape gradient :meth:`PartResponse.gradient` gives: ``Δ`` and ``Δ/SE``
+OBJECTIVES = ("delta", "ratio")
 
 
 def _ports(mesh, ports) -> tuple[Port, ...]:
@@ -92,8 +117,16 @@ def _ports(mesh, ports) -> tuple[Port, ...]:
     return ports
 
 
+def _objective(objective: str) -> str:
+    """``objective`` if it is one of :data:`OBJECTIVES` (ValueError otherwise)."""
+    if objective not in OBJECTIVES:
+        raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, not {objective!r}")
+    return objective
+
+
 class PartResponse:
-    """The state, the output ``Δ`` and its shape gradient of a part (see the module).
+    """The state, the output ``Δ``, the strain energy ``SE`` and the shape gradients of ``Δ``
+    and ``Δ/SE`` of a part (see the module).
 
     Parameters
     ----------
@@ -116,9 +149,10 @@ class PartResponse:
     order : int, optional
         Displacement order (default ``params.order``, else 1).
 
-    Attributes: ``u``, ``lam`` (GridFunctions of the state and the adjoint), ``delta`` (the
-    last solve's ``Δ``), ``result`` (its :class:`~pacto_ng.physics.newton.NewtonResult`),
-    ``free`` (numpy mask of the free displacement dofs), ``thickness``, ``kind``.
+    Attributes: ``u``, ``lam`` (GridFunctions of the state and the adjoint), ``delta`` and
+    ``strain_energy`` (the last solve's ``Δ`` and ``SE``), ``result`` (its
+    :class:`~pacto_ng.physics.newton.NewtonResult`), ``free`` (numpy mask of the free
+    displacement dofs), ``thickness``, ``kind``.
     """
 
     def __init__(self, mesh, *, params, supports: Supports, ports, pressure: float,
@@ -156,13 +190,13 @@ class PartResponse:
         self.load = Parameter(self.pressure)  # the load factor of Newton's continuation
         self.settings = params.newton.settings()
         self.u, self.lam = GridFunction(self.fes), GridFunction(self.fes)
-        self.a = self._tangent_form()
+        self.a, self._se = self._tangent_form(), self._energy_form()
         self._inverse = None
         self._tangent_current = False
         self._trial = GridFunction(self.fes)
         self._guard = None if guard is None else guard(Grad(self._trial), self.coeffs)
         self._points = mesh.MapToAllElements(integration_rules(2 * self.fes.globalorder), VOL)
-        self.delta, self.result = math.nan, None
+        self.delta, self.strain_energy, self.result = math.nan, math.nan, None
         self._output, self._sizes = None, ()
 
     # -- the forms -----------------------------------------------------------------------------
@@ -205,6 +239,25 @@ class PartResponse:
             sizes.append((p, size))
         lf.Assemble()
         return lf.vec, sizes
+
+    def _energy_form(self):
+        """``SE(u) = t ∫_Ω φ(∇u) dx`` as a BilinearForm (the Variation of the residual's own):
+        ``Energy`` gives ``SE``, ``Apply`` ``∂SE/∂u``, by the quadrature of the assembly (that
+        of ``DiffShape``; ``Integrate`` takes another, and differs by ~1e-6 on a curved mesh)."""
+        u = self.fes.TrialFunction()
+        form = BilinearForm(self.fes, symmetric=True)
+        form += Variation(self.thickness * self.energy(Grad(u), self.coeffs) * shape_dx())
+        return form
+
+    def _scales(self, objective: str) -> tuple[float, float]:
+        """``(α, β)`` with ``J``'s partial derivatives ``α ∂Δ - β ∂SE`` (in ``u`` and in the
+        shape): ``(1, 0)`` for ``Δ``, ``(1/SE, Δ/SE²)`` for ``Δ/SE``."""
+        if _objective(objective) == "delta":
+            return 1.0, 0.0
+        if not self.strain_energy > 0.0:
+            raise ValueError(f"the ratio Δ/SE needs a strained state (SE = "
+                             f"{self.strain_energy!r})")
+        return 1.0 / self.strain_energy, self.delta / self.strain_energy ** 2
 
     # -- the problem Newton drives (pacto_ng.physics.newton) ---------------------------------
     def residual(self, vec, out, load):
@@ -251,24 +304,39 @@ class PartResponse:
         self._tangent_current = self.linear and self.result.iterations > 0
         self._output, self._sizes = self._outputs()
         self.delta = float(InnerProduct(self._output, self.u.vec))
+        self.strain_energy = float(self._se.Energy(self.u.vec))
         return self.delta
 
-    def adjoint(self) -> None:
-        """``λ`` with ``Kᵀ λ = ∂Δ/∂u`` at the last equilibrium (the tangent refactorised at
-        the converged state unless it is that already)."""
+    def value(self, objective: str = "delta") -> float:
+        """The last solve's objective: ``Δ`` (``"delta"``) or ``Δ/SE`` (``"ratio"``)."""
+        alpha, _ = self._scales(objective)
+        return alpha * self.delta
+
+    def adjoint(self, objective: str = "delta") -> None:
+        """``λ`` with ``Kᵀ λ = ∂J/∂u = α ∂Δ/∂u - β ∂SE/∂u`` (:meth:`_scales`) at the last
+        equilibrium (the tangent refactorised at the converged state unless it is that
+        already)."""
         if self.result is None:
             raise RuntimeError("solve the state before its adjoint")
+        alpha, beta = self._scales(objective)
+        rhs = self._output.CreateVector()
+        rhs.data = alpha * self._output
+        if beta:
+            d_se = rhs.CreateVector()
+            self._se.Apply(self.u.vec, d_se)  # ∂SE/∂u
+            rhs.data -= beta * d_se
         if not self._tangent_current:
             self.assemble_tangent(self.u.vec, self.pressure)
             self._tangent_current = True
         inverse = self._inverse if self.kind == "fixed" else self._inverse.T
-        self.lam.vec.data = inverse * self._output
+        self.lam.vec.data = inverse * rhs
 
-    def lagrangian(self):
+    def lagrangian(self, objective: str = "delta"):
         """``L`` of the module at the last state and adjoint, as integrals over the current
-        shape (their ``DiffShape`` is the shape gradient of ``Δ``)."""
+        shape (their ``DiffShape`` is the shape gradient of ``objective``)."""
         u, lam, t = self.u, self.lam, self.thickness
         P = self.sign * self.pressure
+        alpha, beta = self._scales(objective)
         L = (-t * self.energy(Grad(u), self.coeffs).Diff(u, lam)) * shape_dx()
         L += (-t * P * InnerProduct(self._traction(u), lam)) * shape_ds(self.boundary)
         for p, size in self._sizes:
@@ -276,37 +344,43 @@ class PartResponse:
                 continue  # a named point: no explicit shape dependence
             d = CF(tuple(float(c) for c in p.direction))
             mean = float(Integrate(InnerProduct(d, u) * shape_ds(p.region), self.mesh)) / size
-            L += (p.weight / size) * (InnerProduct(d, u) - mean) * shape_ds(p.region)
+            L += (alpha * p.weight / size) * (InnerProduct(d, u) - mean) * shape_ds(p.region)
+        if beta:
+            L += (-beta * t * self.energy(Grad(u), self.coeffs)) * shape_dx()
         return L
 
-    def gradient(self, space: ShapeSpace) -> np.ndarray:
-        """``dΔ/dV`` on ``space`` (its held dofs zeroed) at the last equilibrium: the adjoint
-        solve and the shape derivative of :meth:`lagrangian`."""
-        self.adjoint()
-        return space.derivative(self.lagrangian())
+    def gradient(self, space: ShapeSpace, objective: str = "delta") -> np.ndarray:
+        """``dJ/dV`` of ``J = Δ`` (``"delta"``) or ``Δ/SE`` (``"ratio"``) on ``space`` (its
+        held dofs zeroed) at the last equilibrium: the adjoint solve and the shape derivative
+        of :meth:`lagrangian`."""
+        self.adjoint(objective)
+        return space.derivative(self.lagrangian(objective))
 
 
 class ShapeResponse:
-    """Block ``shape -> Δ``: the coefficients of the mesh deformation ``d`` on ``space`` to
-    the part's output (:class:`PartResponse`).
+    """Block ``shape -> J``: the coefficients of the mesh deformation ``d`` on ``space`` to
+    the part's objective ``J``, ``Δ`` (``objective="delta"``) or ``Δ/SE`` (``"ratio"``)
+    (:class:`PartResponse`); the output is named after the objective unless ``output`` is
+    given.
 
-    forward: ``SetDeformation(d)`` (:meth:`ShapeSpace.set`), equilibrium, ``Δ``.
-    backward: ``ḡ dΔ/dV`` on ``space`` (held dofs zero; the module's Lagrangian).
+    forward: ``SetDeformation(d)`` (:meth:`ShapeSpace.set`), equilibrium, ``J``.
+    backward: ``ḡ dJ/dV`` on ``space`` (held dofs zero; the module's Lagrangian).
     """
 
     def __init__(self, response: PartResponse, space: ShapeSpace, *, inputs=("shape",),
-                 output: str = "delta"):
+                 output: str | None = None, objective: str = "delta"):
         if space.mesh is not response.mesh:
             raise ValueError("the shape space and the response must be on the same mesh")
-        self.response, self.space = response, space
-        self.inputs, self.output = tuple(inputs), output
+        self.response, self.space, self.objective = response, space, _objective(objective)
+        self.inputs, self.output = tuple(inputs), output or objective
 
     def forward(self, shape) -> float:
         self.space.set(shape)
-        return self.response.solve()
+        self.response.solve()
+        return self.response.value(self.objective)
 
     def backward(self, grad_output) -> tuple[np.ndarray]:
-        return (float(grad_output) * self.response.gradient(self.space),)
+        return (float(grad_output) * self.response.gradient(self.space, self.objective),)
 
 
 class ShapeVolume:
