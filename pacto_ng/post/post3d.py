@@ -1,11 +1,10 @@
-"""``pacto export`` of a 3D run, and the 3D part's two materials (docs/postprocessing.md, "3D
-runs"; ``pacto analyse`` of a 3D run is :mod:`.analyse`'s, as of a 2D run).
+"""The 3D part's solid for ``pacto export`` and its two materials (docs/postprocessing.md, "3D
+runs"; ``pacto export`` of a 3D run is :mod:`.cli_commands`'s, as of a 2D run, its 3D steps
+in :mod:`.export_part`; ``pacto analyse`` of a 3D run is :mod:`.analyse`'s).
 
-``export DIR --format stl`` writes the part of :mod:`.part3d` (the closed, smoothed surface of
-{ρ̄ >= threshold}, pieces off the clamp dropped) as binary STL; ``--format vtk`` or ``vtu`` the
-clipped tetrahedral solid (not smoothed) with the run's final state on it (:func:`part_solid`:
-ρ̄, u, p, the model's strain and stress).  With ``mirror`` (the default) a case solved on a
-half or a quarter is written whole, reflected about its symmetry planes (:mod:`.mirror3d`).
+:func:`part_solid` gives the clipped tetrahedral solid of a :class:`~.part3d.Part3D` (not
+smoothed) the run's final state (ρ̄, u, p, the model's strain and stress), which
+:func:`write_part_solid` writes as VTK or VTU.
 
 A two-material design (mm-gripper's chain in 3D): the part is that of the total solid ρ̄1,
 as for one material (the STL is the whole part); its clipped solid is cut at the iso-surface
@@ -15,65 +14,22 @@ elsewhere (:func:`split_materials`), so that ``--format vtk|vtu`` carries each c
 and modulus.  The remeshed part (:func:`~.remesh3d.remesh_part`) gives each tetrahedron the
 material of the nodal ρ̄2 at its centroid (:func:`stiff_sampler`; the interface a staircase
 of tetrahedron faces, the 2D part's element-wise mode).
-
-Not in 3D yet, refused in one line (exit code 2): ``--format msh``.
 """
 from __future__ import annotations
-
-import json
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..errors import InputError
 from ..files import atomic_path
 from ..measures import strain_stress_measures, tensor_components
-from ..threads import compute
-from .export import UNITS
 from .grid import cell_volumes
 from .materials import MATERIALS, SOFT, STIFF
-from .mirror3d import is_symmetry_name, mirror_solid, mirror_surface, symmetry_planes
-from .part3d import closed_checks, part3d, void_regions, write_part_stl
-from .runs import design_density, export_destination, rebuild
-from .seal import design_seal, warn_if_open
-
-EXPORT_FORMATS_3D = ("stl", "vtk", "vtu")
 
 
 def is_3d(run) -> bool:
     """Whether a run folder's summary records a 3D mesh."""
     mesh = run.summary.get("mesh")
     return isinstance(mesh, dict) and mesh.get("dim") == 3
-
-
-def _say(quiet, msg):
-    if not quiet:
-        print(msg, flush=True)
-
-
-def _not_yet(what: str):
-    return InputError(f"{what} is not supported for 3D runs yet")
-
-
-def part_of_run_3d(run, threshold_value: float, threshold2: float = 0.5):
-    """``(part, problem, setup, exclude)``: the :class:`~.part3d.Part3D` of a 3D run's final
-    design at ``threshold_value``; InputError when there is none.  A two-material design: the
-    part of ρ̄1, its solid cut into the materials at ρ̄2 = ``threshold2``
-    (:func:`split_materials`)."""
-    setup = run.case.make_setup(run.params)
-    with compute():
-        problem = rebuild(run)
-    exclude = void_regions(problem.mesh, setup)
-    two = setup.materials == 2
-    try:
-        part = part3d(problem.mesh, design_density(problem), threshold_value,
-                      clamp=setup.supports.clamp, exclude=exclude,
-                      fields={RHO2: problem.values["rho_bar2"]} if two else None)
-        if two:
-            part.solid = split_materials(part.solid, threshold2)
-    except ValueError as err:
-        raise InputError(str(err)) from None
-    return part, problem, setup, exclude
 
 
 #: the point data of a two-material part's solid that holds the nodal ρ̄2
@@ -127,7 +83,7 @@ def solid_elements(solid, volumes) -> np.ndarray:
 def part_solid(part, problem=None):
     """The part's clipped solid (tetrahedra and wedges of the source mesh, not smoothed) with
     point data ``rho`` (the nodal ρ̄ it is clipped at) and, given the run's ``problem``
-    (rebuilt and analysed: :func:`part_of_run_3d`), the run's final state on it, in SI units:
+    (rebuilt and analysed: :func:`~.export_part.make_3d`), the run's final state on it, in SI units:
 
     * cell data ``rho_bar`` (``rho_bar1``, ``rho_bar2`` for two materials): ρ̄ of the
       optimisation element the cell was clipped from;
@@ -148,8 +104,6 @@ def part_solid(part, problem=None):
     its load: ρ̄ and p only, and ``notes`` says so.  ValueError when a point of the part is not
     found in the run's mesh or a field is not finite."""
     from ngsolve import GridFunction
-
-
 
     solid = part.solid.copy()
     cid = np.asarray(solid.cell_data["cid"])
@@ -206,66 +160,6 @@ def write_part_solid(path, solid, scale: float = 1.0) -> None:
         solid.point_data["u"] = np.asarray(solid.point_data["u"]) * scale
     with atomic_path(path) as tmp:
         solid.save(str(tmp), binary=True)
-
-
-def _plural(n: int, word: str) -> str:
-    return f"{n} {word}" + ("" if n == 1 else "s")
-
-
-def export_run_3d(run, fmt: str, *, out=None, threshold_value=None, quiet=False,
-                  units: str = "m", mirror: bool = True, threshold2=None) -> int:
-    """``pacto export`` of a 3D run: stl (the closed, smoothed part) or vtk / vtu (the clipped
-    solid with the run's final state: :func:`part_solid`), at ``threshold_value``, else the
-    analysis's (``DIR/analysis/analysis.json``), else 0.5; coordinates (and u) in ``units`` (m
-    or mm).  ``mirror``: the part reflected about the mesh's symmetry planes
-    (:func:`~.mirror3d.symmetry_planes`), whole; else the half or quarter as solved.  A
-    two-material design: the STL is the whole part, the VTK/VTU has each cell's material and
-    modulus, ρ̄2 thresholded at ``threshold2`` (default 0.5; :func:`split_materials`)."""
-    if fmt not in EXPORT_FORMATS_3D:
-        raise _not_yet(f"--format {fmt}")
-    prev = run.path / "analysis" / "analysis.json"
-    if threshold_value is None and prev.exists():
-        try:
-            threshold_value = float(json.loads(prev.read_text())["settings"]["threshold"])
-        except (ValueError, KeyError, TypeError):
-            threshold_value = None
-    threshold2 = 0.5 if threshold2 is None else float(threshold2)
-    part, problem, setup, exclude = part_of_run_3d(
-        run, 0.5 if threshold_value is None else threshold_value, threshold2)
-    warn_if_open(design_seal(problem, setup, part.threshold, exclude=exclude))
-    planes = symmetry_planes(problem.mesh) if mirror else []
-    surface = mirror_surface(part.surface, planes) if planes else part.surface
-    whole = f"mirrored about {_plural(len(planes), 'plane')}"
-    dst = export_destination(run, out, fmt)
-    notes = []
-    if fmt == "stl":
-        write_part_stl(dst, surface, units, header=f"pacto_ng {run.case.name} part (3D)"
-                       + (f", whole ({whole})" if planes else ""))
-    else:
-        try:
-            solid, notes = part_solid(part, problem)
-        except ValueError as err:
-            raise InputError(f"export: {err}") from None
-        write_part_solid(dst, mirror_solid(solid, planes), 1.0 / UNITS[units])
-        notes.append("fields " + ", ".join([*solid.point_data, *solid.cell_data])
-                     + " of the run's final state")
-    if planes:
-        notes.insert(0, f"whole: {whole} ({', '.join(map(str, planes))}), volume "
-                        f"{surface.volume:.6g} m³")
-    elif not mirror and any(map(is_symmetry_name, problem.mesh.GetBoundaries())):
-        notes.insert(0, "the part as solved (--no-mirror)")
-    if setup.materials == 2:
-        vols = material_volumes(part.solid)
-        notes.append("materials " + ", ".join(f"{k} {v:.6g} m³" for k, v in vols.items())
-                     + f" as solved (ρ̄2 at {threshold2:g})")
-    chk = closed_checks(surface)
-    _say(quiet, f"{dst}: {run.case.name} part (3D), threshold {part.threshold:g}, volume "
-                f"{part.volume:.6g} m³ as solved (thresholded, kept pieces "
-                f"{part.volume_kept:.6g}: {100 * part.volume_error:+.2f} %; {part.dropped} of "
-                f"{part.pieces} pieces off the clamp dropped), {surface.n_cells} triangles, "
-                f"{chk['n_open_edges']} open edges, manifold {chk['manifold']}; units {units}"
-                + "".join(f"; {n}" for n in notes))
-    return 0
 
 
 def stiff_sampler(solid, threshold2: float):

@@ -31,12 +31,18 @@ def run3d(tmp_path_factory):
                                  "filter_radius=0.004"], lambda c: c[:, 1] < 0.03)
 
 
-@pytest.fixture(scope="module")
-def part(run3d):
-    from pacto_ng.post.post3d import part_of_run_3d
+def _part(folder):
+    """The Part3D that ``pacto export`` makes of a run at threshold 0.5."""
+    from pacto_ng.post.export_part import make_3d
     from pacto_ng.post.runs import load_run
 
-    return part_of_run_3d(load_run(run3d, "test"), 0.5)
+    run = load_run(folder, "test")
+    return make_3d(run, run.case.make_setup(run.params), 0.5, None, 0.5).solid
+
+
+@pytest.fixture(scope="module")
+def part(run3d):
+    return _part(run3d)
 
 
 def test_export_stl_closed_with_the_thresholded_volume(run3d, part, capsys):
@@ -47,7 +53,7 @@ def test_export_stl_closed_with_the_thresholded_volume(run3d, part, capsys):
     assert main(["export", str(run3d), "--format", "stl", "--no-mirror"]) == 0
     stl = pv.read(str(run3d / "export" / "design.stl"))
     assert stl.n_open_edges == 0 and stl.is_manifold
-    p = part[0]
+    p = part
     assert p.dropped == 0
     # the thresholded design's volume: the tetrahedra clipped at the nodal rho_bar = 0.5
     assert p.volume_kept == pytest.approx(float(cell_volumes(p.solid).sum()), rel=1e-12)
@@ -122,16 +128,13 @@ def test_export_of_a_short_optimisation(tmp_path):
     pieces kept; after 30 iterations -0.28 %, 2 of 6)."""
     import pyvista as pv
 
-    from pacto_ng.post.post3d import part_of_run_3d
-    from pacto_ng.post.runs import load_run
-
     out = tmp_path / "opt"
     assert main(["run", "pneunet-3d", "--maxh", "0.006", "--iterations", "15", "--out",
                  str(out), "--quiet"]) == 0
     assert main(["export", str(out), "--format", "stl", "--quiet", "--no-mirror"]) == 0
     stl = pv.read(str(out / "export" / "design.stl"))
     assert stl.n_open_edges == 0 and stl.is_manifold
-    part = part_of_run_3d(load_run(out, "test"), 0.5)[0]
+    part = _part(out)
     assert part.pieces - part.dropped >= 1
     assert abs(abs(stl.volume) * 1e-9 / part.volume_kept - 1.0) < 0.02  # mm³ -> m³
 

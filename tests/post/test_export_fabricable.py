@@ -173,3 +173,15 @@ def test_units_inch_is_refused_in_one_line(half_run, capsys):
     assert main(["export", str(half_run), "--format", "stl", "--units", "inch"]) == 2
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert len(err) == 1 and err[0].startswith("pacto: error:") and "--units" in err[0]
+
+
+def test_the_line_says_what_the_part_was_mirrored_about(half_run, exported, tmp_path, capsys):
+    """The printed line says it as a 3D run's does: the whole part mirrored about the symmetry
+    line, or the part as solved with ``--no-mirror``."""
+    capsys.readouterr()
+    for extra, words in (([], "; units m; whole: mirrored about 1 line (symmetry: y = 0 m)"),
+                         (["--no-mirror"], "; units m; the part as solved (--no-mirror)")):
+        assert main(["export", str(half_run), "--format", "msh", "--threshold", THRESHOLD,
+                     "--out", str(tmp_path / "p.msh"), *extra]) == 0
+        line = capsys.readouterr().out
+        assert words in line and "(whole:" not in line, line
