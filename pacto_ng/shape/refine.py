@@ -1,21 +1,25 @@
 """Body-fitted refinement of a part's shape: a descent loop on the mesh deformation that
-maximises the part's output ``Δ`` with its volume bounded, without remeshing.
+maximises the part's output ``Δ`` (or its mechanism ratio ``Δ/SE``) with its volume bounded
+(and, if asked, ``Δ/SE`` kept from falling), on one mesh (a caller remeshes between loops).
 
-Problem.  ``min_d f(d) = -Δ(d)/|Δ(0)|`` subject to ``c(d) = V(d)/V_max - 1 ≤ 0``, ``d`` the
-deformation of :class:`~pacto_ng.shape.deformation.ShapeSpace`, ``Δ`` the output of
-:class:`~pacto_ng.shape.gradient.PartResponse`, ``V`` the part's volume (the thickness times
-the area in 2D).  The inequality is treated by the augmented Lagrangian of Rockafellar
+Problem.  ``min_d f(d) = -J(d)/|J(0)|`` subject to ``c_V(d) = V(d)/V_max - 1 ≤ 0`` and,
+with a floor ``r_min``, ``c_r(d) = 1 - (Δ/SE)(d)/r_min ≤ 0``; ``d`` the deformation of
+:class:`~pacto_ng.shape.deformation.ShapeSpace`, ``J`` the objective of
+:class:`~pacto_ng.shape.gradient.PartResponse`: its output ``Δ`` (``objective="delta"``) or
+the runs' mechanism ratio ``Δ/SE`` (``"ratio"``), ``V`` the part's volume (the thickness times
+the area in 2D).  The inequalities are treated by the augmented Lagrangian of Rockafellar
 (1973, *J. Optim. Theory Appl.* 12, "The multiplier method of Hestenes and Powell applied to
 convex programming"; Nocedal and Wright 2006, *Numerical Optimization*, 2nd ed., ch. 17):
 the merit
 
-    M(d; λ) = f(d) + (max(0, λ + μ c(d))² - λ²) / (2μ),
+    M(d; λ) = f(d) + Σ_i (max(0, λ_i + μ c_i(d))² - λ_i²) / (2μ),
 
-with the multiplier ``λ ≥ 0`` (start 0) and the fixed penalty ``μ``; its shape derivative is
-``dM = df + max(0, λ + μc) dc``.  Each step (one descent step per multiplier update, a
+with the multipliers ``λ_i ≥ 0`` (start 0) and the fixed penalty ``μ``; its shape derivative
+is ``dM = df + Σ_i max(0, λ_i + μc_i) dc_i``.  Each step (one descent step per multiplier update, a
 common simplification in shape optimisation, where an exact inner minimisation is too dear):
 
-1. the state and adjoint on the current shape, ``dΔ`` and ``dV``
+1. the state and adjoint on the current shape, ``dJ``, ``dV`` and (a floor active)
+   ``d(Δ/SE)`` (a second adjoint)
    (:meth:`~pacto_ng.shape.gradient.PartResponse.gradient`,
    :meth:`~pacto_ng.shape.deformation.ShapeSpace.derivative`);
 2. the descent field ``θ``, the Riesz representative of ``-dM``
@@ -47,10 +51,10 @@ common simplification in shape optimisation, where an exact inner minimisation i
    displacements (component ``k`` of vertex ``i`` is dof ``k·nv + i``), and the vertices,
    with them every straight edge, stay in the box (a curved edge of the reference mesh
    could bulge past a side by its own curvature: the bound is on the vertices);
-5. the multiplier update ``λ ← max(0, λ + μ c)`` at the accepted shape.
+5. the multiplier update ``λ_i ← max(0, λ_i + μ c_i)`` at the accepted shape.
 
 The loop stops after ``steps`` accepted steps (status ``steps``) or when the merit changes by
-less than ``rtol`` relative to ``max(1, |M|)`` with the constraint met to ``vtol``
+less than ``rtol`` relative to ``max(1, |M|)`` with the constraints met to ``vtol``
 (``converged``).  The bound is met only approximately while ``λ`` settles: measured on the
 plate with a pressurised hole of the tests (μ = 1000), 0.05 % above a bound of 95 % of the
 start after 5 steps, 0.6 % above a bound of 100 % after 8; with μ = 100, 3 % above the
@@ -77,61 +81,94 @@ ACTIVE_TOL = 1e-9
 @dataclass
 class RefineResult:
     """The outcome of :func:`refine`: ``status`` (one of :data:`STATUSES`), the final
-    deformation's coefficients ``shape`` (the space is left at it), its ``delta`` and
-    ``volume``, the last ``multiplier`` and the ``history``: one dict per accepted shape
-    (step 0 the start) with ``step``, ``delta``, ``volume``, ``det`` (the lowest
+    deformation's coefficients ``shape`` (the space is left at it), its ``delta``, ``value``
+    (the objective ``J``) and ``volume``, the last ``multipliers`` (by constraint:
+    ``volume``, ``ratio``) and the ``history``: one dict per accepted shape (step 0 the
+    start) with ``step``, ``delta``, ``value``, ``ratio`` (``Δ/SE``, NaN unless the
+    objective or a floor needs it), ``volume``, ``det`` (the lowest
     ``det(I + ∇₀d)``), ``length`` (the step ``s``), ``merit`` and ``merit_before`` (both at
-    the multiplier the step used), ``multiplier`` (after the update), ``trials``."""
+    the multipliers the step used), ``multipliers`` (after the update), ``trials``."""
 
     status: str
     shape: np.ndarray
     delta: float
+    value: float
     volume: float
-    multiplier: float
+    multipliers: dict
     history: list[dict] = field(default_factory=list)
 
 
 class _Loop:
-    """The state of one refinement: the current shape and its response, merit and
-    multiplier (see the module)."""
+    """The state of one refinement: the current shape and its measures, merit and
+    multipliers (see the module)."""
 
-    def __init__(self, response: PartResponse, space: ShapeSpace, volume_max: float,
-                 penalty: float, riesz: RieszMap, bounds=None, *, multiplier: float = 0.0,
-                 scale: float | None = None):
+    def __init__(self, response: PartResponse, space: ShapeSpace, riesz: RieszMap, *,
+                 bounds=None, limits: dict, penalty: float, multipliers=None,
+                 scale: float | None = None, objective: str = "delta"):
         self.response, self.space, self.riesz = response, space, riesz
+        self.objective, self.limits = objective, dict(limits)
         self.box = None if bounds is None else _Box(space, bounds)
         self.quality = Quality(space)
-        self.volume_max, self.penalty = float(volume_max), float(penalty)
+        self.penalty = float(penalty)
         self.thickness = response.thickness
-        self.multiplier = float(multiplier)
+        self.multipliers = dict.fromkeys(self.limits, 0.0) | dict(multipliers or {})
         self.shape = space.deformation.vec.FV().NumPy().copy()
-        self.delta, self.volume = self.evaluate(self.shape)
-        self.scale = abs(self.delta) if scale is None else float(scale)
+        self.measures = self.evaluate(self.shape)
+        self.scale = abs(self.value) if scale is None else float(scale)
         if not self.scale > 0:
-            raise ValueError("refine: the output Δ is zero on the starting shape")
+            raise ValueError("refine: the objective is zero on the starting shape")
         self.state = response.u.vec.CreateVector()
         self.state.data = response.u.vec
 
-    def evaluate(self, shape) -> tuple[float, float]:
-        """``(Δ, V)`` on the shape ``shape`` (the mesh is left at it)."""
+    @property
+    def value(self) -> float:
+        return self.measures[self.objective]
+
+    def evaluate(self, shape) -> dict:
+        """The measures ``delta``, ``volume`` and (when the objective or a limit needs it)
+        ``ratio`` on the shape ``shape`` (the mesh is left at it)."""
         self.space.set(shape)
-        return self.response.solve(), volume(self.space.mesh, self.thickness)
+        out = {"delta": self.response.solve(),
+               "volume": volume(self.space.mesh, self.thickness)}
+        if "ratio" in (self.objective, *self.limits):
+            out["ratio"] = self.response.value("ratio")
+        return out
 
-    def constraint(self, vol: float) -> float:
-        return vol / self.volume_max - 1.0
+    def constraints(self, measures: dict) -> dict:
+        """``c_i ≤ 0`` of each limit: ``V/V_max - 1`` and ``1 - (Δ/SE)/r_min``."""
+        out = {}
+        for name, bound in self.limits.items():
+            ratio = measures[name] / bound
+            out[name] = ratio - 1.0 if name == "volume" else 1.0 - ratio
+        return out
 
-    def merit(self, delta: float, vol: float) -> float:
-        """``M`` at the current multiplier."""
-        lam, mu = self.multiplier, self.penalty
-        return (-delta / self.scale
-                + (max(0.0, lam + mu * self.constraint(vol)) ** 2 - lam * lam) / (2 * mu))
+    def merit(self, measures: dict) -> float:
+        """``M`` at the current multipliers."""
+        mu, total = self.penalty, -measures[self.objective] / self.scale
+        for name, c in self.constraints(measures).items():
+            lam = self.multipliers[name]
+            total += (max(0.0, lam + mu * c) ** 2 - lam * lam) / (2 * mu)
+        return total
+
+    def update(self) -> None:
+        """The multiplier update ``λ_i ← max(0, λ_i + μ c_i)`` at the accepted shape."""
+        for name, c in self.constraints(self.measures).items():
+            self.multipliers[name] = max(0.0, self.multipliers[name] + self.penalty * c)
+
+    def _derivative(self, name: str) -> np.ndarray:
+        """The shape gradient of the measure ``name`` at the current (solved) shape."""
+        if name == "volume":
+            return self.space.derivative(volume_integrals(self.thickness))
+        return self.response.gradient(self.space, name)
 
     def direction(self) -> np.ndarray:
         """``θ`` for ``-dM`` at the current (accepted, solved) shape, largest coefficient 1."""
-        d_delta = self.response.gradient(self.space)
-        d_volume = self.space.derivative(volume_integrals(self.thickness))
-        weight = max(0.0, self.multiplier + self.penalty * self.constraint(self.volume))
-        g = d_delta / self.scale - weight * d_volume / self.volume_max
+        g = self._derivative(self.objective) / self.scale
+        for name, c in self.constraints(self.measures).items():
+            weight = max(0.0, self.multipliers[name] + self.penalty * c)
+            if weight > 0:  # dc_i: dV/V_max, or -d(Δ/SE)/r_min
+                sign = 1.0 if name == "volume" else -1.0
+                g -= weight * sign * self._derivative(name) / self.limits[name]
         theta = self.riesz(g)
         if self.box is not None:
             active = self.box.active(self.shape, theta)
@@ -157,18 +194,18 @@ class _Loop:
                            theta, length, q_min=q_min)
         if s < quality_step:
             return "mesh_quality", s, q, 0
-        before, trials = self.merit(self.delta, self.volume), 0
+        before, trials = self.merit(self.measures), 0
         while s >= min_step:
             trial = self.project(self.shape + s * theta)
             q = self.quality(trial)
             if q >= q_min:
                 trials += 1
                 try:
-                    delta, vol = self.evaluate(trial)
-                except NewtonFailure:
-                    delta, vol = math.nan, math.nan
-                if math.isfinite(delta) and self.merit(delta, vol) < before:
-                    self.shape, self.delta, self.volume = trial, delta, vol
+                    measures = self.evaluate(trial)
+                except (NewtonFailure, ValueError):  # no equilibrium, or no strain (SE = 0)
+                    measures = None
+                if measures is not None and self.merit(measures) < before:
+                    self.shape, self.measures = trial, measures
                     self.state.data = self.response.u.vec
                     return None, s, q, trials
                 self.response.u.vec.data = self.state  # the next solve starts from the last
@@ -179,18 +216,24 @@ class _Loop:
     def record(self, step: int, length: float, det: float, merits: tuple[float, float],
                trials: int) -> dict:
         """The history entry of the current shape; ``merits`` before and after the step."""
-        return {"step": step, "delta": self.delta, "volume": self.volume, "det": det,
-                "length": length, "merit_before": merits[0], "merit": merits[1],
-                "multiplier": self.multiplier, "trials": trials}
+        return {"step": step, "delta": self.measures["delta"], "value": self.value,
+                "ratio": self.measures.get("ratio", math.nan),
+                "volume": self.measures["volume"], "det": det, "length": length,
+                "merit_before": merits[0], "merit": merits[1],
+                "multipliers": dict(self.multipliers), "trials": trials}
 
 
-def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, steps: int = 20,
-           step: float = 0.02, step_max: float | None = None, min_step: float | None = None,
-           q_min: float = 0.3, penalty: float = 1000.0, rtol: float = 1e-5, vtol: float = 1e-3,
-           alpha: float = 1.0, kind: str = "elasticity", bounds=None, multiplier: float = 0.0,
+def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
+           ratio_min: float | None = None, steps: int = 20, step: float = 0.02,
+           step_max: float | None = None, min_step: float | None = None, q_min: float = 0.3,
+           penalty: float = 1000.0, rtol: float = 1e-5, vtol: float = 1e-3,
+           alpha: float = 1.0, kind: str = "elasticity", bounds=None, multipliers=None,
            scale: float | None = None, quality_step: float | None = None,
-           say: Callable[[str], None] | None = None) -> RefineResult:
-    """Maximise ``Δ`` with ``t|Ω| ≤ volume_max`` by descent on the shape (see the module).
+           objective: str = "delta", say: Callable[[str], None] | None = None
+           ) -> RefineResult:
+    """Maximise ``J`` (``objective``: ``"delta"`` for ``Δ``, ``"ratio"`` for ``Δ/SE``) with
+    ``t|Ω| ≤ volume_max`` (and ``Δ/SE ≥ ratio_min``, if given) by descent on the shape (see
+    the module).
 
     ``response`` and ``space`` on the same mesh, ``space`` at the starting deformation;
     ``step`` the first trial step and ``step_max`` the largest (default ``4 step``), both in
@@ -199,46 +242,59 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float, step
     :class:`~pacto_ng.shape.riesz.RieszMap`; ``bounds`` ``(low, high)``, the lowest and
     highest corner of a box (one coordinate per dimension of the mesh) that every vertex of
     the part is kept in: each trial shape is projected into it (step 4 of the module; an
-    order-1 ``space`` only); ``multiplier`` the starting ``λ`` and ``scale`` the ``|Δ(0)|``
-    of the objective (default: this start's ``|Δ|``), both to go on from an earlier
-    refinement of the same part on another mesh; ``quality_step`` (default ``min_step``) the
-    step below which a step bounded by the mesh's quality stops the loop with the status
-    ``mesh_quality`` (a caller that remeshes then gives a larger one: small steps that the
-    quality bound allows make little progress); ``say`` receives one line per step."""
+    order-1 ``space`` only); ``multipliers`` the starting ``λ`` (``{"volume": λ, "ratio":
+    λ}``, default 0) and ``scale`` the ``|J(0)|`` of the objective (default: this start's
+    ``|J|``), both to go on from an earlier refinement of the same part on another mesh;
+    ``quality_step`` (default ``min_step``) the step below which a step bounded by the
+    mesh's quality stops the loop with the status ``mesh_quality`` (a caller that remeshes
+    then gives a larger one: small steps that the quality bound allows make little
+    progress); ``say`` receives one line per step."""
     if space.mesh is not response.mesh:
         raise ValueError("the shape space and the response must be on the same mesh")
-    if not (volume_max > 0 and step > 0 and penalty > 0 and 0 < q_min < 1 and steps >= 0):
-        raise ValueError("refine: volume_max, step and penalty must be positive, q_min in "
-                         "(0, 1) and steps non-negative")
+    if not (volume_max > 0 and step > 0 and penalty > 0 and 0 < q_min < 1 and steps >= 0
+            and (ratio_min is None or ratio_min > 0)):
+        raise ValueError("refine: volume_max, ratio_min, step and penalty must be positive, "
+                         "q_min in (0, 1) and steps non-negative")
     step_max = 4.0 * step if step_max is None else float(step_max)
     min_step = step / 1024.0 if min_step is None else float(min_step)
     quality_step = min_step if quality_step is None else float(quality_step)
-    loop = _Loop(response, space, volume_max, penalty, RieszMap(space, alpha=alpha, kind=kind),
-                 bounds, multiplier=multiplier, scale=scale)
-    start = loop.merit(loop.delta, loop.volume)
+    limits = {"volume": float(volume_max)} | ({} if ratio_min is None
+                                              else {"ratio": float(ratio_min)})
+    loop = _Loop(response, space, RieszMap(space, alpha=alpha, kind=kind), bounds=bounds,
+                 limits=limits, penalty=penalty, multipliers=multipliers, scale=scale,
+                 objective=objective)
+    start = loop.merit(loop.measures)
     history = [loop.record(0, 0.0, loop.quality(loop.shape), (start, start), 0)]
     status, length = "steps", float(step)
     for k in range(1, steps + 1):
         theta = loop.direction()
-        before = loop.merit(loop.delta, loop.volume)
+        before = loop.merit(loop.measures)
         stop, s, q, trials = loop.search(theta, length, min_step, q_min, quality_step)
         if stop is not None:
             status = stop
             _say(say, f"step {k}: stopped ({stop}; step {s:.3g}, lowest det {q:.3f})")
             break
-        after = loop.merit(loop.delta, loop.volume)
-        loop.multiplier = max(0.0, loop.multiplier + penalty * loop.constraint(loop.volume))
+        after = loop.merit(loop.measures)
+        loop.update()
         history.append(loop.record(k, s, q, (before, after), trials))
-        _say(say, f"step {k}: Δ {loop.delta:.6g}, volume {loop.volume:.6g} "
-                  f"(bound {volume_max:.6g}), merit {after:.6g}, lowest det {q:.3f}, "
-                  f"step {s:.3g} ({trials} trial{'s' if trials > 1 else ''})")
+        _say(say, _line(k, loop, (after, q, s, trials)))
         length = min(2.0 * s, step_max)
         if (abs(after - before) <= rtol * max(1.0, abs(after))
-                and loop.constraint(loop.volume) <= vtol):
+                and max(loop.constraints(loop.measures).values()) <= vtol):
             status = "converged"
             break
-    return RefineResult(status, loop.shape.copy(), loop.delta, loop.volume, loop.multiplier,
-                        history)
+    m = loop.measures
+    return RefineResult(status, loop.shape.copy(), m["delta"], loop.value, m["volume"],
+                        dict(loop.multipliers), history)
+
+
+def _line(k: int, loop: _Loop, figures) -> str:
+    """The progress line of step ``k``; ``figures`` ``(merit, lowest det, step, trials)``."""
+    m, (merit, q, s, trials) = loop.measures, figures
+    ratio = f", Δ/SE {m['ratio']:.6g}" if "ratio" in m else ""
+    return (f"step {k}: Δ {m['delta']:.6g}{ratio}, volume {m['volume']:.6g} (bound "
+            f"{loop.limits['volume']:.6g}), merit {merit:.6g}, lowest det {q:.3f}, step "
+            f"{s:.3g} ({trials} trial{'s' if trials > 1 else ''})")
 
 
 class _Box:

@@ -53,7 +53,7 @@ def test_pa_inverter_5e7_pa_on_the_thesis_mesh(model, extra, tmp_path):
     inv_nh_5e7_e4_r100: 83 s and 47 s): a valid design at the full load, and its part,
     thresholded at 0.4, reaches the output and moves it the working way under a Neo-Hookean
     analysis at 5e7 Pa with the follower pressure."""
-    from pacto_ng.post.cli_commands import analyse_run
+    from pacto_ng.post.analyse import analyse_run
 
     out = tmp_path / model
     assert main(["run", "--no-part", "pa-inverter", "--model", model, "--order", "1", "--load", "5e7",
@@ -103,7 +103,7 @@ def test_pneunet_1e6_pa_from_the_linear_design(pneunet_1e6):
 def pneunet_1e6_part(pneunet_1e6):
     """``pacto analyse`` of that design at 1e6 Pa (threshold 0.5 asked; the connectivity check
     lowers it until the part on the clamp contains the output corner)."""
-    from pacto_ng.post.cli_commands import analyse_run
+    from pacto_ng.post.analyse import analyse_run
 
     assert analyse_run(pneunet_1e6, pressures=[1e6], threshold_value=0.5,
                        kinds=("darcy", "fixed"), quiet=True) == 0

@@ -65,11 +65,16 @@ def test_refine_writes_its_files_and_raises_the_output(refined):
     assert s["volume_bound"] == pytest.approx(s["volume_before"], rel=1e-12)
     assert abs(s["volume_after"] / s["volume_bound"] - 1.0) <= 0.05
     assert 0.3 <= s["lowest_det"] < 1.0
+    # a mechanism run (pneunet minimises -Δ/SE): its ratio is held at the part's own, to the
+    # augmented Lagrangian's slack (measured: 0.0 % after three steps)
+    r = s["ratio"]
+    assert r["after"] >= 0.98 * r["before"] > 0.0
     assert s["warnings"] == []  # the refinement keeps the part in the design domain
     with open(folder / "history.csv") as f:
         rows = list(csv.DictReader(f))
     assert [int(r["step"]) for r in rows] == [0, 1, 2, 3]
-    assert set(rows[0]) == {"step", "mesh", "delta", "volume", "det", "length", "merit"}
+    assert set(rows[0]) == {"step", "mesh", "delta", "ratio", "volume", "det", "length",
+                            "merit"}
     assert float(rows[-1]["delta"]) == pytest.approx(s["delta_after"], rel=1e-9)
     assert all(float(b["merit"]) < float(a["merit"]) for a, b in zip(rows, rows[1:]))
     # one progress line per step, and the last line

@@ -196,6 +196,35 @@ def test_refinement_increases_the_output_within_the_volume_bound(plate_mesh):
     assert result.delta == pytest.approx(response.delta, rel=1e-14)
 
 
+def test_a_ratio_floor_pulls_the_mechanism_ratio_up(plate_mesh):
+    """Five steps maximising Δ at the plate's own volume (μ = 10), without and with a floor
+    on Δ/SE (``ratio_min``).  On this plate Δ/SE grows with Δ (measured: ×1.66 while Δ grows
+    ×13.3), so a floor at the start's ratio never binds and changes nothing; a floor at
+    twice it (violated at the start) is pulled towards: the ratio, measured afresh on the
+    final shape by ``value("ratio")``, ends higher than without it (measured ×1.78) and Δ
+    grows less (×9.2)."""
+    results = {}
+    for factor in (None, 1.0, 2.0):
+        mesh = plate()
+        space = ShapeSpace(mesh, hold=("left",))
+        response = plate_response(mesh)
+        with compute(THREADS):
+            response.solve()
+            start = response.value("ratio")
+            result = refine(response, space, volume_max=volume(mesh, response.thickness),
+                            ratio_min=None if factor is None else factor * start, steps=5,
+                            step=0.02, penalty=10.0, q_min=Q_MIN)
+            response.solve()
+        results[factor] = (response.value("ratio") / start, result)
+    (free, unheld), (same, inactive), (pulled, held) = (results[k] for k in (None, 1.0, 2.0))
+    assert free > 1.0 and unheld.delta > 5.0 * unheld.history[0]["delta"]
+    assert same == pytest.approx(free, rel=1e-9) and inactive.multipliers["ratio"] == 0.0
+    assert pulled > free and held.multipliers["ratio"] > 0.0
+    assert unheld.delta > held.delta > 2.0 * held.history[0]["delta"]
+    assert all(math.isnan(h["ratio"]) for h in unheld.history)
+    assert all(not math.isnan(h["ratio"]) for h in held.history)
+
+
 def test_refinement_stops_when_the_quality_bound_cannot_be_met(plate_mesh):
     """With q_min 0.99 the first step the control allows is below min_step: the loop stops at
     once with the status ``mesh_quality`` and leaves the shape where it started."""
