@@ -51,27 +51,20 @@ springs on a boundary port are refused with one line.
 """
 from __future__ import annotations
 
-import csv
-import io
-import json
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
-from ngsolve import BND, VOL
 
 from ..errors import InputError
-from ..files import atomic_path, atomic_write_text
 from ..physics.equilibrium import NewtonFailure
 from ..physics.mechanics import Supports
 from ..shape import PartResponse, ShapeSpace, refine, remesh_moved, volume
 from .analysis_options import analysis_params
-from .domain import symmetry_line
 from .finish import say
 from .part import make_part, part_ports, present_supports
-from .part2d import part_mesh, write_part_stl
 from .part_stage import PART_MAXH, PART_ORDER
+from .refine_files import write_refinement, write_stl
 from .post3d import is_3d
 from .runs import copy_gridfunction, load_run, rebuild
 
@@ -87,8 +80,6 @@ STEP_SHARE = 1.0
 #: and restore Δ/SE) and gains 6 %; 100: 9.9 %; 10: 15.5 % with Δ/SE 0.17 % and the volume
 #: 0.05 % under their bounds; 3: 14.8 %, the volume 0.2 % over
 PENALTY = 10.0
-#: the columns of history.csv
-COLUMNS = ("step", "mesh", "delta", "ratio", "volume", "det", "length", "merit")
 #: the run objectives refined, each with whether its mechanism ratio Δ/SE is held: the
 #: refinement raises Δ, and for a mechanism (a run minimising -Δ/SE) keeps Δ/SE at least
 #: the part's own, so that the run's objective is not worsened either (raising Δ/SE alone
@@ -106,7 +97,6 @@ CHECK_MAXH = 0.7
 #: the share of the design domain's size beyond which a refined vertex is reported out of
 #: the domain (round-off only: the refinement clips the vertices into the domain's box)
 OUTSIDE_TOL = 1e-9
-FILES = ("history.csv", "summary.json", "refined.vtu", "refined.png", "refined.stl")
 
 
 def refine_run(folder, *, steps: int = STEPS, quiet: bool = False,
@@ -140,9 +130,9 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False,
     for line in summary["warnings"]:
         say(quiet, f"  warning: {line}")
     summary["wall_time_s"] = time.perf_counter() - t0
-    _write(out, run, (part.mesh, space, response, result), summary,
-           (job.domain, setup.supports.clamp))
-    _write_stl(out / "refined.stl", check_mesh, job.params.thickness, run.case.name)
+    write_refinement(out, run, (part.mesh, space, response, result), summary,
+                     (job.domain, setup.supports.clamp))
+    write_stl(out / "refined.stl", check_mesh, job.params.thickness, run.case.name)
     d0, d1 = summary["delta_before"], summary["delta_after"]
     print(f"refined: Δ {d0:.4g} → {d1:.4g} m ({100 * summary['gain']:+.1f} %) at volume "
           f"{result.volume:.4g} m³ (bound {bound:.4g} m³), status {result.status}, "
@@ -238,15 +228,6 @@ def _check(job: _Job, space, delta: float, quiet: bool):
     return mesh, entry
 
 
-def _write_stl(path: Path, mesh, thickness: float, name: str) -> None:
-    """The refined part (``mesh``: its independent remesh) as ``pacto export`` writes a 2D
-    part: whole (mirrored across the symmetry line, if the case has one), extruded by the
-    thickness, a closed binary STL in mm."""
-    with atomic_path(path) as tmp:
-        write_part_stl(tmp, part_mesh(mesh, symmetry_line(mesh)), thickness, units="mm",
-                       header=f"pacto_ng refined part of {name}")
-
-
 def _checked(folder, steps: int, overwrite: bool):
     """``(Run, RUN/refine, Setup, load type)`` of a run the command applies to; InputError
     (one line) otherwise, before anything is rebuilt."""
@@ -340,105 +321,3 @@ def _summary(run, result, bound: float, kind: str, load: float, settings: dict) 
             "model": run.params.model, "load_type": kind, "load": load,
             "load_unit": run.case.load_unit, "units": {"delta": "m", "volume": "m³"},
             "part": settings}
-
-
-def moved_points(space, response) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(reference vertices, the shape's motion, u)`` at the part's vertices, each (n, 2).
-
-    Both fields are read at the reference vertices with the deformation unset: a finite
-    element function moves with the mesh, so its value at a reference vertex is its value at
-    that vertex moved (the NGSolve notes, "Shape derivatives")."""
-    mesh = space.mesh
-    ref = np.array([v.point for v in mesh.vertices], dtype=float)
-    mesh.UnsetDeformation()
-    try:
-        where = mesh(ref[:, 0], ref[:, 1])
-        motion = np.asarray(space.deformation(where), dtype=float).reshape(len(ref), -1)
-        u = np.asarray(response.u(where), dtype=float).reshape(len(ref), -1)
-    finally:
-        mesh.SetDeformation(space.deformation)
-    return ref, motion, u
-
-
-def _write(out: Path, run, refined, summary: dict, frame) -> None:
-    """history.csv, summary.json, refined.vtu and refined.png into ``out``; ``refined`` is
-    ``(the part as made, ShapeSpace, PartResponse, RefineResult)`` (the last three on the
-    refined part's mesh), ``frame`` ``(the design domain's bounds, the clamp's regions)`` for
-    the picture."""
-    import meshio
-
-    first, space, response, result = refined
-    mesh = space.mesh
-
-    out.mkdir(parents=True, exist_ok=True)
-    text = io.StringIO()
-    writer = csv.writer(text, lineterminator="\n")
-    writer.writerow(COLUMNS)
-    for row in result.history:
-        writer.writerow([row["step"]] + [f"{row[c]:.10g}" for c in COLUMNS[1:]])
-    atomic_write_text(out / "history.csv", text.getvalue())
-    atomic_write_text(out / "summary.json", json.dumps(summary, indent=1))
-    ref, motion, u = moved_points(space, response)
-    moved = ref + motion
-    triangles = np.array([[v.nr for v in el.vertices] for el in mesh.Elements(VOL)])
-    pad = lambda a: np.column_stack([a, np.zeros(len(a))])  # noqa: E731
-    with atomic_path(out / "refined.vtu") as tmp:
-        meshio.write(str(tmp), meshio.Mesh(pad(moved), [("triangle", triangles)],
-                                           point_data={"u": pad(u), "moved": pad(motion)}),
-                     file_format="vtu")
-    before = (np.array([v.point for v in first.vertices], dtype=float), _edges(first))
-    with atomic_path(out / "refined.png") as tmp:
-        plot_outlines(tmp, before, (moved, _edges(mesh)), summary, run.case.name,
-                      domain=frame[0], clamp=frame[1])
-
-
-def _edges(mesh) -> list:
-    """``[([a, b], region)]``: the boundary segments of a 2D mesh by their vertex numbers."""
-    return [([v.nr for v in el.vertices], el.mat) for el in mesh.Elements(BND)]
-
-
-def plot_outlines(path, before, after, summary: dict, name: str, *, domain=None,
-                  clamp=()) -> None:
-    """The part's outline before (grey) and after (blue; the pressure walls red, the clamp
-    black: it does not move) the refinement, true scale, in metres, in the run's design
-    domain (``domain``: its lowest and highest corner; dotted).  ``before`` and ``after``
-    are ``(vertices, boundary segments)`` (:func:`_edges`) of the part as made and refined
-    (remeshed, it may have other vertices)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 5.5))
-    drawn = set()
-    colours = {"pressure": "tab:red", "clamp": "black", "after": "tab:blue"}
-    labels = {"pressure": "after: the pressure walls", "clamp": "the clamp (held)",
-              "after": "after: the other walls"}
-    (ref, edges0), (moved, edges) = before, after
-    for (a, b), region in edges0:
-        ax.plot(ref[[a, b], 0], ref[[a, b], 1], color="0.55", lw=0.8,
-                label=None if "before" in drawn else "before (the part as made)")
-        drawn.add("before")
-    for (a, b), region in edges:
-        key = ("pressure" if region == "pressure" else "clamp" if region in clamp else
-               "after")
-        ax.plot(moved[[a, b], 0], moved[[a, b], 1], lw=2.6 if key == "clamp" else 1.6,
-                color=colours[key], label=None if key in drawn else labels[key])
-        drawn.add(key)
-    if domain is not None:
-        (x0, y0), (x1, y1) = domain[0][:2], domain[1][:2]
-        ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="0.3", lw=0.8, ls=":",
-                label="the run's design domain")
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.legend(loc="best", fontsize=8)
-    s = summary
-    ax.set_title(f"{name} part refined (status {s['status']}, {s['steps']} steps): Δ "
-                 f"{s['delta_before']:.4g} → {s['delta_after']:.4g} m "
-                 f"({100 * s['gain']:+.1f} %)\nvolume {s['volume_after']:.4g} m³ (bound "
-                 f"{s['volume_bound']:.4g}), {s['load_type']} {s['load']:.3g} "
-                 f"{s['load_unit']}, {s['model']}", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, format="png", dpi=130)
-    plt.close(fig)
