@@ -17,6 +17,7 @@
     pacto export DIR --format stl|vtk|vtu|msh [--out FILE] [--units mm|m] [--no-mirror]
                  [--threshold T] [--threshold2 T2] [--maxh H]
     pacto refine DIR [--steps N] [--overwrite] [--quiet]
+    pacto refine DIR --check-gradients [--directions N] [--tol T]
     pacto compare DIR1 DIR2 ... [--out FILE.png]
 
 Bad input gives a one-line error on stderr and exit code 2; a run stopped by a Newton failure

@@ -194,6 +194,14 @@ def _refine_parser(sub):
                        "refined.stl).")
     f.add_argument("dir", help="a finished run folder (2D, a pressure case)")
     f.add_argument("--steps", type=int, default=20, help="descent steps (default 20)")
+    f.add_argument("--check-gradients", action="store_true", help="instead of refining, "
+                   "check the refinement's shape gradients (Δ, volume, and Δ/SE for a "
+                   "mechanism) against central differences on the run's part; writes nothing; "
+                   "exit code 1 if an error is above --tol")
+    f.add_argument("--directions", type=int, default=3, help="with --check-gradients: the "
+                   "random smooth directions checked (default 3)")
+    f.add_argument("--tol", type=float, default=1e-5, help="with --check-gradients: the "
+                   "largest relative error accepted (default 1e-5)")
     f.add_argument("--overwrite", action="store_true", help="replace the files of an earlier "
                    "DIR/refine/ (by default it is refused)")
     f.add_argument("--quiet", action="store_true", help="no progress lines")

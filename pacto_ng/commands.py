@@ -20,8 +20,9 @@ from .post.analysis_options import parse_pressures
 from .post.as_built import analyse_as_built
 from .post.cli_commands import export_run
 from .post.compare import compare_runs
-from .post.refine_run import refine_run
 from .post.part_stage import finish_run
+from .post.refine_check import check_refine_gradients
+from .post.refine_run import refine_run
 from .runner import optimise_case, resume_run
 from .sweep import run_sweep
 from .sweep_plan import parse_loads, parse_models
@@ -31,6 +32,9 @@ def post_command(args) -> int:
     """``pacto analyse``, ``pacto export``, ``pacto refine`` and ``pacto compare``."""
     if args.command == "analyse":
         return _analyse_command(args)
+    if args.command == "refine" and args.check_gradients:
+        return check_refine_gradients(args.dir, directions=args.directions, tol=args.tol,
+                                      quiet=args.quiet)
     if args.command == "refine":
         return refine_run(args.dir, steps=args.steps, quiet=args.quiet,
                           overwrite=args.overwrite)

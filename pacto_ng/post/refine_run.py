@@ -105,23 +105,20 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False,
     volume, the results written into ``RUN/refine/`` (the module docstring).  Returns the exit
     code (0); bad input is an InputError (one line, exit 2)."""
     t0 = time.perf_counter()
-    run, out, setup, kind = _checked(folder, steps, overwrite)
-    load = float(run.summary.get("load_reached") or run.load)
-    say(quiet, f"refine {run.path}: {run.case.name}, model {run.params.model}, {kind} "
-               f"pressure {load:g} {run.case.load_unit}, {steps} steps")
-    problem = rebuild(run)
-    if problem.mesh.dim != 2:
-        raise InputError("refine: 3D parts are not refined yet")
-    part, maxh = _part(run, problem, setup)
-    job = _Job(setup, analysis_params(run.params, None, PART_ORDER[2]), load, kind, maxh,
-               _bounds(problem.mesh), REFINED[run.params.objective or setup.objective])
+    if steps < 0:
+        raise InputError(f"--steps: must be 0 or more, got {steps}")
+    run = load_run(folder, "refine")
+    out = run.path / "refine"
+    if out.exists() and not overwrite:
+        raise InputError(f"refine: '{out}' exists (an earlier refinement): add --overwrite to "
+                         f"replace its files")
+    part, job = refinement(run, quiet, f"{steps} steps")
+    setup, kind, load = job.setup, job.kind, job.load
     bound = volume(part.mesh, job.params.thickness)
-    say(quiet, f"  the part: {part.mesh.ne} elements, maxh {maxh:.4g} m, order "
-               f"{job.params.order}, volume {bound:.4g} m³ (the bound)")
     space, response, result, remeshes = _refine_remeshing(job, part.mesh, bound, steps, quiet)
     settings = dict(threshold=part.threshold, threshold_note=part.choice.get("note"),
-                    maxh=maxh, order=job.params.order, elements=part.mesh.ne,
-                    part_size=_size(part.mesh))
+                    maxh=job.maxh, order=job.params.order, elements=part.mesh.ne,
+                    part_size=part_size(part.mesh))
     summary = _summary(run, result, bound, kind, load, settings)
     summary["ratio"] = _ratio(response, result) if job.hold_ratio else None
     summary["remeshes"] = remeshes
@@ -142,8 +139,27 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False,
     return 0
 
 
+def refinement(run, quiet: bool, what: str):
+    """``(Part, Job)``: the part of the finished run ``run`` (:func:`~.runs.load_run`) as
+    ``pacto analyse`` makes it, and what its refinement shares on every mesh; InputError
+    (one line) for a run the refinement does not apply to.  Prints the set-up's lines
+    (``what``: the task, e.g. "20 steps")."""
+    setup, kind, objective = _checked(run)
+    load = float(run.summary.get("load_reached") or run.load)
+    say(quiet, f"refine {run.path}: {run.case.name}, model {run.params.model}, {kind} "
+               f"pressure {load:g} {run.case.load_unit}, {what}")
+    problem = rebuild(run)
+    part, maxh = _part(run, problem, setup)
+    job = Job(setup, analysis_params(run.params, None, PART_ORDER[2]), load, kind, maxh,
+              _bounds(problem.mesh), REFINED[objective])
+    say(quiet, f"  the part: {part.mesh.ne} elements, maxh {maxh:.4g} m, order "
+               f"{job.params.order}, volume {volume(part.mesh, job.params.thickness):.4g} m³ "
+               f"(the bound)")
+    return part, job
+
+
 @dataclass(frozen=True)
-class _Job:
+class Job:
     """What every mesh of one refinement shares: the case's set-up, the analysis parameters,
     the load and its kind, the part's element size and the run's design domain (its lowest
     and highest corner)."""
@@ -157,7 +173,7 @@ class _Job:
     hold_ratio: bool
 
 
-def _refine_remeshing(job: _Job, mesh, bound: float, steps: int, quiet: bool):
+def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
     """``(ShapeSpace, PartResponse, RefineResult, remeshes)``: the refinement of the part on
     ``mesh``; when the mesh would fold (status ``mesh_quality``) the moved part is remeshed
     (:func:`~pacto_ng.shape.remesh.remesh_moved`, at the part's ``maxh``) and the refinement
@@ -168,14 +184,14 @@ def _refine_remeshing(job: _Job, mesh, bound: float, steps: int, quiet: bool):
     floor = None
     report = None if quiet else (lambda line: print("  " + line, flush=True))
     while True:
-        response, space = _response(mesh, job)
+        response, space = shape_response(mesh, job)
         try:
             if job.hold_ratio and floor is None:
                 response.solve()
                 floor = response.value("ratio")
             result = refine(response, space, volume_max=bound, steps=steps - done,
                             step=STEP_SHARE * job.maxh, penalty=PENALTY,
-                            alpha=1.0 / _size(mesh) ** 2, bounds=job.domain, scale=scale,
+                            alpha=1.0 / part_size(mesh) ** 2, bounds=job.domain, scale=scale,
                             multipliers=multipliers, quality_step=QUALITY_STEP * job.maxh,
                             ratio_min=floor, say=report)
         except NewtonFailure as err:
@@ -208,13 +224,13 @@ def _ratio(response, result) -> dict:
     return {"before": first["ratio"], "after": response.value("ratio"), "unit": "1/J"}
 
 
-def _check(job: _Job, space, delta: float, quiet: bool):
+def _check(job: Job, space, delta: float, quiet: bool):
     """``(mesh, entry)``: the refined part remeshed independently (at :data:`CHECK_MAXH`
     times the part's element size) and analysed afresh; ``entry`` gives that mesh's size
     and Δ and its relative difference from the refinement's own ``delta``."""
     maxh = CHECK_MAXH * job.maxh
     mesh = remesh_moved(space.mesh, space.moved_points(), maxh)
-    response, _ = _response(mesh, job)
+    response, _ = shape_response(mesh, job)
     try:
         check = response.solve()
     except NewtonFailure as err:
@@ -228,18 +244,11 @@ def _check(job: _Job, space, delta: float, quiet: bool):
     return mesh, entry
 
 
-def _checked(folder, steps: int, overwrite: bool):
-    """``(Run, RUN/refine, Setup, load type)`` of a run the command applies to; InputError
-    (one line) otherwise, before anything is rebuilt."""
-    if steps < 0:
-        raise InputError(f"--steps: must be 0 or more, got {steps}")
-    run = load_run(folder, "refine")
+def _checked(run):
+    """``(Setup, load type, the run's objective)`` of a run the refinement applies to;
+    InputError (one line) otherwise, before anything is rebuilt."""
     if is_3d(run):
         raise InputError("refine: 3D parts are not refined yet")
-    out = run.path / "refine"
-    if out.exists() and not overwrite:
-        raise InputError(f"refine: '{out}' exists (an earlier refinement): add --overwrite to "
-                         f"replace its files")
     setup = run.case.make_setup(run.params)
     kind = run.params.load_type
     if setup.pressure is None or kind not in ("fixed", "follower"):
@@ -251,7 +260,7 @@ def _checked(folder, steps: int, overwrite: bool):
     if objective not in REFINED:
         raise InputError(f"refine: the run's objective '{objective}' is not refined (the "
                          f"refinement takes {' and '.join(REFINED)})")
-    return run, out, setup, kind
+    return setup, kind, objective
 
 
 def _leaves(space, domain) -> list[str]:
@@ -278,7 +287,7 @@ def _part(run, problem, setup):
     return part, maxh
 
 
-def _response(mesh, job: _Job):
+def shape_response(mesh, job: Job):
     """``(PartResponse, ShapeSpace)`` of the part: the run's supports, ports and pressure;
     the clamp and the ports held, the symmetry lines held in their normal component."""
     supports = present_supports(job.setup.supports, mesh)
@@ -302,7 +311,7 @@ def _bounds(mesh) -> tuple[np.ndarray, np.ndarray]:
     return points.min(axis=0), points.max(axis=0)
 
 
-def _size(mesh) -> float:
+def part_size(mesh) -> float:
     """The part's size: its bounding box's largest side (m)."""
     low, high = _bounds(mesh)
     return float(np.max(high - low))

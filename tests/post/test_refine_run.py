@@ -197,3 +197,24 @@ def test_overwrite_replaces_the_files_and_nothing_else(solid_member, tmp_path, c
     s = json.loads((run / "refine" / "summary.json").read_text())
     assert s["steps"] == 0 and s["delta_after"] == s["delta_before"]
     assert (run / "refine" / "notes.txt").read_text() == "mine"
+
+
+def test_check_gradients_on_the_runs_part(solid_member, capsys):
+    """``pacto refine RUN --check-gradients``: Δ, the volume and Δ/SE (pneunet is a
+    mechanism run) against central differences in two directions, every relative error
+    within 1e-5 (measured on the default pneunet run: at most 4.4e-7), exit code 0, nothing
+    written; a bad --directions is one line with exit code 2."""
+    before = sorted(p.name for p in solid_member.rglob("*"))
+    assert main(["refine", str(solid_member), "--check-gradients", "--directions", "2"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    errors = [float(line.rsplit("relative error ", 1)[1]) for line in lines
+              if line.startswith("  direction ")]
+    assert len(errors) == 6 and max(errors) <= 1e-5
+    assert lines[-1].startswith(f"refine {solid_member} --check-gradients: the largest "
+                                f"relative error") and "within 1e-05" in lines[-1]
+    assert "Δ, volume, Δ/SE" in lines[-1]
+    assert sorted(p.name for p in solid_member.rglob("*")) == before
+    assert main(["refine", str(solid_member), "--check-gradients", "--directions", "0"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--directions" in err[0]
+
