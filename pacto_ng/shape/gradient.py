@@ -67,10 +67,16 @@ derivative is ``dJ[V]`` (the quotient rule ``d(Δ/SE) = (dΔ - J dSE)/SE`` on th
 parts).  Both objectives share the code: ``∂J = α ∂Δ - β ∂SE`` with ``(α, β) = (1, 0)`` for
 ``Δ`` and ``(1/SE, Δ/SE²)`` for ``Δ/SE``.
 
+Output springs.  One at a named point adds its energy ``k/2 (d̂ · u)²`` to ``R`` (no
+explicit shape term, above).  One on a boundary port is the runs' distributed spring of the
+same total stiffness, ``k/2 (1/|Γ|) ∫_Γ (d̂ · u)² ds`` (:class:`~pacto_ng.physics.loads.
+Spring`), with ``1/|Γ|`` of the current shape; its term ``k/|Γ| ∫_Γ (d̂·u)(d̂·λ) ds`` in
+``R(u; λ)`` depends on the shape through the integral and through ``|Γ|``, and ``L`` carries
+it as ``-k w ∫_Γ (d̂·u)(d̂·λ) ds + k w² J ∫_Γ ds`` with ``w = 1/|Γ|`` and
+``J = ∫_Γ (d̂·u)(d̂·λ) ds`` frozen (the quotient rule, as for a port's mean).
+
 The displacement formulation throughout (the mixed one of
-:func:`~pacto_ng.physics.mixed.formulation_for` is not shape-differentiated here); an output
-spring on a boundary port is refused (its energy, a mean square over the boundary, is not
-shape-differentiated here either); one at a named point adds its energy to ``R``.
+:func:`~pacto_ng.physics.mixed.formulation_for` is not shape-differentiated here).
 """
 from __future__ import annotations
 
@@ -99,15 +105,12 @@ OBJECTIVES = ("delta", "ratio")
 
 def _ports(mesh, ports) -> tuple[Port, ...]:
     """``ports`` as a tuple of Ports on named boundaries or points of ``mesh`` (ValueError
-    otherwise, or for a port with an output spring)."""
+    otherwise)."""
     ports = (ports,) if isinstance(ports, Port) else tuple(ports)
     if not ports or not all(isinstance(p, Port) for p in ports):
         raise ValueError("ports: give a Port or a non-empty tuple of Ports")
     points = mesh.GetBBBoundaries() if mesh.dim == 3 else mesh.GetBBoundaries()
     for p in ports:
-        if p.spring > 0 and p.region not in points:
-            raise ValueError(f"port '{p.region}': output springs on a boundary are not "
-                             f"shape-differentiated (springs at a named point are)")
         if p.region not in mesh.GetBoundaries() and p.region not in points:
             raise ValueError(f"port '{p.region}' is neither a boundary nor a named point of the "
                              f"{mesh.dim}D mesh")
@@ -139,7 +142,7 @@ class PartResponse:
     supports : Supports
         Dirichlet conditions of the displacement by region name.
     ports : Port or tuple of Port
-        The output (boundaries or named points; output springs at named points only).
+        The output (boundaries or named points, with their output springs).
     pressure : float
         The wall pressure ``P`` (negative: suction).
     kind : {"fixed", "follower"}
@@ -217,10 +220,38 @@ class PartResponse:
             a += Variation(t * P * InnerProduct(self.normal, u) * shape_ds(self.boundary))
         else:
             a += t * P * InnerProduct(self._traction(u), v) * shape_ds(self.boundary)
-        for p in self.ports:  # output springs, at named points only (_ports)
+        self._boundary_springs = []
+        for p in self.ports:  # output springs
             for spring in p.springs():
-                a += Variation(spring.energy(self.mesh, u))
+                if p.region not in self.mesh.GetBoundaries():
+                    a += Variation(spring.energy(self.mesh, u))  # at a named point
+                    continue
+                # on a boundary: k/2 (1/|Γ|) ∫_Γ (d̂·u)² ds, 1/|Γ| of the current shape
+                d = np.asarray(spring.direction, dtype=float)
+                term = (CF(tuple(d / np.linalg.norm(d))), Parameter(1.0), spring)
+                self._boundary_springs.append(term)
+                a += Variation(0.5 * spring.stiffness * term[1] * InnerProduct(term[0], u) ** 2
+                               * shape_ds(spring.region))
         return a
+
+    def _spring_terms(self):
+        """The explicit shape terms of the boundary springs in ``-R(u; λ)``: with
+        ``I = ∫_Γ (d̂·u)(d̂·λ) ds`` and ``w = 1/|Γ|`` frozen, ``-k w ∫_Γ (d̂·u)(d̂·λ) ds +
+        k w² I ∫_Γ 1 ds`` (the quotient rule ``d(I/C) = dI/C - I dC/C²``, as for a port's
+        mean)."""
+        u, lam, total = self.u, self.lam, None
+        for d, w, spring in self._boundary_springs:
+            product = InnerProduct(d, u) * InnerProduct(d, lam)
+            integral = float(Integrate(product * shape_ds(spring.region), self.mesh))
+            k, wv = spring.stiffness, w.Get()
+            term = (-k * wv * product + k * wv * wv * integral) * shape_ds(spring.region)
+            total = term if total is None else total + term
+        return total
+
+    def _measure_springs(self) -> None:
+        """``w = 1/|Γ|`` of every boundary spring on the current shape."""
+        for _, w, spring in self._boundary_springs:
+            w.Set(1.0 / float(Integrate(CF(1.0) * shape_ds(spring.region), self.mesh)))
 
     def _outputs(self):
         """``(f, [(port, |Γ_k| or None)])``: the vector with ``Δ = f · u`` (and ``∂Δ/∂u``) on
@@ -294,6 +325,7 @@ class PartResponse:
     def solve(self) -> float:
         """Equilibrium on the current shape (warm-started from the last one's) and ``Δ``;
         NewtonFailure if Newton does not reach the pressure."""
+        self._measure_springs()
         self.result = solve_with_continuation(self, self.u.vec, self.pressure, self.settings,
                                               warm=self.result is not None, linear=self.linear)
         if not self.result.converged:
@@ -347,7 +379,8 @@ class PartResponse:
             L += (alpha * p.weight / size) * (InnerProduct(d, u) - mean) * shape_ds(p.region)
         if beta:
             L += (-beta * t * self.energy(Grad(u), self.coeffs)) * shape_dx()
-        return L
+        springs = self._spring_terms()
+        return L if springs is None else L + springs
 
     def gradient(self, space: ShapeSpace, objective: str = "delta") -> np.ndarray:
         """``dJ/dV`` of ``J = Δ`` (``"delta"``) or ``Δ/SE`` (``"ratio"``) on ``space`` (its
