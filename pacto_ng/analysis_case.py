@@ -70,12 +70,12 @@ def _check_resources(case, params) -> None:
     solver = "sparsecholesky"  # a symmetric tangent (no follower load)
     if kind == "quad":
         n = params.nelx
-        est = resources.estimate_grid(n, n, params.order, solver=solver)
+        est = resources.estimate_grid((n, n), params.order, solver=solver)
         what, advice = f"nelx = {n} ({n} x {n} quads)", "give a smaller nelx or order"
     else:
         layout = case.make_geometry(params)
-        est = resources.estimate_triangles(
-            resources.netgen_triangles(layout.width * layout.height, h), params.order,
+        est = resources.estimate_netgen(
+            resources.netgen_elements(layout.width * layout.height, h, 2), params.order, 2,
             solver=solver)
         what, advice = f"maxh = {h:g}", "give a larger maxh or a lower order"
     resources.check(est, what, mesh_time_limit=params.mesh_time_limit, advice=advice)

@@ -1,6 +1,5 @@
 """What a mesh and a run on it will cost, in the terms both halves of the resources check share:
-the :class:`Estimate` record (:mod:`pacto_ng.resources` for 2D meshes, :mod:`pacto_ng.resources3d`
-for 3D ones), the memory of a mesh (:func:`mesh_bytes`) and a run's memory around its
+the :class:`Estimate` record (:mod:`pacto_ng.resources`, 2D and 3D meshes), the memory of a mesh (:func:`mesh_bytes`) and a run's memory around its
 displacement system (:func:`run_overheads`).
 
 Around the system (assembled and factorised, each dimension's fit) a run holds the mesh
@@ -9,7 +8,7 @@ matrices while they are built (about 88 bytes per entry, built only below 20·10
 physics/scatter.py; counted for the displacement and a Darcy pressure in every case, an
 over-estimate for cases without them), and the pressure's and filter's systems, MMA and the
 outputs (``_RUN_FACTOR`` = 1.25 on the system; checked on whole runs in
-:mod:`pacto_ng.resources` and :mod:`pacto_ng.resources3d`).
+:mod:`pacto_ng.resource_probes`).
 """
 from __future__ import annotations
 

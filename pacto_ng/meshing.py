@@ -1,7 +1,7 @@
 """A case's geometry meshed (:func:`mesh_geometry`): its mesh settings (:class:`MeshSettings`),
 the mesh size derived where a case gives none (:func:`derived_maxh`), the element size before
 meshing (:func:`element_size`), and the check of a mesh against this machine's resources
-before it is made (:mod:`pacto_ng.resources`, :mod:`pacto_ng.resources3d`).  What the geometry
+before it is made (:mod:`pacto_ng.resources`).  What the geometry
 may be: :mod:`pacto_ng.geometry`.
 """
 from __future__ import annotations
@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import resources, resources3d
+from . import resources
 from .box import Box, box_shape, netgen_box_mesh, structured_box
 from .errors import InputError
 from .geometry import (CAD_SUFFIXES, MESH_SUFFIXES, bounding_sides, extent, is_occ_shape,
@@ -67,13 +67,11 @@ def _element_count(geometry):
     """Netgen's element count at a mesh size, as a function of it, for a geometry that Netgen
     meshes (:mod:`pacto_ng.resources`); None for one it cannot (a shape without faces)."""
     if isinstance(geometry, Layout):
-        return lambda h: resources.netgen_triangles(geometry.width * geometry.height, h)
+        return lambda h: resources.netgen_elements(geometry.width * geometry.height, h, 2)
     if isinstance(geometry, Box):
-        return lambda h: resources3d.netgen_tets(float(np.prod(geometry.size)), h)
+        return lambda h: resources.netgen_elements(float(np.prod(geometry.size)), h, 3)
     if is_occ_shape(geometry) and len(geometry.faces) > 0:
-        if is_solid(geometry):
-            return lambda h: resources3d.shape_tets(geometry, h)
-        return lambda h: resources.shape_triangles(geometry, h)
+        return lambda h: resources.shape_elements(geometry, h)
     return None
 
 
@@ -135,10 +133,10 @@ def mesh_geometry(geometry, *, maxh: float, nelx: int = 0, nely: int = 0, nelz: 
     nelz > 0`` structured hexahedra, for a :class:`~pacto_ng.box.Box` only.
 
     Before a mesh is made, its elements, its displacement dofs at ``order`` and a run's memory
-    are estimated (:mod:`pacto_ng.resources`, :mod:`pacto_ng.resources3d`; ``solver`` of the
+    are estimated (:mod:`pacto_ng.resources`; ``solver`` of the
     displacement system, ``sparsecholesky`` or ``umfpack``, None for the larger estimate; in
     3D ``linear_solver``, the ``solver`` setting, decides whether the system is factorised or
-    solved iteratively, :func:`pacto_ng.resources3d.route`): a mesh that would not fit this
+    solved iteratively, :func:`pacto_ng.resources.route`): a mesh that would not fit this
     machine's memory, or would take Netgen (or the grid builder)
     longer than ``mesh_time_limit`` seconds to make, is refused with one line.  A mesh file or
     an ``ngsolve.Mesh`` is checked on its own counts."""
@@ -203,13 +201,13 @@ def _mesh_layout(layout: Layout, maxh, nelx, nely, order, fits, solver) -> Meshe
     """A Layout as structured quads (``nelx, nely > 0``) or Netgen triangles of ``maxh``,
     checked by ``fits`` (:func:`_fits`) first."""
     if nelx > 0:
-        fits(resources.estimate_grid(nelx, nely, order, solver=solver),
+        fits(resources.estimate_grid((nelx, nely), order, solver=solver),
              f"nelx x nely = {nelx} x {nely}", "give a smaller nelx, nely or order")
         mesh = structured_mesh(layout, nelx, nely)
         return Meshed(mesh, min(layout.width / nelx, layout.height / nely), None)
     _check_maxh(maxh, min(layout.width, layout.height))
-    triangles = resources.netgen_triangles(layout.width * layout.height, maxh)
-    fits(resources.estimate_triangles(triangles, order, solver=solver), f"maxh = {maxh:g}",
+    triangles = resources.netgen_elements(layout.width * layout.height, maxh, 2)
+    fits(resources.estimate_netgen(triangles, order, 2, solver=solver), f"maxh = {maxh:g}",
          _FINER)
     return Meshed(netgen_mesh(layout, maxh), maxh, layout_shape(layout))
 
@@ -224,13 +222,9 @@ def _mesh_shape(shape, maxh, order, fits, solver, linear_solver) -> Meshed:
     if len(shape.faces) == 0:
         raise InputError("geometry: the shape has no face to mesh")
     _check_maxh(maxh, extent(shape))
-    if solid:
-        estimate = resources3d.estimate_tets(resources3d.shape_tets(shape, maxh), order,
-                                             solver=solver, linear_solver=linear_solver)
-    else:
-        estimate = resources.estimate_triangles(resources.shape_triangles(shape, maxh),
-                                                order, solver=solver)
-    fits(estimate, f"maxh = {maxh:g}", _FINER)
+    fits(resources.estimate_netgen(resources.shape_elements(shape, maxh), order,
+                                   3 if solid else 2, solver=solver,
+                                   linear_solver=linear_solver), f"maxh = {maxh:g}", _FINER)
     try:
         ngm = occ.OCCGeometry(shape, dim=3 if solid else 2).GenerateMesh(maxh=maxh)
     except RuntimeError as err:
@@ -249,14 +243,14 @@ def _mesh_box(box: Box, maxh, nel, order, mesh_time_limit, solvers: dict) -> Mes
         if nelz == 0:
             raise InputError("nelz: a box domain (3D) meshed as hexahedra needs nelx, nely and "
                              "nelz")
-        fits(resources3d.estimate_hex_grid(nelx, nely, nelz, order, **solvers),
+        fits(resources.estimate_grid(nel, order, **solvers),
              f"nelx x nely x nelz = {nelx} x {nely} x {nelz}",
              "give a smaller nelx, nely, nelz or order")
         mesh = structured_box(box, nelx, nely, nelz)
         return Meshed(mesh, float(min(box.size / np.array(nel))), None)
     _check_maxh(maxh, float(box.size.min()))
-    tets = resources3d.netgen_tets(float(np.prod(box.size)), maxh)
-    fits(resources3d.estimate_tets(tets, order, **solvers), f"maxh = {maxh:g}", _FINER)
+    tets = resources.netgen_elements(float(np.prod(box.size)), maxh, 3)
+    fits(resources.estimate_netgen(tets, order, 3, **solvers), f"maxh = {maxh:g}", _FINER)
     return Meshed(netgen_box_mesh(box, maxh), maxh, box_shape(box))
 
 

@@ -1,189 +1,266 @@
 """Resources checked before they run out: a run's elements, displacement dofs, peak memory and
 meshing time, estimated from the mesh options and the element order *before* any mesh is made,
 and refused with one line (an :class:`~pacto_ng.params.InputError`, exit code 2 from the CLI)
-when they do not fit this machine.
+when they do not fit this machine.  One path for 2D and 3D: the dimension comes from the mesh
+or the geometry, and only the measured numbers differ (:data:`DIMENSIONS`).
 
-:func:`pacto_ng.meshing.mesh_geometry` calls :func:`check` on :func:`estimate_triangles`
-(Netgen: a Layout, a netgen.occ shape, a CAD file), :func:`estimate_grid` (structured quads)
-or, for a mesh that exists (a mesh file after reading, an ``ngsolve.Mesh``),
+:func:`pacto_ng.meshing.mesh_geometry` calls :func:`check` on :func:`estimate_netgen` (Netgen
+triangles or tetrahedra: a Layout, a Box, a netgen.occ shape, a CAD file; counted by
+:func:`netgen_elements` and :func:`shape_elements`), :func:`estimate_grid` (structured quads
+or hexahedra) or, for a mesh that exists (a mesh file after reading, an ``ngsolve.Mesh``),
 :func:`estimate_mesh` on its counts.  The remesh of a run's part (``pacto analyse``, ``pacto
 export``: :func:`pacto_ng.post.runs.check_part_mesh`) is checked on :func:`estimate_part`, and
-the C-beam analysis (``pacto run c-beam``) on the same estimates as a run's mesh.
+the C-beam analysis (``pacto run c-beam``) on the same estimates as a run's mesh.  The
+:class:`~pacto_ng.estimate.Estimate` record and a run's memory around its system:
+:mod:`pacto_ng.estimate`; the measurements behind the numbers below (on this 2-core, 23 GB
+machine, ngsolve 6.2.2608), and the whole runs they were checked on:
+:mod:`pacto_ng.resource_probes`.
 
-Estimates (2D; 3D meshes: :mod:`pacto_ng.resources3d`; the :class:`~pacto_ng.estimate.Estimate`
-record and a run's memory around its system: :mod:`pacto_ng.estimate`; measured on this 2-core,
-23 GB machine, ngsolve 6.2.2608)
---------------------------------------------------------------------------
-**Elements.**  Netgen triangles of size ``h`` on a face of area ``A``: ``(4/√3)·A/h²``, the
-count of equilateral triangles of side ``h`` (a 2 x 1 rectangle at h = 0.04 ... 0.005 gave
-2874, 11 542, 46 176, 184 662 triangles: 2.299–2.309·A/h²).  A face's own ``maxh`` replaces
-``h`` on it; an edge's smaller ``maxh`` ``he`` adds ``6·L/he`` (5.5–6.5 measured on a unit
-square, h = 0.05, he = 0.01 ... 0.002).  On the built-in cases' geometries (Layouts and
-netgen.occ shapes, default maxh and half of it) the estimate was 0.99–1.08 of Netgen's count
-(tests/unit/test_resources.py).  Structured quads: ``nelx·nely``.
+Estimates
+---------
+**Elements.**  Netgen elements of size ``h`` in a domain of measure ``A`` (area, volume):
+``c·A/h^d``; 2D ``c = 4/√3``, the count of equilateral triangles of side ``h`` (2.299–2.309
+measured; 0.99–1.08 of Netgen's count on the built-in cases' geometries,
+tests/unit/test_resources.py); 3D ``c = 5`` tetrahedra (a regular one of edge ``h`` fills
+``h³/(6√2)``, i.e. 8.5 per h³, but Netgen's interior elements grow larger; 0.59–1.53 of
+Netgen's count on shapes not fitted, tests/unit/test_resources_3d.py).  A face's (2D) or
+solid's (3D) own ``maxh`` replaces ``h`` in it; in 2D an edge's smaller ``maxh`` ``he`` adds
+``6·L/he`` (5.5–6.5 measured), in 3D a face's or edge's smaller ``maxh`` is not counted.
+Structured quads or hexahedra: ``nelx·nely(·nelz)``.  A Netgen mesh still to be made of ``n``
+elements has about ``n/2`` vertices and ``1.5·n`` edges (2D), or ``n/5`` vertices (4.9–5.0
+measured), ``n/5 + n`` edges and ``2n`` faces (3D).
 
-**Displacement dofs** (vector H1 of order k): ``2·(nv + (k−1)·nedge + (k−1)(k−2)/2·ntrig +
-(k−1)²·nquad)``; for a triangle mesh still to be made ``nv ≈ ne/2``, ``nedge ≈ 3·ne/2``, i.e.
-``k²·ne`` (0.94–1.03 of the real count); for a grid or a mesh that exists, exact.
+**Displacement dofs** (``d``-vector H1 of order k, NGSolve's: full tensor-product polynomials
+on quads and hexahedra): ``d·(nv + (k−1)·nedge + (k−1)(k−2)/2·ntrig + (k−1)²·nquad +
+(k−1)(k−2)(k−3)/6·ntet + (k−1)³·nhex)`` (in 3D ntrig, nquad count faces); for a Netgen mesh
+still to be made in 2D about ``k²·n`` (0.94–1.03 of the real count); exact for a grid
+(``d·Π(k·nel+1)``) and for a mesh that exists.
 
 **Memory.**  The largest allocation of a run is the displacement system, assembled and
-factorised.  Its peak RSS (``VmHWM`` above the process's start) was measured by
-:func:`measure` (``python -c 'from pacto_ng.resources import measure; measure()'``):
-linear elasticity on VectorH1, orders 1–3, Netgen triangles (2 x 1 rectangle, h = 0.04, 0.02,
-0.01, 0.005) and structured quads (2n x n, n = 25, 50, 100, 200), 2.6·10³ to 1.7·10⁶ dofs,
-sparse Cholesky and UMFPACK (a follower pressure's unsymmetric tangent), and fitted (points
-above 2·10⁴ dofs) as ``bytes = a · ndof^b · q^[quads] · o^k``::
+factorised (or, in 3D on the iterative route, assembled with its BDDC preconditioner): its
+peak RSS above the process's start, fitted as ``bytes − mesh = a · ndof^b · q^[quads or
+hexahedra] · o^k`` (points above 2·10⁴ dofs)::
 
-    sparsecholesky  a = 447   b = 1.074  q = 1.17  o = 1.170   measured/fit 0.91–1.10
-    umfpack         a = 1182  b = 1.051  q = 1.11  o = 1.272   measured/fit 0.89–1.13
+    2D  sparsecholesky  a = 447    b = 1.074  q = 1.17  o = 1.170   measured/fit 0.91–1.10
+        umfpack         a = 1182   b = 1.051  q = 1.11  o = 1.272   measured/fit 0.89–1.13
+    3D  sparsecholesky  a = 57.6   b = 1.463  q = 1.58  o = 1.093   measured/fit 0.89–1.13
+        umfpack         a = 152.7  b = 1.452  q = 1.38  o = 1.134   measured/fit 0.91–1.13
+        iterative       a = 1261   b = 1.047  q = 2.09  o = 1.226   measured/fit 0.92–1.07
 
-(``bytes`` less the mesh, :func:`~pacto_ng.estimate.mesh_bytes`), e.g. 1.67·10⁶ dofs (order
-3, 184 662 triangles): 3.56 GB with Cholesky, 8.81 GB with UMFPACK; 1.44·10⁶ dofs (order 3,
-200 x 100 quads): 3.73 and 7.55 GB.  A run holds more: the mesh, the linear fast paths'
-element matrices while they are built, and the pressure's and filter's systems, MMA and the
-outputs (:func:`pacto_ng.estimate.run_overheads`).  Checked on whole runs (``pacto run ...
---set iterations=2``, peak RSS by ``/usr/bin/time``, less the 0.22 GB of a default mbb run),
-estimate / measured:
-
-    run                                                    dofs      measured  est/meas
-    mbb --nelx 400 --nely 300 --order 3                   2 164 202   6.71 GB   1.00
-    mbb --nelx 200 --nely 100 --order 1                      40 602   0.20 GB   1.29
-    mbb --nelx 200 --nely 100 --order 2                     161 202   0.87 GB   1.40
-    mbb --nelx 200 --nely 100 --order 3                     361 802   0.85 GB   2.22
-    pa-inverter --maxh 0.002 --order 1                       11 894   0.09 GB   0.96
-    pa-inverter --maxh 0.002 --order 2                       46 970   0.26 GB   1.20
-    pa-inverter --maxh 0.001 --order 2                      185 914   1.11 GB   1.14
-    pa-inverter --maxh 0.002 --order 2, Neo-Hookean,         46 970   0.22 GB   1.95
-      load_type=follower (UMFPACK)
-    pa-inverter --maxh 0.001 --order 1, the same             46 780   0.31 GB   1.35
+Fill-in is far larger in 3D: a nested-dissection factorisation of a 3D mesh grows like
+``ndof^(4/3)`` and more (at 1.5·10⁵ dofs the 3D Cholesky takes 2.7 GB, the 2D fit gives 0.19
+GB).  Which route a 3D system takes is the physics' (:func:`route`:
+:func:`pacto_ng.physics.solvers.choose`; with ``solver = auto`` direct at order 1 and up to
+``DIRECT_MAX_DOFS_3D`` dofs, iterative above it at order ≥ 2); 2D systems are estimated as
+factorised.  A run holds more around its system: the mesh, the linear fast paths' element
+matrices while they are built (not on the iterative route), and the pressure's and filter's
+systems, MMA and the outputs (:func:`pacto_ng.estimate.run_overheads`); in 3D writing
+design.vtu adds about 460 bytes per point written (4 or 10 per tetrahedron, 8 or 27 per
+hexahedron, order 1 or above).  This machine (23 GB, about 18 GB usable) plans 3D runs up to
+about 5·10⁵ dofs with Cholesky at order 1.
 
 **Limit**: :func:`memory_limit`, ``_SAFETY`` (80 %) of the least of MemAvailable, the
 physical memory, the cgroup's memory limit less its usage (v1 or v2), and the address-space
 limit (``ulimit -v``) less the process's size.
 
 **Meshing time** grows with the element count: Netgen took 0.17–0.26 ms of CPU per triangle
-here (11 542 triangles in 2.7 s, 184 662 in 47 s, on a shared machine), the structured grid
-builder 17–20 µs per quad (80 000 in 1.3–1.6 s).  A mesh whose making alone would exceed the
-``mesh_time_limit`` setting (:data:`MESH_TIME_LIMIT`, 300 s: about 1.5·10⁶ Netgen triangles or
-1.5·10⁷ quads) is refused before it is started; ``--set mesh_time_limit=SECONDS`` allows
-longer.
+and 0.18–0.31 ms per tetrahedron (up to 0.9 ms on coarse meshes of curved shapes), the
+structured grid builders 17–20 µs per quad and 7–34 µs per hexahedron.  A mesh whose making
+alone would exceed the ``mesh_time_limit`` setting (:data:`MESH_TIME_LIMIT`, 300 s: about
+1.5·10⁶ Netgen triangles or 1.5·10⁷ quads) is refused before it is started; ``--set
+mesh_time_limit=SECONDS`` allows longer.
 """
 from __future__ import annotations
 
 import math
 import os
 import resource
-import sys
+from dataclasses import dataclass
 from pathlib import Path
 
-from . import resources3d
+import numpy as np
+
 from .errors import InputError
 from .estimate import Estimate, mesh_bytes, run_overheads
-from .mesh import Layout, netgen_mesh, structured_mesh
+from .geometry import is_solid
+from .physics.solvers import choose
 
-# the displacement system's memory fit (see the module docstring): (a, b, quad, per order)
-_FIT = {"sparsecholesky": (447.2, 1.0735, 1.168, 1.1697),
-        "umfpack": (1181.7, 1.0512, 1.108, 1.2717)}
+
+@dataclass(frozen=True)
+class Dimension:
+    """The numbers of one dimension (module docstring; measured: :mod:`pacto_ng.
+    resource_probes`)."""
+
+    fits: dict              # the displacement system's memory, by solver: (a, b, quad/hex, order)
+    netgen_density: float   # Netgen elements per h^d of area or volume
+    elements_per_vertex: float  # a Netgen mesh still to be made: its elements per vertex,
+    netgen_counts: dict     # and its edges, faces (trigs) and tetrahedra per element
+    netgen_seconds: float   # CPU seconds per Netgen element
+    kinds: tuple            # (simplices, boxes): what the elements are called
+    netgen_types: tuple     # Netgen's element type codes (simplex, box)
+    edge_elements: float = 0.0  # extra elements per length/he along an edge of smaller maxh
+    output_points: tuple = ()   # design.vtu's points per element: (simplex, box) x (k = 1, k > 1)
+
+
+DIMENSIONS = {
+    2: Dimension(fits={"sparsecholesky": (447.2, 1.0735, 1.168, 1.1697),
+                       "umfpack": (1181.7, 1.0512, 1.108, 1.2717)},
+                 netgen_density=4.0 / math.sqrt(3.0), elements_per_vertex=2,
+                 netgen_counts={"edges": 1.5, "trigs": 1.0}, netgen_seconds=2.0e-4,
+                 kinds=("triangles", "quads"), netgen_types=(10, 11), edge_elements=6.0),
+    3: Dimension(fits={"sparsecholesky": (57.55, 1.4627, 1.582, 1.0925),
+                       "umfpack": (152.7, 1.4516, 1.384, 1.1340),
+                       "iterative": (1261.0, 1.0466, 2.089, 1.2257)},
+                 netgen_density=5.0, elements_per_vertex=5,
+                 netgen_counts={"edges": 1.2, "trigs": 2.0, "tets": 1.0}, netgen_seconds=2.5e-4,
+                 kinds=("tetrahedra", "hexahedra"), netgen_types=(20, 25),
+                 output_points=((4, 10), (8, 27))),
+}
 _SAFETY = 0.8               # of the free memory a run may plan to use
-_TRIANGLES_PER_AREA = 4.0 / math.sqrt(3.0)  # equilateral triangles of side h per h²
-_EDGE_TRIANGLES = 6.0       # extra triangles per length/he along an edge with a smaller maxh
-_NETGEN_SECONDS = 2.0e-4    # CPU seconds per Netgen triangle (0.17-0.26 ms measured here)
-_GRID_SECONDS = 2.0e-5      # CPU seconds per structured quad (17-20 µs measured here)
+_GRID_SECONDS = 2.0e-5      # CPU seconds per structured quad or hexahedron
+_OUTPUT_BYTES_PER_POINT = 460.0  # design.vtu's writing, per point (module docstring)
 MESH_TIME_LIMIT = 300.0     # default of the mesh_time_limit setting, seconds
 _HUGE = 1e300               # counts are capped here (a maxh of 1e-300 still gives one line)
 
 
-def run_memory(dofs: float, order: int, elements: float, *, quads: bool = False,
-               solver: str | None = None) -> float:
+def route(dofs: float, order: int, dim: int, linear_solver: str = "auto") -> str:
+    """``"direct"`` or ``"iterative"``: the displacement system's route as the physics takes
+    it (:func:`pacto_ng.physics.solvers.choose`; ``linear_solver`` its ``solver`` setting)."""
+    return choose(linear_solver, int(min(dofs, 1e18)), dim, max(int(order), 1))
+
+
+def run_memory(dofs: float, order: int, elements: float, dim: int, *, boxes: bool = False,
+               solver: str | None = None, linear_solver: str = "auto") -> float:
     """A run's peak memory in bytes (above the process's start) for ``dofs`` displacement
-    dofs of ``order`` on ``elements`` elements (module docstring): the displacement system
-    (``solver``: ``sparsecholesky``, ``umfpack`` or None for the larger, umfpack's) and what a
-    run holds around it (:func:`pacto_ng.estimate.run_overheads`)."""
-    k = max(int(order), 1)
-    a, b, q, o = _FIT[solver or "umfpack"]
-    system = a * min(max(dofs, 1.0), 1e30) ** b * (q if quads else 1.0) * o ** k
-    local = (k + 1) ** 2 if quads else (k + 1) * (k + 2) / 2  # scalar dofs per element
-    return run_overheads(system, elements, local, dim=2)
+    dofs of ``order`` on ``elements`` simplices (or, ``boxes``, quads or hexahedra): the
+    displacement system's fit for its :func:`route` (where the dimension has an iterative fit;
+    direct: ``solver``, ``sparsecholesky``, ``umfpack`` or None for the larger, umfpack's) and
+    what a run holds around it (:func:`pacto_ng.estimate.run_overheads`, design.vtu)."""
+    d, k = DIMENSIONS[dim], max(int(order), 1)
+    direct = "iterative" not in d.fits or route(dofs, k, dim, linear_solver) == "direct"
+    a, b, q, o = d.fits[(solver or "umfpack") if direct else "iterative"]
+    system = a * min(max(dofs, 1.0), 1e30) ** b * (q if boxes else 1.0) * o ** k
+    local = (k + 1) ** dim if boxes else math.comb(k + dim, dim)  # scalar dofs per element
+    memory = run_overheads(system, elements, local, dim=dim, displacement_matrices=direct)
+    if d.output_points:
+        points = d.output_points[bool(boxes)][k > 1]
+        memory += _OUTPUT_BYTES_PER_POINT * points * min(elements, _HUGE)
+    return memory
 
 
-def vector_h1_dofs(order: int, *, vertices: float, edges: float, trigs: float = 0.0,
-                   quads: float = 0.0, dim: int = 2) -> float:
-    """Dofs of a ``dim``-vector H1 space of ``order`` on a 2D mesh with these counts."""
+def vector_h1_dofs(order: int, dim: int, *, vertices: float, edges: float, trigs: float = 0.0,
+                   quads: float = 0.0, tets: float = 0.0, hexes: float = 0.0) -> float:
+    """Dofs of a ``dim``-vector H1 space of ``order`` on a mesh with these counts (in 3D
+    ``trigs`` and ``quads`` count faces)."""
     k = max(int(order), 1)
     return dim * (vertices + (k - 1) * edges + (k - 1) * (k - 2) / 2 * trigs
-                  + (k - 1) ** 2 * quads)
+                  + (k - 1) ** 2 * quads + (k - 1) * (k - 2) * (k - 3) / 6 * tets
+                  + (k - 1) ** 3 * hexes)
 
 
-def netgen_triangles(area: float, maxh: float) -> float:
-    """Netgen triangles of size ``maxh`` on a face of ``area`` (module docstring; ``inf`` for
-    a ``maxh`` so small that the count overflows)."""
-    return _TRIANGLES_PER_AREA * (area / maxh) / maxh
-
-
-def estimate_triangles(triangles: float, order: int, *, solver: str | None = None) -> Estimate:
-    """A Netgen triangle mesh still to be made, of about ``triangles`` triangles
-    (:func:`netgen_triangles`, :func:`shape_triangles`)."""
-    n = min(float(triangles), _HUGE)  # a maxh so small that the count overflows
-    dofs = vector_h1_dofs(order, vertices=n / 2, edges=1.5 * n, trigs=n)
-    return Estimate(n, dofs, run_memory(dofs, order, n, solver=solver), _NETGEN_SECONDS * n,
-                    max(int(order), 1), "triangles", "Netgen")
-
-
-def estimate_part(area: float, maxh: float, order: int | None = None, *,
-                  solver: str | None = None) -> Estimate:
-    """The Netgen remesh at ``maxh`` of a part of about ``area`` (a thresholded design:
-    ``pacto analyse``, ``pacto export``): with ``order``, a re-analysis on it (its memory as a
-    run's, :func:`estimate_triangles`); None: the mesh alone (:func:`~pacto_ng.estimate.
-    mesh_bytes`, no displacement system).  Against Netgen's count on pa-inverter parts (from the design's
-    Σ a ρ̄, maxh 0.005-0.001): 0.80-1.67 (a remesh's parts are graded, thin members and
-    boundaries fill unevenly)."""
-    triangles = netgen_triangles(area, maxh)
-    if order is not None:
-        return estimate_triangles(triangles, order, solver=solver)
-    n = min(float(triangles), _HUGE)
-    return Estimate(n, 0.0, mesh_bytes(n), _NETGEN_SECONDS * n, 0, "triangles", "Netgen")
-
-
-def shape_triangles(shape, maxh: float) -> float:
-    """Netgen triangles of a 2D netgen.occ ``shape`` at ``maxh``: each face's area at the
-    smaller of ``maxh`` and its own ``maxh``, plus ``6·L/he`` along each edge whose ``maxh``
-    ``he`` is smaller (module docstring).  Cheap: areas and lengths from OCC, no meshing."""
-    n = 0.0
-    for face in shape.faces:
-        n += netgen_triangles(face.mass, min(maxh, face.maxh))
-    for edge in shape.edges:
-        he = edge.maxh
-        if he < maxh:
-            n += _EDGE_TRIANGLES * edge.mass / he
+def netgen_elements(measure: float, maxh: float, dim: int) -> float:
+    """Netgen triangles (tetrahedra) of size ``maxh`` on a face of area (in a solid of
+    volume) ``measure`` (module docstring; ``inf`` for a ``maxh`` so small that the count
+    overflows)."""
+    n = DIMENSIONS[dim].netgen_density * (measure / maxh)
+    for _ in range(dim - 1):
+        n /= maxh
     return n
 
 
-def estimate_grid(nelx: int, nely: int, order: int, *, solver: str | None = None) -> Estimate:
-    """A structured ``nelx x nely`` quad mesh."""
-    k = max(int(order), 1)
-    n = float(nelx) * float(nely)
-    dofs = 2.0 * (k * nelx + 1) * (k * nely + 1)
-    return Estimate(n, dofs, run_memory(dofs, k, n, quads=True, solver=solver),
-                    _GRID_SECONDS * n, k, "quads", "the grid builder", exact=True)
+def shape_elements(shape, maxh: float) -> float:
+    """Netgen elements of a netgen.occ ``shape`` at ``maxh``, tetrahedra of a 3D one (it holds
+    solids), triangles of a 2D one: each solid's volume (face's area) at the smaller of
+    ``maxh`` and its own ``maxh``, and in 2D ``6·L/he`` along each edge whose ``maxh`` ``he``
+    is smaller (module docstring).  Cheap: areas, volumes and lengths from OCC, no meshing."""
+    dim = 3 if is_solid(shape) else 2
+    d = DIMENSIONS[dim]
+    n = 0.0
+    for part in shape.solids if dim == 3 else shape.faces:
+        n += netgen_elements(part.mass, min(maxh, part.maxh), dim)
+    for edge in shape.edges if d.edge_elements else ():
+        if edge.maxh < maxh:
+            n += d.edge_elements * edge.mass / edge.maxh
+    return n
+
+
+def estimate_netgen(elements: float, order: int, dim: int, *, solver: str | None = None,
+                    linear_solver: str = "auto") -> Estimate:
+    """A Netgen mesh still to be made of about ``elements`` triangles or tetrahedra
+    (:func:`netgen_elements`, :func:`shape_elements`), its vertices, edges and faces from
+    them (module docstring)."""
+    d = DIMENSIONS[dim]
+    n = min(float(elements), _HUGE)  # a maxh so small that the count overflows
+    dofs = vector_h1_dofs(order, dim, vertices=n / d.elements_per_vertex,
+                          **{key: c * n for key, c in d.netgen_counts.items()})
+    return Estimate(n, dofs, run_memory(dofs, order, n, dim, solver=solver,
+                                        linear_solver=linear_solver),
+                    d.netgen_seconds * n, max(int(order), 1), d.kinds[0], "Netgen")
+
+
+def estimate_part(measure: float, maxh: float, order: int | None = None, *, dim: int,
+                  solver: str | None = None) -> Estimate:
+    """The Netgen remesh at ``maxh`` of a part of about ``measure`` (area, volume: a
+    thresholded design, ``pacto analyse``, ``pacto export``): with ``order``, a re-analysis on
+    it (its memory as a run's, :func:`estimate_netgen`); None: the mesh alone
+    (:func:`~pacto_ng.estimate.mesh_bytes`, no displacement system).  Against Netgen's count
+    on pa-inverter parts (from the design's Σ a ρ̄, maxh 0.005-0.001): 0.80-1.67 (a remesh's
+    parts are graded, thin members and boundaries fill unevenly)."""
+    elements = netgen_elements(measure, maxh, dim)
+    if order is not None:
+        return estimate_netgen(elements, order, dim, solver=solver)
+    d, n = DIMENSIONS[dim], min(float(elements), _HUGE)
+    return Estimate(n, 0.0, mesh_bytes(n), d.netgen_seconds * n, 0, d.kinds[0], "Netgen")
+
+
+def estimate_grid(nel, order: int, *, solver: str | None = None,
+                  linear_solver: str = "auto") -> Estimate:
+    """A structured mesh of ``nel`` = ``(nelx, nely)`` quads or ``(nelx, nely, nelz)``
+    hexahedra (:func:`pacto_ng.mesh.structured_mesh`, :func:`pacto_ng.box.structured_box`):
+    counted exactly."""
+    dim, k = len(nel), max(int(order), 1)
+    n = math.prod(map(float, nel))
+    dofs = math.prod((k * m + 1 for m in nel), start=float(dim))
+    return Estimate(n, dofs, run_memory(dofs, k, n, dim, boxes=True, solver=solver,
+                                        linear_solver=linear_solver),
+                    _GRID_SECONDS * n, k, DIMENSIONS[dim].kinds[1], "the grid builder",
+                    exact=True)
 
 
 def estimate_mesh(mesh, order: int, *, solver: str | None = None,
                   linear_solver: str = "auto") -> Estimate:
-    """A mesh that exists (an ``ngsolve.Mesh``; a 3D one: :func:`pacto_ng.resources3d.
-    estimate_mesh`, whose route ``linear_solver`` decides): elements and dofs counted."""
-    import numpy as np
-
-    if mesh.dim == 3:
-        return resources3d.estimate_mesh(mesh, order, solver=solver, linear_solver=linear_solver)
-
-    types = np.asarray(mesh.ngmesh.Elements2D().NumPy()["type"])
-    quads = int(np.count_nonzero(types == 11))  # Netgen's QUAD; TRIG is 10
-    trigs = int(types.size) - quads
-    dofs = vector_h1_dofs(order, vertices=mesh.nv, edges=mesh.nedge, trigs=trigs, quads=quads)
-    kind = "quads" if quads and not trigs else "triangles" if not quads else "elements"
-    return Estimate(mesh.ne, dofs, run_memory(dofs, order, mesh.ne, quads=quads > trigs,
-                                              solver=solver),
+    """A mesh that exists (an ``ngsolve.Mesh``, 2D or 3D): elements and dofs counted."""
+    counts, simplices, boxes, size = _element_counts(mesh)
+    dofs = vector_h1_dofs(order, mesh.dim, vertices=mesh.nv, edges=mesh.nedge, **counts)
+    names = DIMENSIONS[mesh.dim].kinds
+    kind = names[1] if boxes == size else names[0] if simplices == size else "elements"
+    return Estimate(mesh.ne, dofs, run_memory(dofs, order, mesh.ne, mesh.dim,
+                                              boxes=boxes > simplices, solver=solver,
+                                              linear_solver=linear_solver),
                     0.0, max(int(order), 1), kind, None, exact=True)
+
+
+def _element_counts(mesh) -> tuple[dict, int, int, int]:
+    """``(counts, simplices, boxes, elements)`` of a mesh that exists, ``counts`` those of
+    :func:`vector_h1_dofs`: a 2D mesh's elements are its trigs and quads (any element not a
+    quad a trig); a 3D mesh's faces are counted one by one where it mixes elements."""
+    simplex, box = DIMENSIONS[mesh.dim].netgen_types
+    elements = mesh.ngmesh.Elements2D() if mesh.dim == 2 else mesh.ngmesh.Elements3D()
+    types = np.asarray(elements.NumPy()["type"])
+    boxes = int(np.count_nonzero(types == box))
+    size = int(types.size)
+    if mesh.dim == 2:
+        return {"trigs": size - boxes, "quads": boxes}, size - boxes, boxes, size
+    simplices = int(np.count_nonzero(types == simplex))
+    if boxes == size:
+        quad_faces = mesh.nface
+    elif simplices == size:
+        quad_faces = 0
+    else:
+        quad_faces = sum(1 for f in mesh.faces if len(f.vertices) == 4)
+    counts = {"trigs": mesh.nface - quad_faces, "quads": quad_faces, "tets": simplices,
+              "hexes": boxes}
+    return counts, simplices, boxes, size
 
 
 # ------------------------------------------------------------------------------------------
@@ -318,81 +395,3 @@ def check(est: Estimate, what: str, *, mesh_time_limit: float = MESH_TIME_LIMIT,
         line += (f"; meshing alone would take about {_duration(est.mesh_seconds)} of "
                  f"{est.mesher} here, over mesh_time_limit = {mesh_time_limit:g} s ({longer})")
     raise InputError(line + (f"; {advice}" if advice else ""))
-
-
-# -- the measurements behind the fit --------------------------------------------------------
-# python -c 'from pacto_ng.resources import measure; measure()'  (quick=True: the smaller half)
-_SIZES = {"netgen": (0.04, 0.02, 0.01, 0.005), "grid": (25, 50, 100, 200)}
-
-
-def probe(kind: str, size: float, order: int, solver: str) -> dict:
-    """Mesh a 2 x 1 rectangle (``netgen``: triangles of size ``size``; ``grid``: 2·size x size
-    quads), assemble linear elasticity on VectorH1 of ``order`` and factorise it with
-    ``solver``; return the counts, the meshing CPU time and the peak RSS above the start (run it
-    in a fresh process: the peak is the process's)."""
-    import time
-
-    from ngsolve import (BilinearForm, InnerProduct, SetNumThreads, Sym, TaskManager, VectorH1,
-                         div, dx, Grad)
-
-    SetNumThreads(2)
-    with TaskManager():
-        start = _read_kib("/proc/self/status", "VmHWM:")
-        cpu = resource.getrusage(resource.RUSAGE_SELF)
-        mesh = (netgen_mesh(Layout(2.0, 1.0), size) if kind == "netgen"
-                else structured_mesh(Layout(2.0, 1.0), 2 * int(size), int(size)))
-        cpu2 = resource.getrusage(resource.RUSAGE_SELF)
-        fes = VectorH1(mesh, order=order, dirichlet="default")
-        u, v = fes.TnT()
-        a = BilinearForm(fes, symmetric=solver == "sparsecholesky")
-        a += (InnerProduct(Sym(Grad(u)), Sym(Grad(v))) + div(u) * div(v)) * dx
-        a.Assemble()
-        t = time.perf_counter()
-        a.mat.Inverse(fes.FreeDofs(), inverse=solver)
-        t_fac = time.perf_counter() - t
-        peak = _read_kib("/proc/self/status", "VmHWM:")
-    return {"kind": kind, "size": size, "order": order, "solver": solver, "elements": mesh.ne,
-            "dofs": fes.ndof, "mesh_cpu_s": (cpu2.ru_utime + cpu2.ru_stime)
-            - (cpu.ru_utime + cpu.ru_stime), "factor_s": t_fac, "peak_bytes": peak - start}
-
-
-def measure(quick: bool = False) -> list[dict]:
-    """Run :func:`probe` over orders 1-3, both meshers and both solvers (each in a fresh
-    process), print each row against :func:`run_memory`'s displacement-system part, and fit
-    ``log(bytes - mesh) = log a + b log ndof + [quads] log q + k log o`` per solver."""
-    import json
-    import subprocess
-
-    import numpy as np
-
-    rows = []
-    for solver in ("sparsecholesky", "umfpack"):
-        for order in (1, 2, 3):
-            for kind, sizes in _SIZES.items():
-                for size in sizes[:2] if quick else sizes:
-                    code = ("import json; from pacto_ng.resources import probe; "
-                            f"print(json.dumps(probe({kind!r}, {size}, {order}, {solver!r})))")
-                    out = subprocess.run([sys.executable, "-c", code], capture_output=True,
-                                         text=True, timeout=900)
-                    if out.returncode != 0:
-                        print(f"{kind} {size} order {order} {solver}: failed "
-                              f"({out.stderr.strip()[-200:]})")
-                        continue
-                    row = json.loads(out.stdout.strip().splitlines()[-1])
-                    rows.append(row)
-                    print(f"{solver:14s} {kind:6s} {size:6g} k={order} {row['elements']:7d} el "
-                          f"{row['dofs']:8d} dofs  mesh {row['mesh_cpu_s']:5.1f} s CPU  "
-                          f"factor {row['factor_s']:6.1f} s  peak {row['peak_bytes'] / 1e6:7.0f}"
-                          " MB", flush=True)
-    for solver in ("sparsecholesky", "umfpack"):
-        sel = [r for r in rows if r["solver"] == solver and r["dofs"] > 20000]
-        if len(sel) < 4:
-            continue
-        y = np.log([r["peak_bytes"] - mesh_bytes(r["elements"]) for r in sel])
-        X = np.array([[1.0, np.log(r["dofs"]), r["kind"] == "grid", r["order"]] for r in sel])
-        c = np.linalg.lstsq(X, y, rcond=None)[0]
-        ratio = np.exp(y - X @ c)
-        print(f"{solver}: a = {np.exp(c[0]):.1f}, b = {c[1]:.4f}, q = {np.exp(c[2]):.3f}, "
-              f"o = {np.exp(c[3]):.4f}; measured/fit {ratio.min():.2f}-{ratio.max():.2f}")
-    return rows
-

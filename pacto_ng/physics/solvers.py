@@ -58,7 +58,7 @@ SOLVERS = ("auto", "direct", "iterative")
 # one thread): with the element-matrix assembly of linear runs it was the faster at every size
 # measured, 8.6 against 11.3 s per iteration at 78 000 dofs (cantilever-3d) and 4.0 against
 # 10.8 s at 50 000 (pneunet-3d); the fitted slopes (1.51 against 1.04, cantilever-3d) cross
-# near 1.4e5 dofs, where the 3D Cholesky needs about 2 GB (pacto_ng/resources3d.py).
+# near 1.4e5 dofs, where the 3D Cholesky needs about 2 GB (pacto_ng/resources.py).
 DIRECT_MAX_DOFS_3D = 140_000
 
 ADJOINT_RTOL = 1e-12  # Krylov tolerance of the Darcy and filter solves (relative)

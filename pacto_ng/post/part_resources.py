@@ -2,16 +2,15 @@
 and what would not fit this machine refused in one line (``pacto analyse``, step 4 of
 :mod:`.analyse`).
 
-The mesh and its memory are :mod:`pacto_ng.resources`'s (2D: :func:`~pacto_ng.resources.
-estimate_part` from the design's material area; 3D: :func:`~pacto_ng.resources3d.
-estimate_tets` of :func:`~pacto_ng.resources3d.netgen_tets` from its material volume; a mesh
-that exists, an as-built part: :func:`~pacto_ng.resources.estimate_mesh`, counted).  The time
+The mesh and its memory are :mod:`pacto_ng.resources`'s (:func:`~pacto_ng.resources.
+estimate_part` from the design's material area or volume; a mesh that exists, an as-built
+part: :func:`~pacto_ng.resources.estimate_mesh`, counted).  The time
 is the meshing's and the sweeps': Newton iterations (:func:`analysis_seconds`) times the
 seconds of one (:func:`newton_seconds`).
 """
 from __future__ import annotations
 
-from .. import resources, resources3d
+from .. import resources
 from ..errors import InputError
 from .runs import design_density
 
@@ -29,10 +28,10 @@ NEWTON_PER_PRESSURE = {"linear": 1, "linear follower": 2, "nonlinear": 5}
 _ASSEMBLY = {(2, 1): 5e-5, (2, 2): 1.5e-4, (2, 3): 4e-4,
              (3, 1): 3e-4, (3, 2): 9e-4, (3, 3): 2.5e-3}
 #: sparse Cholesky factorisation ``s (dofs / n)^b``: (s, n, b) by dimension, from the
-#: measurements of docs (NGSOLVE_NOTES: 2D 322k dofs 1.71 s; resources3d: 3D 1.51e5 dofs 84 s)
+#: measurements of docs (NGSOLVE_NOTES: 2D 322k dofs 1.71 s; resource_probes: 3D 1.51e5 dofs 84 s)
 _FACTOR = {2: (1.71, 3.22e5, 1.2), 3: (84.0, 1.51e5, 2.0)}
 #: UMFPACK (the follower's unsymmetric tangent) against sparse Cholesky (2.5 at 1.5e5 3D dofs,
-#: resources3d's fits; the measured whole iterations above 1.0-1.7 times the Cholesky ones)
+#: the 3D fits of resources; the measured whole iterations above 1.0-1.7 times the Cholesky ones)
 UMFPACK_FACTOR = 2.5
 
 
@@ -112,7 +111,4 @@ def part_estimate(problem, maxh: float, order: int, kinds):
     2D, volume in 3D), before Netgen is asked for it."""
     measure = float(problem.field.areas @ design_density(problem))
     solver = "umfpack" if "follower" in kinds else "sparsecholesky"
-    if problem.mesh.dim == 2:
-        return resources.estimate_part(measure, maxh, order, solver=solver)
-    return resources3d.estimate_tets(resources3d.netgen_tets(measure, maxh), order,
-                                     solver=solver)
+    return resources.estimate_part(measure, maxh, order, dim=problem.mesh.dim, solver=solver)

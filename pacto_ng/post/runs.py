@@ -197,7 +197,8 @@ def check_part_mesh(run: Run, problem, rho: np.ndarray, maxh: float, *,
     thresholded part's), its meshing time against the run's ``mesh_time_limit`` and, with
     ``order``, the memory of a re-analysis on it (``solver``: its displacement system's)."""
     area = float(problem.field.areas @ rho)
-    resources.check(resources.estimate_part(area, maxh, order, solver=solver),
+    resources.check(resources.estimate_part(area, maxh, order, dim=problem.mesh.dim,
+                                            solver=solver),
                     f"--maxh = {maxh:g}", mesh_time_limit=run.params.mesh_time_limit,
                     advice="give a larger --maxh" + (" or a lower --order" if order else ""),
                     longer="the run's setting")

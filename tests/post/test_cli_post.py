@@ -303,7 +303,7 @@ def test_the_part_mesh_estimate_is_near_netgens_count(pa_run, analysed):
     with compute():
         problem = rebuild(load_run(pa_run, "analyse"))
     area = float(problem.field.areas @ problem.values["rho_bar"])
-    est = resources.estimate_part(area, summary["settings"]["maxh"], 2)
+    est = resources.estimate_part(area, summary["settings"]["maxh"], 2, dim=2)
     real = summary["part"]["elements"]
     assert 0.5 < est.elements / real < 2.0, (est.elements, real)
 

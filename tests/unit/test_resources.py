@@ -101,7 +101,7 @@ def test_order_3_grid_of_the_issue_refused_where_it_does_not_fit(tmp_path, capsy
                                                                    monkeypatch):
     """mbb at order 3 on 400 x 300 (2.16e6 dofs; a whole run measured 6.9 GB peak here) is
     refused where less than its estimate is free (here: 4 GB), and passes the check here."""
-    est = resources.estimate_grid(400, 300, 3, solver="sparsecholesky")
+    est = resources.estimate_grid((400, 300), 3, solver="sparsecholesky")
     assert est.dofs == 2 * (3 * 400 + 1) * (3 * 300 + 1)
     assert 6.0e9 < est.memory < 8.0e9  # measured 6.72 GB above the process's start
     monkeypatch.setattr(resources, "memory_limit", lambda: (4e9, "a 4 GB test limit"))
@@ -147,11 +147,11 @@ def test_estimate_against_real_meshes(name, scale):
     case = get_case(name)
     geo = case.make_geometry(case.defaults)
     h = case.defaults.maxh * scale
-    tri = (resources.shape_triangles(geo, h) if is_occ_shape(geo)
-           else resources.netgen_triangles(geo.width * geo.height, h))
+    tri = (resources.shape_elements(geo, h) if is_occ_shape(geo)
+           else resources.netgen_elements(geo.width * geo.height, h, 2))
     mesh = mesh_geometry(geo, maxh=h).mesh
     for k in (1, 2, 3):
-        est = resources.estimate_triangles(tri, k)
+        est = resources.estimate_netgen(tri, k, 2)
         ndof = VectorH1(mesh, order=k).ndof
         assert 1 / 1.15 < est.elements / mesh.ne < 1.15, (k, est.elements, mesh.ne)
         assert 1 / 1.15 < est.dofs / ndof < 1.15, (k, est.dofs, ndof)
@@ -165,7 +165,7 @@ def test_grid_and_existing_mesh_counts_are_exact():
     quad = structured_mesh(Layout(2.0, 1.0), 12, 6)
     trig = netgen_mesh(Layout(2.0, 1.0), 0.2)
     for k in (1, 2, 3):
-        assert resources.estimate_grid(12, 6, k).dofs == VectorH1(quad, order=k).ndof
+        assert resources.estimate_grid((12, 6), k).dofs == VectorH1(quad, order=k).ndof
         assert resources.estimate_mesh(quad, k).dofs == VectorH1(quad, order=k).ndof
         assert resources.estimate_mesh(trig, k).dofs == VectorH1(trig, order=k).ndof
         assert resources.estimate_mesh(trig, k).elements == trig.ne
@@ -176,14 +176,14 @@ def test_local_maxh_of_a_shape_counts():
     from netgen import occ
 
     plain = occ.WorkPlane().Rectangle(1, 1).Face()
-    base = resources.shape_triangles(plain, 0.05)
-    assert base == pytest.approx(resources.netgen_triangles(1.0, 0.05))
+    base = resources.shape_elements(plain, 0.05)
+    assert base == pytest.approx(resources.netgen_elements(1.0, 0.05, 2))
     fine_face = occ.WorkPlane().Rectangle(1, 1).Face()
     fine_face.maxh = 0.01
-    assert resources.shape_triangles(fine_face, 0.05) == pytest.approx(25 * base)
+    assert resources.shape_elements(fine_face, 0.05) == pytest.approx(25 * base)
     fine_edge = occ.WorkPlane().Rectangle(1, 1).Face()
     fine_edge.edges.Min(occ.X).maxh = 0.005
-    assert resources.shape_triangles(fine_edge, 0.05) == pytest.approx(base + 6 * 1 / 0.005)
+    assert resources.shape_elements(fine_edge, 0.05) == pytest.approx(base + 6 * 1 / 0.005)
 
 
 def test_occ_shape_refused_before_netgen(no_meshing):
@@ -218,7 +218,7 @@ def test_memory_limit_is_below_the_machine():
 
 
 def test_refusal_line_names_what_to_change():
-    est = resources.estimate_grid(100000, 100000, 1)
+    est = resources.estimate_grid((100000, 100000), 1)
     with pytest.raises(InputError) as err:
         resources.check(est, "nelx x nely = 100000 x 100000", limit=(1e10, "10 GB"),
                         advice="give a smaller nelx")
