@@ -1,4 +1,10 @@
-"""``pacto compare``: designs of several runs side by side, and their analysis curves."""
+"""``pacto compare``: designs of several runs side by side, and their analysis curves.
+
+2D runs: the designs' ρ̄, their thresholded outlines over each other and the analysis curves;
+3D runs (:mod:`.compare3d`): the same for the 3D views, each design's ρ̄ = 0.5 iso-surface with
+one camera and its mid-depth cut, the outlines on that cut, the curves.  Either way the table
+of :func:`compare_table` is printed: one row per run.
+"""
 from __future__ import annotations
 
 import json
@@ -13,8 +19,10 @@ from netgen.occ import OCCException
 from ..case import mesh_for
 from ..errors import InputError
 from ..files import atomic_path
+from .compare3d import common_box, design_key, draw_designs, draw_outlines, read_design
 from .domain import symmetry_line
 from .pictures import figure
+from .post3d import is_3d
 from .report import fmt_value
 from .runs import load_run
 
@@ -27,13 +35,7 @@ def _design_triangles(vtu):
     import pyvista as pv
 
     g = pv.read(str(vtu))
-    if "rho_bar" in g.point_data:
-        key = "rho_bar"
-    elif "rho_bar1" in g.point_data:
-        key = "rho_bar1"
-    else:
-        raise InputError(f"compare: '{vtu}' has no rho_bar field")
-    val = np.asarray(g.point_data[key], dtype=float)
+    val = np.asarray(g.point_data[design_key(g, vtu)], dtype=float)
     pts = np.asarray(g.points)[:, :2]
     scale = float(np.ptp(pts, axis=0).max()) or 1.0
     _, first, inv = np.unique(np.round(pts / scale, 9), axis=0, return_index=True,
@@ -68,7 +70,7 @@ def run_symmetry(run):
     the case's mesh rebuilt; None when it has none or cannot be rebuilt."""
     try:
         mesh = mesh_for(run.case, run.params).mesh
-    except (ValueError, NgException, OCCException, RuntimeError):
+    except (InputError, NgException, OCCException, RuntimeError):
         # the case's geometry or mesh refused (InputError), or Netgen / OCC failed: a picture
         # without its mirror image, not an error
         return None
@@ -102,37 +104,84 @@ _STYLE = {"expected": ("o", "--"), "darcy": ("s", "-"), "fixed": ("x", ":"),
 def compare_runs(folders, *, out=None, quiet: bool = False, mirror: bool = True) -> int:
     """``pacto compare``: the designs side by side, their thresholded outlines over each other
     (thesis Fig. 6.7) and, where ``analysis/analysis.json`` exists, their analysis curves in
-    one picture (thesis Figs 6.10/6.12).  A run solved on a symmetric half is drawn whole
-    (mirrored about its mesh's straight ``symmetry`` boundary) unless ``mirror`` is False."""
+    one picture (thesis Figs 6.10/6.12); the table of :func:`compare_table` printed.  A 2D run
+    solved on a symmetric half is drawn whole (mirrored about its mesh's straight
+    ``symmetry`` boundary) unless ``mirror`` is False; 3D runs: :mod:`.compare3d`."""
     runs = _read_runs(folders)
     dst = _destination(out)
+    labels = _labels(runs)
+    dims = {3 if is_3d(r) else 2 for r, _ in runs}
+    if len(dims) > 1:
+        raise InputError("compare: the runs are 2D and 3D; compare runs of one dimension")
+    fig = _figure_3d(runs, labels) if dims == {3} else _figure_2d(runs, labels, mirror)
+    with atomic_path(dst) as tmp:
+        fig.savefig(str(tmp), dpi=130)
+    if not quiet:
+        print("\n".join(compare_table(runs)))
+        print(f"picture: {dst}")
+    return 0
+
+
+def _figure_2d(runs, labels, mirror):
+    """The 2D figure: the designs' ρ̄, the outlines over each other, the curves."""
     n = len(runs)
-    has_curves = any(a is not None for _, a in runs)
     lines = [run_symmetry(r) if mirror else None for r, _ in runs]
     designs = [_mirrored_design(*_design_triangles(r.path / "design.vtu"), ln)
                for (r, _), ln in zip(runs, lines)]
     allp = np.vstack([d[0] for d in designs])
     w, h = np.ptp(allp, axis=0)
     aspect = h / max(w, 1e-300)
-    labels = _labels(runs)
     ncol = min(n, 3)
     nrow = -(-n // ncol)
     top_h = nrow * (4.2 * aspect + 0.7)
-    bottom_h = 4.6
-    fig = figure((12.0, top_h + bottom_h))
-    top, bottom = fig.subfigures(2, 1, height_ratios=[top_h, bottom_h])
+    fig = figure((12.0, top_h + 4.6))
+    top, bottom = fig.subfigures(2, 1, height_ratios=[top_h, 4.6])
     _draw_designs(top, runs, designs, labels, nrow, ncol)
     # outlines over each other (thesis Fig. 6.7)
-    ax = bottom.add_subplot(1, 2, 1) if has_curves else bottom.add_subplot(1, 1, 1)
+    ax, curves = _bottom_axes(bottom, runs)
     _draw_outlines(ax, runs, designs, lines, labels, allp)
-    if has_curves:
-        _draw_curves(bottom.add_subplot(1, 2, 2), runs)
-    with atomic_path(dst) as tmp:
-        fig.savefig(str(tmp), dpi=130)
-    if not quiet:
-        _print_table(runs, labels)
-        print(f"picture: {dst}")
-    return 0
+    if curves is not None:
+        _draw_curves(curves, runs)
+    return fig
+
+
+def _figure_3d(runs, labels):
+    """The 3D figure (:mod:`.compare3d`): per run its iso-surface (one camera for all) and
+    its mid-depth cut, then the outlines on the cuts over each other, the curves."""
+    designs = [read_design(r.path / "design.vtu") for r, _ in runs]
+    box = common_box(designs)
+    n = len(runs)
+    ncol = min(n, 3)
+    nrow = -(-n // ncol)
+    aspect = (box[3] - box[2]) / max(box[1] - box[0], 1e-300)
+    width = 12.0 / ncol  # inches of one run's panels
+    top_h = nrow * (width * (0.5 + aspect) + 1.4)  # the iso-surface's view, the cut's
+    bottom_h = max(4.6, 5.5 * aspect + 1.8)
+    fig = figure((12.0, top_h + bottom_h))
+    top, bottom = fig.subfigures(2, 1, height_ratios=[top_h, bottom_h])
+    colours = [_COLOURS[i % 10] for i in range(n)]
+    draw_designs(top, designs, box, [_run_title(r, lab) for (r, _), lab in zip(runs, labels)],
+                 colours, ncol)
+    ax, curves = _bottom_axes(bottom, runs)
+    draw_outlines(ax, [r.path for r, _ in runs], designs, box, labels, colours)
+    if curves is not None:
+        _draw_curves(curves, runs)
+    return fig
+
+
+def _bottom_axes(bottom, runs):
+    """The outlines' axes and the curves' (None when no run was analysed)."""
+    if any(a is not None for _, a in runs):
+        return bottom.add_subplot(1, 2, 1), bottom.add_subplot(1, 2, 2)
+    return bottom.add_subplot(1, 1, 1), None
+
+
+def _run_title(run, label) -> str:
+    """A design's title: its label, and Δ and the volume fraction when the run has them."""
+    s = run.summary
+    delta = s.get("output_displacement")
+    return label + ("" if delta is None else
+                    f"\nΔ = {delta:.3g} m, volume {s.get('volume_fraction', float('nan')):.3f}")
 
 
 def _read_runs(folders) -> list:
@@ -170,11 +219,7 @@ def _draw_designs(top, runs, designs, labels, nrow, ncol) -> None:
         ax.set_aspect("equal")
         ax.set_xticks([])
         ax.set_yticks([])
-        s = run.summary
-        delta = s.get("output_displacement")
-        extra = "" if delta is None else \
-            f"\nΔ = {delta:.3g} m, volume {s.get('volume_fraction', float('nan')):.3f}"
-        ax.set_title(labels[i] + extra, fontsize=9, color=_COLOURS[i % 10])
+        ax.set_title(_run_title(run, labels[i]), fontsize=9, color=_COLOURS[i % 10])
 
 
 def _draw_outlines(ax, runs, designs, lines, labels, allp) -> None:
@@ -203,6 +248,8 @@ def _draw_outlines(ax, runs, designs, lines, labels, allp) -> None:
     ax.set_xlim(allp[:, 0].min(), allp[:, 0].max())
     ax.set_ylim(allp[:, 1].min(), allp[:, 1].max())
     ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
     ax.set_title("thresholded designs (remeshed outline, else ρ̄ = 0.5)", fontsize=9)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08), frameon=False)
 
@@ -237,17 +284,43 @@ def _draw_curves(ax, runs) -> None:
     ax.set_ylabel("output displacement Δ (m)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8, title="colour: run", title_fontsize=8)
-    ax.set_title("expected (optimisation) and the Neo-Hookean re-analyses", fontsize=9)
+    models = sorted({a["settings"]["model"] for _, a in runs if a is not None})
+    ax.set_title(f"expected (optimisation) and the parts' re-analyses ({', '.join(models)})",
+                 fontsize=9)
 
 
-def _print_table(runs, labels) -> None:
-    """One line per run: case, model, load, Δ and the re-analyses' gaps."""
-    print(f"{'run':40s} {'case':12s} {'model':11s} {'load':>9s} {'Δ (m)':>11s} "
-          f"{'gap darcy':>10s} {'gap follower':>13s}")
-    for (run, ana), lab in zip(runs, labels):
-        gaps = (ana or {}).get("gap_at_largest_pressure", {})
-        g = lambda k: "—" if gaps.get(k) is None else f"{100 * gaps[k]:+.1f} %"
-        d = run.summary.get("output_displacement")
-        print(f"{str(run.path)[-40:]:40s} {run.case.name:12s} {run.params.model:11s} "
-              f"{run.load:9.3g} {fmt_value(d, '11.4g'):>11s} {g('darcy'):>10s} "
-              f"{g('follower'):>13s}")
+#: the re-analyses whose gap the table shows, in this order
+_GAP_KINDS = ("darcy", "fixed", "follower")
+
+
+def compare_table(runs) -> list[str]:
+    """The table ``pacto compare`` prints: a header, then one row per run: its folder (the
+    whole path where two share a name), case, model, load, mesh (dimension and elements),
+    volume fraction, Δ and, for every kind some run was analysed with, the gap at its
+    largest pressure (``—``: not analysed)."""
+    kinds = [k for k in _GAP_KINDS if any(_gaps(a).get(k) is not None for _, a in runs)]
+    head = ["run", "case", "model", "load", "mesh", "volume", "Δ (m)"] + [f"gap {k}"
+                                                                        for k in kinds]
+    names = [r.path.name for r, _ in runs]
+    rows = []
+    for (run, ana), name in zip(runs, names):
+        s = run.summary
+        mesh = s.get("mesh") if isinstance(s.get("mesh"), dict) else {}
+        gaps = _gaps(ana)
+        rows.append([name if names.count(name) == 1 else str(run.path), run.case.name,
+                     run.params.model, f"{run.load:.3g} {run.case.load_unit}",
+                     f"{mesh.get('dim', '?')}D, {mesh.get('elements', '?')} el.",
+                     fmt_value(s.get("volume_fraction"), ".3f"),
+                     fmt_value(s.get("output_displacement"), ".4g")]
+                    + ["—" if gaps.get(k) is None else f"{100 * gaps[k]:+.1f} %" for k in kinds])
+    widths = [max(len(r[i]) for r in [head] + rows) for i in range(len(head))]
+    left = 3  # run, case, model: left-aligned; the numbers right-aligned
+    return ["  ".join(c.ljust(w) if i < left else c.rjust(w)
+                      for i, (c, w) in enumerate(zip(r, widths))).rstrip()
+            for r in [head] + rows]
+
+
+def _gaps(ana) -> dict:
+    """``{kind: gap}`` at the largest pressure of an analysis.json (none: not analysed, or a
+    part as built)."""
+    return (ana or {}).get("gap_at_largest_pressure") or {}

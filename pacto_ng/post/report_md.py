@@ -38,9 +38,9 @@ def _head(d) -> list[str]:
         L += [f"**Note**: {run['order_note']}.", ""]
     if run.get("load_path_note"):
         L += [f"**Warning**: {run['load_path_note']}.", ""]
-    if run["dim"] == 2:
-        L += ["| run design ρ̄ | run Darcy pressure |", "|---|---|",
-              "| ![design](../design.png) | ![pressure](../pressure.png) |", ""]
+    # a 3D run's pictures: the ρ̄ = 0.5 iso-surface and the mid-depth cut (plots3d)
+    L += ["| run design ρ̄ | run Darcy pressure |", "|---|---|",
+          "| ![design](../design.png) | ![pressure](../pressure.png) |", ""]
     return L
 
 

@@ -75,6 +75,21 @@ def test_analysis_json_csv_and_report_agree(chamber_remeshed, chamber_sweeps):
     assert all(ln.count("|") == head for ln in body), body
 
 
+def test_a_3d_run_s_report_shows_the_same_pictures(chamber_remeshed, chamber_sweeps):
+    """report.md of a 3D run's part (one flow, report_md): the run's design.png and
+    pressure.png (a 3D run writes both: the iso-surface and the mid-depth cut), the analysis
+    and the deformed part, and the part's tetrahedra; an as-built part has no run pictures."""
+    data = _data(chamber_remeshed, chamber_sweeps)
+    data["run"]["dim"] = 3
+    md = report_md(data)
+    for picture in ("![design](../design.png)", "![pressure](../pressure.png)",
+                    "![analysis](analysis.png)", "![deformed](deformed.png)"):
+        assert picture in md
+    assert "tetrahedra" in md and "triangles" not in md
+    as_built = report_md(_data(chamber_remeshed, chamber_sweeps, expected=False))
+    assert "../design.png" not in as_built
+
+
 def test_a_part_as_built_has_no_expected_and_no_gap(chamber_remeshed, chamber_sweeps):
     data = _data(chamber_remeshed, chamber_sweeps, expected=False)
     assert data["gap_at_largest_pressure"] is None and data["gap_at_smallest_pressure"] is None
