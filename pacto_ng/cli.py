@@ -16,7 +16,7 @@
                   [--kinds darcy,fixed,follower] [--quiet]
     pacto export DIR --format stl|vtk|vtu|msh [--out FILE] [--units mm|m] [--no-mirror]
                  [--threshold T] [--threshold2 T2] [--maxh H]
-    pacto refine DIR [--steps N] [--overwrite] [--quiet]
+    pacto refine DIR [--steps N] [--model M] [--load P] [--load-type T] [--overwrite] [--quiet]
     pacto refine DIR --check-gradients [--directions N] [--tol T]
     pacto compare DIR1 DIR2 ... [--out FILE.png]
 

@@ -194,6 +194,12 @@ def _refine_parser(sub):
                        "refined.stl).")
     f.add_argument("dir", help="a finished run folder (2D, a pressure case)")
     f.add_argument("--steps", type=int, default=20, help="descent steps (default 20)")
+    f.add_argument("--model", help="the material law of the part's analysis (default: the "
+                   "run's), e.g. neohookean")
+    f.add_argument("--load", type=float, help="the inlet pressure in the case's load unit "
+                   "(default: the load the run reached)")
+    f.add_argument("--load-type", choices=("fixed", "follower"), help="the wall pressure "
+                   "fixed or following the deformation (default: the run's load_type)")
     f.add_argument("--check-gradients", action="store_true", help="instead of refining, "
                    "check the refinement's shape gradients (Δ, volume, and Δ/SE for a "
                    "mechanism) against central differences on the run's part; writes nothing; "

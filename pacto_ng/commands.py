@@ -22,7 +22,7 @@ from .post.cli_commands import export_run
 from .post.compare import compare_runs
 from .post.part_stage import finish_run
 from .post.refine_check import check_refine_gradients
-from .post.refine_run import refine_run
+from .post.refine_run import Loading, refine_run
 from .runner import optimise_case, resume_run
 from .sweep import run_sweep
 from .sweep_plan import parse_loads, parse_models
@@ -32,12 +32,13 @@ def post_command(args) -> int:
     """``pacto analyse``, ``pacto export``, ``pacto refine`` and ``pacto compare``."""
     if args.command == "analyse":
         return _analyse_command(args)
-    if args.command == "refine" and args.check_gradients:
-        return check_refine_gradients(args.dir, directions=args.directions, tol=args.tol,
-                                      quiet=args.quiet)
     if args.command == "refine":
+        loading = Loading(args.model, args.load, args.load_type)
+        if args.check_gradients:
+            return check_refine_gradients(args.dir, directions=args.directions, tol=args.tol,
+                                          quiet=args.quiet, loading=loading)
         return refine_run(args.dir, steps=args.steps, quiet=args.quiet,
-                          overwrite=args.overwrite)
+                          overwrite=args.overwrite, loading=loading)
     if args.command == "export":
         return export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
                           maxh=args.maxh, quiet=args.quiet, threshold2=args.threshold2,

@@ -23,7 +23,7 @@ from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
 from ..shape import RieszMap, volume, volume_integrals
 from .finish import say
-from .refine_run import part_size, refinement, shape_response
+from .refine_run import Loading, part_size, refinement, shape_response
 from .runs import load_run
 
 #: the directions checked when ``--directions`` is not given
@@ -37,7 +37,7 @@ SEED = 0
 
 
 def check_refine_gradients(folder, *, directions: int = DIRECTIONS, tol: float = TOL,
-                           quiet: bool = False) -> int:
+                           quiet: bool = False, loading: Loading = Loading()) -> int:
     """The module's check on the finished run ``folder``; returns the exit code (0 when
     every relative error is at most ``tol``, else 1); bad input is an InputError."""
     if directions < 1:
@@ -46,7 +46,7 @@ def check_refine_gradients(folder, *, directions: int = DIRECTIONS, tol: float =
         raise InputError(f"--tol: must be positive, got {tol}")
     run = load_run(folder, "refine")
     part, job = refinement(run, quiet, f"the shape gradients checked in {directions} "
-                                       f"directions")
+                                       f"directions", loading)
     response, space = shape_response(part.mesh, job)
     names = ("delta", "volume") + (("ratio",) if job.hold_ratio else ())
     riesz = RieszMap(space, alpha=1.0 / part_size(part.mesh) ** 2)

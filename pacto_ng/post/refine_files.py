@@ -12,15 +12,21 @@ from ngsolve import BND, VOL
 
 from ..files import atomic_path, atomic_write_text
 from .domain import symmetry_line
+from .grid import mesh_to_pyvista
+from .mirror3d import mirror_surface, symmetry_planes
 from .part2d import part_mesh, write_part_stl
+from .part3d import write_part_stl as write_surface_stl
+from .plots3d import plotter as offscreen_plotter
 
 #: the columns of history.csv
 COLUMNS = ("step", "mesh", "delta", "ratio", "volume", "det", "length", "merit")
+#: a coordinate within this share of the part's size of zero is drawn as zero
+SNAP = 1e-9
 FILES = ("history.csv", "summary.json", "refined.vtu", "refined.png", "refined.stl")
 
 
 def moved_points(space, response) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(reference vertices, the shape's motion, u)`` at the part's vertices, each (n, 2).
+    """``(reference vertices, the shape's motion, u)`` at the part's vertices, each (n, dim).
 
     Both fields are read at the reference vertices with the deformation unset: a finite
     element function moves with the mesh, so its value at a reference vertex is its value at
@@ -29,7 +35,7 @@ def moved_points(space, response) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     ref = np.array([v.point for v in mesh.vertices], dtype=float)
     mesh.UnsetDeformation()
     try:
-        where = mesh(ref[:, 0], ref[:, 1])
+        where = mesh(*(ref[:, k] for k in range(mesh.dim)))
         motion = np.asarray(space.deformation(where), dtype=float).reshape(len(ref), -1)
         u = np.asarray(response.u(where), dtype=float).reshape(len(ref), -1)
     finally:
@@ -57,16 +63,21 @@ def write_refinement(out: Path, run, refined, summary: dict, frame) -> None:
     atomic_write_text(out / "summary.json", json.dumps(summary, indent=1))
     ref, motion, u = moved_points(space, response)
     moved = ref + motion
-    triangles = np.array([[v.nr for v in el.vertices] for el in mesh.Elements(VOL)])
-    pad = lambda a: np.column_stack([a, np.zeros(len(a))])  # noqa: E731
+    cells = np.array([[v.nr for v in el.vertices] for el in mesh.Elements(VOL)])
+    pad = lambda a: np.column_stack([a, np.zeros(len(a))]) if mesh.dim == 2 else a  # noqa: E731
+    kind = "triangle" if mesh.dim == 2 else "tetra"
     with atomic_path(out / "refined.vtu") as tmp:
-        meshio.write(str(tmp), meshio.Mesh(pad(moved), [("triangle", triangles)],
+        meshio.write(str(tmp), meshio.Mesh(pad(moved), [(kind, cells)],
                                            point_data={"u": pad(u), "moved": pad(motion)}),
                      file_format="vtu")
-    before = (np.array([v.point for v in first.vertices], dtype=float), _edges(first))
     with atomic_path(out / "refined.png") as tmp:
-        plot_outlines(tmp, before, (moved, _edges(mesh)), summary, run.case.name,
-                      domain=frame[0], clamp=frame[1])
+        if mesh.dim == 2:
+            before = (np.array([v.point for v in first.vertices], dtype=float), _edges(first))
+            plot_outlines(tmp, before, (moved, _edges(mesh)), summary, run.case.name,
+                          domain=frame[0], clamp=frame[1])
+        else:
+            plot_surfaces(tmp, mesh_to_pyvista(first), _grid(moved, cells), motion, summary,
+                          run.case.name)
 
 
 def _edges(mesh) -> list:
@@ -122,9 +133,59 @@ def plot_outlines(path, before, after, summary: dict, name: str, *, domain=None,
 
 
 def write_stl(path: Path, mesh, thickness: float, name: str) -> None:
-    """The refined part (``mesh``: its independent remesh) as ``pacto export`` writes a 2D
-    part: whole (mirrored across the symmetry line, if the case has one), extruded by the
-    thickness, a closed binary STL in mm."""
+    """The refined part (``mesh``: its independent remesh) as ``pacto export`` writes a part,
+    whole (mirrored across the case's symmetry line or planes), a closed binary STL in mm:
+    in 2D extruded by the thickness, in 3D its boundary surface."""
+    header = f"pacto_ng refined part of {name}"
     with atomic_path(path) as tmp:
-        write_part_stl(tmp, part_mesh(mesh, symmetry_line(mesh)), thickness, units="mm",
-                       header=f"pacto_ng refined part of {name}")
+        if mesh.dim == 2:
+            write_part_stl(tmp, part_mesh(mesh, symmetry_line(mesh)), thickness, units="mm",
+                           header=header)
+        else:
+            surface = mesh_to_pyvista(mesh).extract_surface(algorithm="dataset_surface").triangulate()
+            write_surface_stl(tmp, mirror_surface(surface, symmetry_planes(mesh)), "mm",
+                              header)
+
+
+def _grid(points, cells):
+    """The tetrahedra ``cells`` on ``points`` (m) as a pyvista UnstructuredGrid."""
+    import pyvista as pv
+
+    flat = np.column_stack([np.full(len(cells), 4), cells]).ravel()
+    types = np.full(len(cells), pv.CellType.TETRA, dtype=np.uint8)
+    return pv.UnstructuredGrid(flat, types, np.asarray(points, dtype=float))
+
+
+def plot_surfaces(path, before, after, motion, summary: dict, name: str) -> None:
+    """refined.png of a 3D part: the part as made (left) and refined (right, coloured by how
+    far the refinement moved each point, mm), their surfaces from the same camera, with
+    axes in metres; ``before`` and ``after`` pyvista grids, ``motion`` (n, 3) at the points
+    of ``after``."""
+    size = float(np.max(np.ptp(np.asarray(after.points), axis=0)))
+    for grid in (before, after):  # round-off shown as a coordinate (e.g. -1.1e-18) reads 0
+        points = np.array(grid.points)
+        points[np.abs(points) < SNAP * size] = 0.0
+        grid.points = points
+    after.point_data["moved (mm)"] = 1e3 * np.linalg.norm(motion, axis=1)
+    plotter = offscreen_plotter((1, 2), (1400, 600))
+    for column, (grid, what) in enumerate(((before, "the part as made"),
+                                           (after, "refined: the motion (mm)"))):
+        plotter.subplot(0, column)
+        surface = grid.extract_surface(algorithm="dataset_surface")
+        if column:
+            plotter.add_mesh(surface, scalars="moved (mm)", cmap="viridis",
+                             smooth_shading=True, scalar_bar_args={"title": "moved (mm)"})
+        else:
+            plotter.add_mesh(surface, color="lightgrey", smooth_shading=True)
+        plotter.show_bounds(xtitle="x (m)", ytitle="y (m)", ztitle="z (m)", fmt="%.3g",
+                            font_size=9, n_zlabels=2)
+        plotter.add_text(what, font_size=10)
+        plotter.view_isometric()
+    plotter.link_views()
+    s = summary
+    plotter.subplot(0, 0)
+    plotter.add_text(f"{name}: delta {s['delta_before']:.4g} -> {s['delta_after']:.4g} m "
+                     f"({100 * s['gain']:+.1f} %), status {s['status']}", position="lower_left",
+                     font_size=9)
+    plotter.screenshot(str(path))
+    plotter.close()

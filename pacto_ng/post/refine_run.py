@@ -46,26 +46,25 @@ these files and nothing else):
 
 The statuses are those of :func:`~pacto_ng.shape.refine.refine`: ``steps`` (the asked steps
 done), ``converged``, ``mesh_quality`` (the mesh would fold after the last remesh allowed)
-and ``no_descent``.  3D runs, runs without a pressure load or an output port, and output
-springs on a boundary port are refused with one line.
+and ``no_descent``.  Runs without a pressure load or an output port, and runs whose
+objective is neither a mechanism's nor an output's, are refused with one line.
 """
 from __future__ import annotations
 
+import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
-from ..physics.mechanics import Supports
 from ..shape import PartResponse, ShapeSpace, refine, remesh_moved, volume
 from .analysis_options import analysis_params
 from .finish import say
 from .part import make_part, part_ports, present_supports
 from .part_stage import PART_MAXH, PART_ORDER
 from .refine_files import write_refinement, write_stl
-from .post3d import is_3d
 from .runs import copy_gridfunction, load_run, rebuild
 
 #: the refinement's steps when ``--steps`` is not given
@@ -99,8 +98,19 @@ CHECK_MAXH = 0.7
 OUTSIDE_TOL = 1e-9
 
 
-def refine_run(folder, *, steps: int = STEPS, quiet: bool = False,
-               overwrite: bool = False) -> int:
+@dataclass(frozen=True)
+class Loading:
+    """What a user may change of the run's loading for the refinement (None: the run's own):
+    the material ``model``, the inlet pressure ``load`` and its ``kind`` (``fixed`` or
+    ``follower``)."""
+
+    model: str | None = None
+    load: float | None = None
+    kind: str | None = None
+
+
+def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bool = False,
+               loading: Loading = Loading()) -> int:
     """``pacto refine RUN``: the run's part made, its shape refined for a larger Δ at no more
     volume, the results written into ``RUN/refine/`` (the module docstring).  Returns the exit
     code (0); bad input is an InputError (one line, exit 2)."""
@@ -112,9 +122,9 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False,
     if out.exists() and not overwrite:
         raise InputError(f"refine: '{out}' exists (an earlier refinement): add --overwrite to "
                          f"replace its files")
-    part, job = refinement(run, quiet, f"{steps} steps")
+    part, job = refinement(run, quiet, f"{steps} steps", loading)
     setup, kind, load = job.setup, job.kind, job.load
-    bound = volume(part.mesh, job.params.thickness)
+    bound = volume(part.mesh, job.thickness(part.mesh.dim))
     space, response, result, remeshes = _refine_remeshing(job, part.mesh, bound, steps, quiet)
     settings = dict(threshold=part.threshold, threshold_note=part.choice.get("note"),
                     maxh=job.maxh, order=job.params.order, elements=part.mesh.ne,
@@ -122,7 +132,9 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False,
     summary = _summary(run, result, bound, kind, load, settings)
     summary["ratio"] = _ratio(response, result) if job.hold_ratio else None
     summary["remeshes"] = remeshes
-    summary["warnings"] = _leaves(space, job.domain)
+    start = float(np.max(_outside(np.array([v.point for v in part.mesh.vertices]),
+                                  job.domain)))
+    summary["warnings"] = _leaves(space, job.domain, start)
     check_mesh, summary["check"] = _check(job, space, result.delta, quiet)
     for line in summary["warnings"]:
         say(quiet, f"  warning: {line}")
@@ -139,21 +151,24 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False,
     return 0
 
 
-def refinement(run, quiet: bool, what: str):
+def refinement(run, quiet: bool, what: str, loading: Loading = Loading()):
     """``(Part, Job)``: the part of the finished run ``run`` (:func:`~.runs.load_run`) as
-    ``pacto analyse`` makes it, and what its refinement shares on every mesh; InputError
-    (one line) for a run the refinement does not apply to.  Prints the set-up's lines
-    (``what``: the task, e.g. "20 steps")."""
-    setup, kind, objective = _checked(run)
-    load = float(run.summary.get("load_reached") or run.load)
-    say(quiet, f"refine {run.path}: {run.case.name}, model {run.params.model}, {kind} "
-               f"pressure {load:g} {run.case.load_unit}, {what}")
+    ``pacto analyse`` makes it, and what its refinement shares on every mesh, at the run's
+    loading or ``loading``; InputError (one line) for a run the refinement does not apply
+    to.  Prints the set-up's lines (``what``: the task, e.g. "20 steps")."""
+    if loading.load is not None and not (math.isfinite(loading.load) and loading.load > 0):
+        raise InputError(f"--load: must be a positive pressure, got {loading.load:g}")
+    setup, kind, objective = _checked(run, loading.kind)
+    load = loading.load or float(run.summary.get("load_reached") or run.load)
     problem = rebuild(run)
+    dim = problem.mesh.dim
+    params = analysis_params(run.params, loading.model, PART_ORDER[dim])
+    say(quiet, f"refine {run.path}: {run.case.name}, model {params.model}, {kind} "
+               f"pressure {load:g} {run.case.load_unit}, {what}")
     part, maxh = _part(run, problem, setup)
-    job = Job(setup, analysis_params(run.params, None, PART_ORDER[2]), load, kind, maxh,
-              _bounds(problem.mesh), REFINED[objective])
+    job = Job(setup, params, load, kind, maxh, _bounds(problem.mesh), REFINED[objective])
     say(quiet, f"  the part: {part.mesh.ne} elements, maxh {maxh:.4g} m, order "
-               f"{job.params.order}, volume {volume(part.mesh, job.params.thickness):.4g} m³ "
+               f"{job.params.order}, volume {volume(part.mesh, job.thickness(dim)):.4g} m³ "
                f"(the bound)")
     return part, job
 
@@ -171,6 +186,11 @@ class Job:
     maxh: float
     domain: tuple
     hold_ratio: bool
+
+    def thickness(self, dim: int) -> float:
+        """The part's thickness: the run's for a 2D part (its volume is thickness × area),
+        1 in 3D."""
+        return float(self.params.thickness) if dim == 2 else 1.0
 
 
 def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
@@ -244,13 +264,14 @@ def _check(job: Job, space, delta: float, quiet: bool):
     return mesh, entry
 
 
-def _checked(run):
-    """``(Setup, load type, the run's objective)`` of a run the refinement applies to;
-    InputError (one line) otherwise, before anything is rebuilt."""
-    if is_3d(run):
-        raise InputError("refine: 3D parts are not refined yet")
+def _checked(run, kind: str | None):
+    """``(Setup, load type, the run's objective)`` of a run the refinement applies to, the
+    load type ``kind`` or the run's; InputError (one line) otherwise, before anything is
+    rebuilt."""
     setup = run.case.make_setup(run.params)
-    kind = run.params.load_type
+    if kind is not None and kind not in ("fixed", "follower"):
+        raise InputError(f"--load-type: must be fixed or follower, got '{kind}'")
+    kind = kind or run.params.load_type
     if setup.pressure is None or kind not in ("fixed", "follower"):
         raise InputError(f"refine: case '{run.case.name}' has no wall pressure to refine for "
                          f"(the refinement applies to pressure cases, fixed or follower)")
@@ -263,24 +284,32 @@ def _checked(run):
     return setup, kind, objective
 
 
-def _leaves(space, domain) -> list[str]:
+def _outside(points, domain) -> np.ndarray:
+    """How far each of ``points`` lies out of the box ``domain`` (its lowest and highest
+    corner), m."""
+    low, high = domain
+    return np.max(np.maximum(np.maximum(low - points, points - high), 0.0), axis=1)
+
+
+def _leaves(space, domain, start: float) -> list[str]:
     """A warning when the refined part reaches out of the run's design domain (``domain``:
-    its lowest and highest corner) by more than :data:`OUTSIDE_TOL` of the domain's size:
-    the refinement keeps every vertex in the domain's box, so this is a check only."""
+    its lowest and highest corner) farther than the part as made did (``start``, m) by more
+    than :data:`OUTSIDE_TOL` of the domain's size: the refinement keeps every vertex it
+    moves in the domain's box, so this is a check only (a part as made may stick out by the
+    remesher's round-off: 3e-9 m on pa-gripper-3d, at a held output vertex)."""
     moved = space.moved_points()
-    low, high = domain[0][:2], domain[1][:2]
-    out = np.maximum(np.maximum(low - moved, moved - high), 0.0)
+    out = _outside(moved, domain)
     far = float(np.max(out))
-    if not far > OUTSIDE_TOL * float(np.max(high - low)):
+    if not far > start + OUTSIDE_TOL * float(np.max(domain[1] - domain[0])):
         return []
-    at = moved[int(np.argmax(np.max(out, axis=1)))]
+    where = ", ".join(f"{c:.3g}" for c in moved[int(np.argmax(out))])
     return [f"the refined part reaches {far:.3g} m out of the run's design domain (at "
-            f"({at[0]:.3g}, {at[1]:.3g}) m)"]
+            f"({where}) m)"]
 
 
 def _part(run, problem, setup):
     """``(Part, maxh)``: the run's part as ``pacto analyse RUN`` makes it at its defaults."""
-    maxh = PART_MAXH[2] * float(problem.h)
+    maxh = PART_MAXH[problem.mesh.dim] * float(problem.h)
     part = make_part(problem, setup, threshold=0.5, maxh=maxh, threshold2=0.5, connect=True,
                      pressure=copy_gridfunction(problem.pressure_block.gfp), p_in=run.load,
                      mesh_time_limit=run.params.mesh_time_limit)
@@ -295,7 +324,7 @@ def shape_response(mesh, job: Job):
     regions = set(mesh.GetBoundaries()) | set(mesh.GetBBoundaries())
     held = tuple(dict.fromkeys(supports.clamp + tuple(p.region for p in ports
                                                       if p.region in regions)))
-    hold = Supports(clamp=held, fix_x=supports.fix_x, fix_y=supports.fix_y)
+    hold = replace(supports, clamp=held)
     try:
         response = PartResponse(mesh, params=job.params, supports=supports, ports=ports,
                                 pressure=job.load, kind=job.kind)

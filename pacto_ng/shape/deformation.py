@@ -83,10 +83,15 @@ class ShapeSpace:
         self.mesh.SetDeformation(self.deformation)
 
     def moved_points(self) -> np.ndarray:
-        """The mesh's vertices at their moved positions ``x0 + d(x0)``, (nv, dim).  ``d`` is
-        read at the reference vertices with the deformation unset (a finite element function
-        moves with the mesh: the NGSolve notes, "Shape derivatives")."""
+        """The mesh's vertices at their moved positions ``x0 + d(x0)``, (nv, dim).  Of an
+        order-1 space the vertex displacements are the coefficients (component ``k`` of
+        vertex ``i`` at ``k·nv + i``: exact); otherwise ``d`` is read at the reference
+        vertices with the deformation unset (a finite element function moves with the mesh:
+        the NGSolve notes, "Shape derivatives"; a point search, exact to ~1e-8 relative)."""
         ref = np.array([v.point for v in self.mesh.vertices], dtype=float)
+        dim, nv = ref.shape[1], len(ref)
+        if self.space.globalorder == 1 and self.ndof == dim * nv:
+            return ref + self.deformation.vec.FV().NumPy().reshape(dim, nv).T
         self.mesh.UnsetDeformation()
         try:
             where = self.mesh(*(ref[:, k] for k in range(ref.shape[1])))

@@ -1,4 +1,4 @@
-"""A fresh Netgen mesh of a moved 2D part: its boundary as it stands, meshed anew.
+"""A fresh Netgen mesh of a moved part: its boundary as it stands, meshed anew.
 
 When the refinement's mesh motion would fold elements (:func:`~pacto_ng.shape.riesz.
 step_length` finds no admissible step), the part is remeshed and the refinement goes on
@@ -14,6 +14,12 @@ point of the old mesh (an output port) is a vertex of the geometry, named again 
 mesh.  Netgen meshes the polygon with triangles of size at most ``maxh`` (segments shorter
 than ``maxh`` are kept as they are: the mesh is as fine as the boundary's resolution where
 that is finer).
+
+In 3D the moved boundary triangles themselves are kept (their names, and the materials on
+their two sides as the inner and outer domain of their face descriptors) and Netgen fills
+the volume anew (``GenerateVolumeMesh`` at ``maxh``): the interior elements, which the
+motion squeezes, are new; a squeezed surface triangle stays as it is (no surface geometry
+to remesh it on).
 """
 from __future__ import annotations
 
@@ -21,23 +27,37 @@ import numpy as np
 import ngsolve
 from netgen.geom2d import SplineGeometry
 from netgen.libngpy._meshing import NgException
-from netgen.meshing import Element0D
-from ngsolve import BBND, BND, VOL
+from netgen.meshing import Element0D, Element2D, FaceDescriptor, MeshPoint, Pnt
+from netgen.meshing import Mesh as NgMesh
+from ngsolve import BBBND, BBND, BND, VOL
 
 #: the name Netgen gives a geometry's points that have none
 UNNAMED = "default"
 
 
 def remesh_moved(mesh, points, maxh: float):
-    """A new NGSolve mesh of the 2D part ``mesh`` with its vertices at ``points`` ((nv, 2),
+    """A new NGSolve mesh of the part ``mesh`` with its vertices at ``points`` ((nv, dim),
     e.g. :meth:`~pacto_ng.shape.deformation.ShapeSpace.moved_points`), meshed at ``maxh``
-    (see the module).  ValueError (one line) for a 3D mesh or when Netgen fails."""
-    if mesh.dim != 2:
-        raise ValueError("remesh: only 2D parts are remeshed")
-    points = np.asarray(points, dtype=float)[:, :2]
-    if points.shape != (mesh.nv, 2) or not np.all(np.isfinite(points)):
+    (see the module: 2D anew from the boundary polygon, 3D a new interior for the same
+    surface triangles).  ValueError (one line) when Netgen fails."""
+    dim = mesh.dim
+    points = np.asarray(points, dtype=float)[:, :dim]
+    if points.shape != (mesh.nv, dim) or not np.all(np.isfinite(points)):
         raise ValueError(f"remesh: {points.shape} points for a mesh of {mesh.nv} vertices")
     materials = list(dict.fromkeys(mesh.GetMaterials()))
+    try:
+        ngm = (_polygon if dim == 2 else _surface)(mesh, points, materials, float(maxh))
+    except NgException as err:
+        raise ValueError(f"remesh: Netgen could not mesh the moved part: {err}") from None
+    _name_points(ngm, mesh, points)
+    new = ngsolve.Mesh(ngm)
+    if new.ne == 0:
+        raise ValueError("remesh: Netgen left the moved part without elements")
+    return new
+
+
+def _polygon(mesh, points, materials, maxh: float):
+    """The Netgen mesh of a moved 2D part: its boundary polygon as a ``SplineGeometry``."""
     sides = _sides(mesh, points, materials)
     geo = SplineGeometry()
     index = {}
@@ -47,15 +67,58 @@ def remesh_moved(mesh, points, maxh: float):
         geo.Append(["line", index[a], index[b]], leftdomain=left, rightdomain=right, bc=name)
     for k, name in enumerate(materials):
         geo.SetMaterial(k + 1, name)
-    try:
-        ngm = geo.GenerateMesh(maxh=float(maxh))
-    except NgException as err:
-        raise ValueError(f"remesh: Netgen could not mesh the moved part: {err}") from None
-    _name_points(ngm, mesh, points)
-    new = ngsolve.Mesh(ngm)
-    if new.ne == 0:
-        raise ValueError("remesh: Netgen left the moved part without triangles")
-    return new
+    return geo.GenerateMesh(maxh=maxh)
+
+
+def _surface(mesh, points, materials, maxh: float):
+    """The Netgen mesh of a moved 3D part: its boundary triangles kept as they are (their
+    names, and the materials on their two sides as the face's inner and outer domain; each
+    triangle oriented from its inner to its outer domain), the volume meshed anew
+    (``GenerateVolumeMesh``)."""
+    faces = _faces(mesh, points, materials)
+    ngm = NgMesh(dim=3)
+    index = {v: ngm.Add(MeshPoint(Pnt(*points[v])))
+             for v in sorted({v for tri, _ in faces for v in tri})}
+    descriptors = {}
+    for tri, (inner, outer, name) in faces:
+        key = (inner, outer, name)
+        if key not in descriptors:
+            descriptors[key] = ngm.Add(FaceDescriptor(bc=len(descriptors) + 1, domin=inner,
+                                                      domout=outer,
+                                                      surfnr=len(descriptors) + 1))
+            ngm.SetBCName(len(descriptors) - 1, name)
+        ngm.Add(Element2D(descriptors[key], [index[v] for v in tri]))
+    for k, name in enumerate(materials):
+        ngm.SetMaterial(k + 1, name)
+    ngm.GenerateVolumeMesh(maxh=maxh)
+    return ngm
+
+
+def _faces(mesh, points, materials) -> list:
+    """``[(triangle, (inner domain, outer domain, boundary name))]`` for every boundary
+    triangle of a 3D ``mesh``, its vertices ordered so that its normal points from the inner
+    domain to the outer one (domains 1-based in ``materials``, 0 for none), judged at the
+    moved ``points``."""
+    neighbours = {}
+    for el in mesh.Elements(VOL):
+        vs = [v.nr for v in el.vertices]
+        centroid = points[vs].mean(axis=0)
+        for face in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)):
+            key = tuple(sorted(vs[i] for i in face))
+            neighbours.setdefault(key, []).append((centroid, materials.index(el.mat) + 1))
+    out = []
+    for el in mesh.Elements(BND):
+        tri = [v.nr for v in el.vertices]
+        sides = neighbours.get(tuple(sorted(tri)), ())
+        if not sides:
+            raise ValueError(f"remesh: boundary triangle {tri} borders no element")
+        normal = np.cross(points[tri[1]] - points[tri[0]], points[tri[2]] - points[tri[0]])
+        centroid, inner = sides[0]
+        if np.dot(normal, centroid - points[tri[0]]) > 0:  # the normal points into it
+            tri = [tri[0], tri[2], tri[1]]
+        outer = sides[1][1] if len(sides) > 1 else 0
+        out.append((tri, (inner, outer, el.mat)))
+    return out
 
 
 def _sides(mesh, points, materials) -> dict:
@@ -87,16 +150,17 @@ def _sides(mesh, points, materials) -> dict:
 
 
 def _name_points(ngm, mesh, points) -> None:
-    """Every named point of ``mesh`` (its BBND elements but Netgen's unnamed ``default``
-    ones) as a point element of ``ngm`` at the new vertex nearest to the point's moved
-    position (a geometry vertex: the same place)."""
-    coords = np.array([p.p for p in ngm.Points()], dtype=float)[:, :2]
+    """Every named point of ``mesh`` (its point elements, BBND in 2D and BBBND in 3D, but
+    Netgen's unnamed ``default`` ones) as a point element of ``ngm`` at the new vertex
+    nearest to the point's moved position (a vertex of the old boundary: the same place)."""
+    dim = mesh.dim
+    coords = np.array([p.p for p in ngm.Points()], dtype=float)[:, :dim]
     regions = {}
-    for el in mesh.Elements(BBND):
+    for el in mesh.Elements(BBND if dim == 2 else BBBND):
         if el.mat == UNNAMED:
             continue
         v = el.vertices[0].nr
-        k = int(np.argmin(np.hypot(*(coords - points[v]).T)))
+        k = int(np.argmin(np.linalg.norm(coords - points[v], axis=1)))
         if el.mat not in regions:
             regions[el.mat] = ngm.AddRegion(el.mat, dim=0)
         ngm.Add(Element0D(k + 1, index=regions[el.mat]))

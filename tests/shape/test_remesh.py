@@ -1,5 +1,5 @@
-"""The moved part meshed anew (pacto_ng/shape/remesh.py): the same polygon, names, materials
-and named points, on fresh triangles.
+"""The moved part meshed anew (pacto_ng/shape/remesh.py): the same polygon (2D) or surface
+(3D), names, materials and named points, on fresh elements.
 
 The checks are exact properties of the construction: the new mesh's geometry is the moved
 mesh's boundary polygon, so its area, the length of each named boundary and each material's
@@ -9,8 +9,8 @@ to round-off, and a named point sits at its moved position.
 import numpy as np
 import ngsolve
 import pytest
-from netgen.occ import X, Y, Box, Circle, Glue, OCCGeometry, Rectangle
-from ngsolve import BBND, CF, Integrate, ds, dx, x, y
+from netgen.occ import X, Y, Z, Box, Circle, Glue, OCCGeometry, Rectangle
+from ngsolve import BBBND, BBND, CF, Integrate, ds, dx, x, y, z
 
 from pacto_ng.shape import ShapeSpace, remesh_moved
 
@@ -80,6 +80,30 @@ def test_refusals():
     mesh = _plate()
     with pytest.raises(ValueError, match="points for a mesh"):
         remesh_moved(mesh, np.zeros((3, 2)), 0.1)
-    cube = ngsolve.Mesh(OCCGeometry(Box((0, 0, 0), (1, 1, 1))).GenerateMesh(maxh=0.5))
-    with pytest.raises(ValueError, match="only 2D"):
-        remesh_moved(cube, np.zeros((cube.nv, 3)), 0.1)
+
+
+def test_a_3d_part_gets_a_new_interior_for_its_moved_surface():
+    """A box with a box cavity (``pressure``), moved by a smooth field: the new mesh has the
+    moved surface's names and areas and the moved volume (NGSolve's integrals on the moved
+    mesh, an independent route) to round-off, new tetrahedra, and the named point."""
+    outer = Box((0, 0, 0), (1, 0.5, 0.5))
+    outer.faces.Min(X).name = "fixed"
+    cavity = Box((0.3, 0.15, 0.15), (0.6, 0.35, 0.35))
+    cavity.faces.name = "pressure"
+    part = outer - cavity
+    part.vertices.Max(X + Y + Z).name = "tip"
+    mesh = ngsolve.Mesh(OCCGeometry(part).GenerateMesh(maxh=0.2))
+    space = _moved(mesh, CF((0.1 * x * y, 0.05 * x * x, 0.05 * x * z)))
+    points = space.moved_points()
+    new = remesh_moved(mesh, points, 0.1)
+    assert new.dim == 3 and new.ne != mesh.ne
+    assert Integrate(CF(1.0) * dx, new) == pytest.approx(Integrate(CF(1.0) * dx, mesh),
+                                                         rel=1e-12)
+    for name in ("fixed", "pressure", "default"):
+        assert Integrate(CF(1.0) * ds(name), new) == pytest.approx(
+            Integrate(CF(1.0) * ds(name), mesh), rel=1e-12), name
+    tip = [el for el in new.Elements(BBBND) if el.mat == "tip"]
+    old = [el.vertices[0].nr for el in mesh.Elements(BBBND) if el.mat == "tip"][0]
+    assert len(tip) == 1
+    np.testing.assert_allclose(new.vertices[tip[0].vertices[0].nr].point, points[old],
+                               atol=1e-14)

@@ -5,6 +5,7 @@ with one line naming it (pacto_ng/threads.py)."""
 import os
 import subprocess
 import sys
+import importlib
 import time
 
 import pytest
@@ -44,7 +45,8 @@ def no_meshing(monkeypatch):
 def _refused(args, tmp_path, capsys) -> tuple[str, float]:
     """Run ``pacto ARGS`` in this process: exit code 2, one line on stderr; (line, seconds)."""
     argv = [*args, "--out", str(tmp_path / "out")]
-    main(["run", "--no-part", "mbb", "--show-parameters"])  # imports done: the timing is the check's
+    main(["run", "--no-part", "mbb", "--show-parameters"])
+    importlib.import_module("pacto_ng.commands")  # imports done: the timing is the check's
     capsys.readouterr()
     t = time.perf_counter()
     code = main(argv)
