@@ -1,4 +1,4 @@
-"""Benchmarks: speed/accuracy studies that write docs/benchmarks.md (not tests)."""
+"""Benchmarks: speed/accuracy studies that write docs/studies.md (not tests)."""
 
 
 def perturbed(x):

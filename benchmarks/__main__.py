@@ -1,13 +1,13 @@
 """Run the performance and robustness benchmarks and regenerate their parts of the report.
 
-    python -m benchmarks all [--quick] [--out docs/benchmarks.md] [--plots docs]
+    python -m benchmarks all [--quick] [--out docs/studies.md] [--plots docs]
     python -m benchmarks peer|trade|stability|profile|mbb [--quick] ...
     python -m benchmarks solvers_3d|iteration_3d|iteration_ratio|locking|silicone|scaling|iterative_tolerance
         [--out FILE]   (one at a time)
 
 Each study writes one marked block of the report (``<!-- BEGIN name -->`` ... ``<!-- END name
 -->``); the rest of the file (other engineers' sections) is kept as it is.  The default run
-writes docs/benchmarks.md and docs/*.png and takes 10-25 minutes on 2 cores; ``--quick`` (the
+writes docs/studies.md and docs/*.png and takes 10-25 minutes on 2 cores; ``--quick`` (the
 CI smoke run, ~2 minutes) runs every study on its smallest set-up and writes to a file in the
 temp folder unless ``--out`` is given, so that it never replaces the full numbers.
 """
@@ -274,7 +274,7 @@ def main(argv=None):
             [] if args.out is None else ["--out", args.out])
     if args.out is None:
         args.out = (os.path.join(tempfile.gettempdir(), "pacto_benchmarks_quick.md")
-                    if args.quick else os.path.join("docs", "benchmarks.md"))
+                    if args.quick else os.path.join("docs", "studies.md"))
     if args.plots is None:
         args.plots = os.path.dirname(os.path.abspath(args.out))
     os.makedirs(args.plots, exist_ok=True)

@@ -2,7 +2,7 @@
 force cases (cantilever, inverter) at and past their published limits.
 
     python -m benchmarks.extreme [--runs DIR] [--only NAME,...] [--report-only] [--cross]
-                                 [--out FILE] [--doc docs/benchmarks.md]
+                                 [--out FILE] [--doc docs/studies.md]
 
 Every run is a plain ``pacto run`` (the command is in the table), written to ``DIR/NAME``
 (default: $PACTO_BENCH_RUNS or ``output/extreme``); a run whose folder already holds a
@@ -285,7 +285,7 @@ def main(argv=None):
 
         body = ["## Extreme loads (thesis meshes)", "", _describe(sys.modules[__name__]), "", out,
                 "", "Regenerate: `python -m benchmarks.extreme --runs DIR --doc "
-                "docs/benchmarks.md` (runs what is missing in DIR, then rewrites this block; "
+                "docs/studies.md` (runs what is missing in DIR, then rewrites this block; "
                 "`--cross` adds every PA design analysed at every pressure).",
                 "", f"*Tables written {machine()}; the runs' wall times are of one run each, "
                 "measured while other runs shared the 2 cores (2-4 processes at a time): "

@@ -1,6 +1,6 @@
 """3D optimisation iterations: time and peak memory per iteration against displacement dofs.
 
-    PACTO_THREADS=1 python3 -m benchmarks.iteration_3d [--budget 1400] [--out docs/benchmarks.md]
+    PACTO_THREADS=1 python3 -m benchmarks.iteration_3d [--budget 1400] [--out docs/studies.md]
     python3 -m benchmarks iteration_3d
 
 Per case (cantilever-3d, pneunet-3d), model (linear, Neo-Hookean at the case's default load
@@ -241,7 +241,7 @@ def main(argv=None):
                                                       "pacto_iteration_3d.json"),
                     help="the measured rows (kept: a second call resumes)")
     ap.add_argument("--fresh", action="store_true", help="forget the rows of --results")
-    ap.add_argument("--out", default=os.path.join("docs", "benchmarks.md"))
+    ap.add_argument("--out", default=os.path.join("docs", "studies.md"))
     ap.add_argument("--no-write", action="store_true", help="print the section only")
     args = ap.parse_args(argv)
     os.environ.setdefault("PACTO_THREADS", "1")

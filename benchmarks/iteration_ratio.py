@@ -2,7 +2,7 @@
 matrix-vector products at the same size, measured in the same process.
 
     PACTO_THREADS=1 python3 -m benchmarks.iteration_ratio [--sizes cantilever-3d:0.05,0.03]
-        [--models linear,neohookean] [--routes direct,iterative] [--out docs/benchmarks.md]
+        [--models linear,neohookean] [--routes direct,iterative] [--out docs/studies.md]
     python3 -m benchmarks iteration_ratio
 
 Per case, Netgen size (``maxh``), model and linear-solver route (``solver=direct|iterative``,

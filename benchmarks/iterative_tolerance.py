@@ -1,6 +1,6 @@
 """The iterative route's tolerance: what Newton's residual tolerance costs and what it changes.
 
-    python3 -m benchmarks iterative_tolerance [--iterations 25] [--out docs/benchmarks.md]
+    python3 -m benchmarks iterative_tolerance [--iterations 25] [--out docs/studies.md]
     python3 -m benchmarks.iterative_tolerance --no-write
 
 The two 3D linear cases at order 2 on their default meshes, every system on the iterative route
@@ -110,7 +110,7 @@ def markdown(rows, iterations: int, mach: str) -> str:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--iterations", type=int, default=25)
-    ap.add_argument("--out", default=os.path.join("docs", "benchmarks.md"))
+    ap.add_argument("--out", default=os.path.join("docs", "studies.md"))
     ap.add_argument("--no-write", action="store_true", help="print the section only")
     args = ap.parse_args(argv)
     from benchmarks.__main__ import machine, replace_block

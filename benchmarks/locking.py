@@ -1,6 +1,6 @@
 """Volumetric locking: the displacement formulation against the mixed one as ν -> 1/2.
 
-    python3 -m benchmarks locking [--out docs/benchmarks.md] [--plot docs/img/locking.png]
+    python3 -m benchmarks locking [--out docs/studies.md] [--plot docs/img/locking.png]
 
 A Neo-Hookean cantilever in plane strain (1 x 0.25 m, clamped on the left, a downward load of
 20 N spread over the right edge, t = 0.1 m, E = 1 MPa: a tip deflection of about 4 % of the
@@ -105,7 +105,7 @@ def report(rows: list[dict], plot: str | None) -> str:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=os.path.join("docs", "benchmarks.md"))
+    ap.add_argument("--out", default=os.path.join("docs", "studies.md"))
     ap.add_argument("--plot", default=os.path.join("docs", "img", "locking.png"))
     args = ap.parse_args(argv)
     from benchmarks.__main__ import machine, replace_block

@@ -1,6 +1,6 @@
 """The silicone cases at their defaults, and the pressure where each first fails.
 
-    python3 -m benchmarks silicone [--out docs/benchmarks.md] [--runs DIR] [--cases A,B]
+    python3 -m benchmarks silicone [--out docs/studies.md] [--runs DIR] [--cases A,B]
 
 For ``pneunet-silicone`` and ``gripper-silicone``: ``pacto run CASE`` at its defaults (into
 ``DIR/CASE``, reused if it holds a finished run), then ``pacto evaluate`` of its final design
@@ -95,7 +95,7 @@ def report(results: dict) -> str:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=os.path.join("docs", "benchmarks.md"))
+    ap.add_argument("--out", default=os.path.join("docs", "studies.md"))
     ap.add_argument("--runs", default=os.path.join("output", "benchmarks-silicone"))
     ap.add_argument("--cases", default=",".join(CASES))
     args = ap.parse_args(argv)

@@ -1,6 +1,6 @@
 """3D solvers: direct against iterative, time and peak memory per linear solve.
 
-    PACTO_THREADS=1 python3 -m benchmarks.solvers_3d [--sizes 4,6,8,11,14,18,22] [--out docs/benchmarks.md]
+    PACTO_THREADS=1 python3 -m benchmarks.solvers_3d [--sizes 4,6,8,11,14,18,22] [--out docs/studies.md]
 
 A cantilever box 1 x 0.25 x 0.25 m (NGSolve's `MakeStructured3DMesh`, 4n x n x n cubes of
 six tetrahedra each), clamped at x = 0, a downward traction on the end face x = 1; linear
@@ -175,7 +175,7 @@ def markdown(rows, took, mach):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="4,6,8,11,14,18,22")
-    ap.add_argument("--out", default=os.path.join("docs", "benchmarks.md"))
+    ap.add_argument("--out", default=os.path.join("docs", "studies.md"))
     ap.add_argument("--one", nargs=2, metavar=("N", "ROUTE"))
     ap.add_argument("--newton", action="store_true")
     args = ap.parse_args(argv)

@@ -54,7 +54,7 @@ CASE = Case(
     options=Options(),
     load_unit="N",
     # order 2 for linear and Wang: 0.23 % and 0.06 % from the finest objective (order 1: 1.0 %
-    # and 1.23 %, docs/benchmarks.md "Where the defaults sit"); a whole default Wang run at
+    # and 1.23 %, docs/studies.md "Where the defaults sit"); a whole default Wang run at
     # 144 kN took 1.56x order 1's time (261 s against 167 s, one thread each, 2026-12-02).
     # Neo-Hookean and gnl keep order 1, at which the extreme-load runs were made
     model_orders={"linear": 2, "wang": 2},

@@ -1,7 +1,7 @@
 """A 3D cantilever: a beam clamped at one end, a downward traction on the other (compliance).
 
 What it shows: the chain on Netgen tetrahedra, and the solver studies' model problem
-(docs/benchmarks.md, "3D solvers").  Beam 1.0 x 0.25 x 0.125 m, the face x = 0 clamped, a
+(docs/studies.md, "3D solvers").  Beam 1.0 x 0.25 x 0.125 m, the face x = 0 clamped, a
 total downward force ``load`` (N) spread uniformly over the end face x = 1.0.  E1 = 3e9 Pa,
 E0 = 1e-6 E1, ν = 0.4, volume fraction 0.3, tetrahedra of 0.03 m, Helmholtz filter of radius
 0.06 m.  Objective: end compliance F·u; linear by default, ``--model neohookean`` or ``wang``
@@ -9,7 +9,7 @@ for large deflections (the load then matters: 1e5 N by default).
 
 Continuation: β 1 → 16, each stage ending once settled (its last five compliance changes
 below 0.3 %) or after 20 iterations, up to 200 iterations.  Measured 2026-12-03
-(docs/benchmarks.md, "3D cases at defaults"): with β every 20 and 100 iterations the run
+(docs/studies.md, "3D cases at defaults"): with β every 20 and 100 iterations the run
 stopped at the cap still moving by the move limit (compliance 1.565e4); 200 iterations
 converge at 178 (1.531e4), the settled stages at 165 (1.531e4).
 """

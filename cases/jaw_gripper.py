@@ -19,7 +19,7 @@ of struts turns the push into both jaws swinging shut.  Triangles of 0.002 m (5 
 radius): on 0.004 m the run did not converge in 150 iterations and its one-element struts,
 thresholded at 0.5, broke, so that the part closed the wrong way (-104 % against the expected
 Δ); on 0.002 m it converges in 141 iterations (109 s) and its part closes, 50 % short of the
-expected Δ as the other cases' parts (docs/benchmarks.md, "Convergence at defaults").
+expected Δ as the other cases' parts (docs/studies.md, "Convergence at defaults").
 
     pacto run jaw-gripper                      # output/jaw-gripper-linear/
     pacto check-gradients jaw-gripper
@@ -100,7 +100,7 @@ CASE = pn.Case(
         # the robust formulation and a projection to β = 128: at β 32 the design stayed grey
         # (0.064); sharpened without robust, a point hinge the threshold cut (part -63 % off
         # the design); robust keeps its hinges (greyness 0.011, part +1.1 %,
-        # docs/benchmarks.md, "Per case at defaults")
+        # docs/studies.md, "Per case at defaults")
         robust=1),
     geometry=geometry,
     setup=setup,

@@ -15,13 +15,13 @@ few hinge elements (measured at the thesis mesh: soft material 0.1 % of the doma
 The Darcy pressure sees the total solid ρ̄1.  Passive solids (clamp block, jaw pad) are of the
 stiff material.  Load 5e5 Pa by default (the thesis limit of its Neo-Hookean model).
 Triangles of 0.002 m: the thesis mesh (0.004 m, ``--maxh 0.004``) is 1.9 % from the finest
-objective of the trade study (docs/benchmarks.md), 0.002 m 1.0 % at 4.6x its time.
+objective of the trade study (docs/studies.md), 0.002 m 1.0 % at 4.6x its time.
 β doubles every 7 iterations (final problem from iteration 85 of 160) and the move limit is
 0.1: with the pa-inverter's every 15 and 0.05 (final from 125) the objective still fell by
 0.1-0.4 % per iteration at the cap, −0.0939; every 10 and 0.1 reached −0.103 at the cap, still
 falling by about 0.1 % per iteration; every 8 and 0.1 the same (−0.1037, the last 4 changes below
 1e-3 at the cap); every 7 and 0.1 converged at iteration 151, −0.1030 (one run each,
-docs/benchmarks.md, "Convergence at defaults", measured 2026-12-03).
+docs/studies.md, "Convergence at defaults", measured 2026-12-03).
 """
 from __future__ import annotations
 

@@ -11,7 +11,7 @@ x ∈ [0.8L, L], y ∈ [0.2H, 0.25H].  Output: the inner right corner of the jaw
 Δ = -u_y (the jaw closes) with an output spring k_ss = k_out = 1e4 N/m.  E1 = 3e9 Pa,
 E0 = 1e-6 E1, ν = 0.4, plane strain, t = 1e-3 m, volume fraction 0.2, triangles of 0.002 m;
 load 1e6 Pa by default (the thesis ran 1e5–1e7 Pa).  The thesis mesh (0.004 m, Table 6.1,
-``--maxh 0.004``) is 2.9 % from the finest objective of the trade study (docs/benchmarks.md),
+``--maxh 0.004``) is 2.9 % from the finest objective of the trade study (docs/studies.md),
 0.002 m 0.17 % at 4x its time: the default.
 
 Objective ``mechanism``: minimise -sΔ/SE (thesis eq. 3.9); ``--set objective=output_se``

@@ -9,7 +9,7 @@ shorter continuation: p from 2 to 3 in steps of 0.1 and β doubling every 10 ite
 the final problem starts at iteration 60 of 160.  With pa-inverter-3d's (steps of 0.04, every
 15: final from iteration 100) the run did not meet the convergence test by the cap, −4.13e-3;
 with every 10 alone (final from 75) neither, −4.23e-3, still falling by about 0.1 % per
-iteration; with both it converged at iteration 139, −4.42e-3 (one run each, docs/benchmarks.md,
+iteration; with both it converged at iteration 139, −4.42e-3 (one run each, docs/studies.md,
 "3D cases at defaults", measured 2026-12-03).
 
 The robust formulation is on by default (``robust=1``: the worst case of the eroded,
@@ -17,7 +17,7 @@ intermediate and dilated designs).  Without it the converged design joined its t
 a grey hinge 1-2 elements wide, which thresholding at 0.5 cut: ``pacto analyse`` refused the
 part ("the part does not reach the output face").  With it the run converged at iteration 107
 (48 s) and its part, re-analysed under follower pressure, closes the jaw by 2.93 mm at 1e6 Pa
-(docs/benchmarks.md, "3D cases at defaults", measured 2026-12-04).
+(docs/studies.md, "3D cases at defaults", measured 2026-12-04).
 """
 from __future__ import annotations
 

@@ -73,20 +73,20 @@ CASE = Case(
     source="Thesis §6.1 (Table 6.1); Kumar, Frouws & Langelaar (2020), Struct Multidisc Optim 61",
     # p from 2, not 1: from p = 1 the optimiser leaves grey ρ̄ < 0.5 bars inside the cavity at
     # the thesis mesh; a smaller filter (0.008 m) avoids them there but leaks through thin walls
-    # on 120 x 60 quads (measured, docs/benchmarks.md)
+    # on 120 x 60 quads (measured, docs/studies.md)
     # a projection to β = 64 (iteration cap 220): at β 32 the design stayed grey (0.027).
     # The robust formulation (robust=1: the eroded, intermediate and dilated designs) keeps
     # the hinges the part is made with: without it (β 64) the part moved 21.9 % less than
     # its design at the part's order (the threshold -10.9 %, the remesh -16.2 % of it: hinges
     # one element wide), with it 15.4 % less, greyness 0.016, the part's motion 3.9 % below
-    # the standard chain's (docs/benchmarks.md, "The part at defaults")
+    # the standard chain's (docs/studies.md, "The part at defaults")
     defaults=PRESSURE_DEFAULTS.replace(penal_start=2.0, beta_max=64.0, iterations=220, robust=1),
     geometry=_geometry,
     setup=_setup,
     options=Options(),
     load_unit="Pa",
     # Wang at order 2: 0.17 % from the finest objective at 1.5x order 1's time per analysis
-    # (order 1: 1.33 %; docs/benchmarks.md, trade curves); the extreme-pressure runs pin
+    # (order 1: 1.33 %; docs/studies.md, trade curves); the extreme-pressure runs pin
     # order 1, the thesis's (2.5x faster at 5e7 Pa)
     model_orders={"wang": 2},
 )

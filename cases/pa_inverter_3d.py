@@ -35,7 +35,7 @@ CASE = Case(
     source="the 2D pa-inverter (thesis §6.1; Kumar, Frouws & Langelaar 2020) in 3D",
     # the Darcy outflow limited (docs/guide.md, "Sealed chambers"): without it the part's
     # chamber opened to the outside through a grey wall (leak 0.025, the seal check failed);
-    # with it the part is sealed and moves +10.3 % off the design (docs/benchmarks.md, "Per
+    # with it the part is sealed and moves +10.3 % off the design (docs/studies.md, "Per
     # case at defaults")
     defaults=PRESSURE_DEFAULTS_3D.replace(leak_max=1e-3),
     geometry=_geometry,

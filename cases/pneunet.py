@@ -10,10 +10,10 @@ left edge included).  Output: the bottom-right corner, Δ = -u_y (the member ben
 an output spring k_ss = k_out = 1e4 N/m (the thesis also shows 1e3).  E1 = 1e8 Pa,
 E0 = 1e-6 E1, ν = 0.4, plane strain, t = 1e-3 m, volume fraction 0.2, ηk = 0.2, ηh = 0.3,
 triangles of 0.0015 m; load 1e5 Pa by default (the thesis limit).  The thesis mesh (0.003 m,
-``--maxh 0.003``) is 3.8 % from the finest objective of the trade study (docs/benchmarks.md),
+``--maxh 0.003``) is 3.8 % from the finest objective of the trade study (docs/studies.md),
 0.0015 m 0.19 % at 4x its time: the default.
 The projection ends at β = 128 (the pressure cases' 32 left greyness 0.066: a grey layer
-the part lost; at 128, 0.0065 and a part within 2 % of the design, docs/benchmarks.md, "Per
+the part lost; at 128, 0.0065 and a part within 2 % of the design, docs/studies.md, "Per
 case at defaults"), so the iteration cap is 220.
 
 Objective ``mechanism``: minimise -sΔ/SE (thesis eq. 3.9); ``--set objective=output_se``

@@ -15,7 +15,7 @@ minimise -sΔ/SE.
 
 Continuation: p 1 → 3 by 0.04, then β 1 → 32, each β stage ending once settled (its last five
 objective changes below 0.3 %) or after 30 iterations, up to 300 iterations.  Measured
-2026-12-03 (docs/benchmarks.md, "3D cases at defaults"): with β doubling every 15 and 160
+2026-12-03 (docs/studies.md, "3D cases at defaults"): with β doubling every 15 and 160
 iterations the final problem (p 3, β 32) started at iteration 125 and the run stopped at the
 cap still falling by 0.1-0.3 % per iteration; this final problem needs 55-80 iterations.  The
 defaults converge at iteration 233 (-5.04e-3), β every 20 at 229 (-4.97e-3), every 30 at 260

@@ -12,7 +12,7 @@ the corner of a load patch or a clamp is singular in linear elasticity.
 
 - the model: linear below ``STRAIN_THRESHOLD`` (1 %), where the small-strain assumption holds,
   else Wang's interpolation (Neo-Hookean wherever there is material, linear in the void), the
-  nonlinear model that carries the pressure cases' loads (docs/benchmarks.md, stability map);
+  nonlinear model that carries the pressure cases' loads (docs/studies.md, stability map);
 - the load ramp (:func:`choose_ramp`).
 
 The choice, the figures and the reason are recorded in summary.json.
@@ -80,7 +80,7 @@ def material_strain(mech, q: float = 0.99) -> tuple[float, float]:
 
 #: the linear strain per iteration of a chosen load ramp: the first iteration's analysis is
 #: within the small-strain regime, and each iteration adds at most that much (measured,
-#: docs/benchmarks.md "Extreme pressures at defaults")
+#: docs/studies.md "Extreme pressures at defaults")
 RAMP_STRAIN = STRAIN_THRESHOLD
 
 

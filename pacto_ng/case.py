@@ -109,7 +109,7 @@ class Case:
     analysis_only: bool = False
     notes: str = ""
     #: displacement order per model where it is not 1 (``order`` = 0, the default, resolves
-    #: through this): the knee of the case's trade curve (docs/benchmarks.md)
+    #: through this): the knee of the case's trade curve (docs/studies.md)
     model_orders: dict = field(default_factory=dict)
     #: the case file a user's case was loaded from (empty for the built-in cases)
     file: str = ""

@@ -35,12 +35,12 @@ SE_FACTOR = 15.0
 
 #: the parameters the pressure-actuated mechanisms start from (pa-inverter, pa-gripper,
 #: mm-gripper, pa-inverter-3d): thesis Table 6.1, and a continuation that gives clean designs
-#: at the thesis mesh (measured, docs/benchmarks.md): p = 1 -> 3 in steps of 0.04, then
+#: at the thesis mesh (measured, docs/studies.md): p = 1 -> 3 in steps of 0.04, then
 #: β = 1 -> 32 doubling every 15 iterations, move limit 0.05 (0.1 oscillates from the start);
 #: the filter radius is a length (3 thesis mesh sizes), so that finer meshes resolve the same
 #: design.  The run stops once -Δ/SE changes by less than 0.1 % in each of 5 iterations
 #: (obj_tol): on the final problem GCMMA lowers it by 0.02-0.1 % per iteration for tens of
-#: iterations while the design barely changes (docs/benchmarks.md, "Convergence at defaults")
+#: iterations while the design barely changes (docs/studies.md, "Convergence at defaults")
 PRESSURE_DEFAULTS = Parameters(
     model="linear", maxh=0.004, plane="strain", thickness=1e-3, E1=3e9, E0=3e3, nu=0.4,
     volfrac=0.2, filter="helmholtz", filter_radius=0.012, penal=3.0, penal_start=1.0,

@@ -55,7 +55,7 @@ ACROSS_3D = 10
 #: ... coarsened where that would make more elements than this (Netgen's estimate,
 #: :mod:`pacto_ng.resources`): a run at defaults stays within minutes (2D: about 0.1 s per
 #: linear iteration at 10k triangles here; 3D: the 12-18k-tetrahedron built-in cases take
-#: 1-4 min for 150-300 iterations, docs/benchmarks.md)
+#: 1-4 min for 150-300 iterations, docs/studies.md)
 MAX_DERIVED_TRIANGLES = 40_000
 MAX_DERIVED_TETS = 20_000
 #: ... and at least this many elements across a filter radius the case gives (the built-in

@@ -321,7 +321,7 @@ def optimize(problem, schedule: Schedule, *, iterations: int, tol: float, method
     # β = 32 a step of 0.005 in x changes ρ̄ of a wall element by up to 0.08, and the strain
     # energy of the pressurised wall follows it.  GCMMA from the first iteration of the final
     # problem instead was slower where MMA does not zigzag (SoRoTop's set-up: Δ 75.6 after 200
-    # iterations against 91.6 at convergence in 99; docs/benchmarks.md, "Convergence at
+    # iterations against 91.6 at convergence in 99; docs/studies.md, "Convergence at
     # defaults")
     # optional parts of the problem's protocol (the robust formulation, pacto_ng.robust): the
     # terms of a worst-case objective, for MMA's bound formulation, and what changes with the

@@ -2,7 +2,7 @@ r"""How much a design leaks: :class:`Outflow`, the flow out through the zero-pre
 boundaries (``leak`` in every pressure run's summary.json and in its pressure.png's title; the
 ``leak_max`` constraint), and the leakage figure of a solved Darcy pressure field (how much of
 the inlet pressure reaches solid material away from the pressurised cavity; ``leakage`` in the
-summary, read by the benchmark studies' tables of docs/benchmarks.md).
+summary, read by the benchmark studies' tables of docs/studies.md).
 """
 from __future__ import annotations
 
@@ -98,7 +98,7 @@ class Outflow:
     the outward flux ``∫ -K ∇p·n`` in the weak form.  It is made dimensionless: per unit
     thickness in 2D (an open channel of height H and length L0 leaks H/L0), per unit length
     ``ℓ`` in 3D, ``ℓ`` the smallest side of the mesh's bounding box (a channel of cross-section
-    A leaks A/(L0 ℓ)), so that one limit serves both.  Measured (PneuNet, docs/benchmarks.md):
+    A leaks A/(L0 ℓ)), so that one limit serves both.  Measured (PneuNet, docs/studies.md):
     1.9e-5 for the closed shell of the linear design, 0.0086 to 0.45 for Wang designs with a gap
     in a chamber wall; in 3D 2.4e-6 for pa-gripper-3d's sealed design, 0.83 and 1.27 for the
     open pneunet-3d and pa-inverter-3d designs.

@@ -63,7 +63,7 @@ def make_energy(params: Parameters, penal, fields=("rho_bar",)):
         return E, {fields[0]: d}
 
     # the discrete energy is evaluated at the quadrature points only: the guard holds there
-    # (docs/guide.md "Newton and failures", docs/benchmarks.md "The Newton guard")
+    # (docs/guide.md "Newton and failures", docs/studies.md "The Newton guard")
     declare(energy, reads=fields, quadratic=mat.linear, stress_free=mat.stress_free,
             modulus=modulus_np if mat.proportional_to_E else None, guard_points="quadrature")
     guard = (lambda G, c: jacobian(G)) if mat.needs_positive_J else None
@@ -77,7 +77,7 @@ def _law(params):
 
 
 #: what carries a load that a model's Newton cannot reach, said in the last line of a run that
-#: stopped below its full load (measured: docs/benchmarks.md "Extreme pressures at defaults")
+#: stopped below its full load (measured: docs/studies.md "Extreme pressures at defaults")
 WHEN_NEWTON_FAILS = {
     "neohookean": "--model wang carries such loads (Neo-Hookean where there is material, "
                   "linear in the void, whose crushed elements stop plain Neo-Hookean)",

@@ -50,7 +50,7 @@ FORMULATIONS = ("auto", "displacement", "mixed")
 
 # ``auto`` takes the mixed formulation from this Poisson's ratio on (hyperelastic models, plane
 # strain or 3D, quadrilaterals and hexahedra at any order, triangles at order >= 2).  Measured by
-# ``python3 -m benchmarks locking`` (docs/benchmarks.md, "Volumetric locking"), tip deflection of
+# ``python3 -m benchmarks locking`` (docs/studies.md, "Volumetric locking"), tip deflection of
 # a Neo-Hookean cantilever in plane strain against a converged reference: Q1 displacement -2.4 %
 # at ν = 0.4, -4.9 % at 0.45, -19 % at 0.49, -90 % at 0.4999; Q1/P0 mixed +0.2 % to 0.0 %
 # throughout; P2 displacement -1.3 % at 0.45, -2.2 % at 0.4999 (and 9 Newton iterations against

@@ -38,7 +38,7 @@ import numpy as np
 # route's own.  The direct route's exact solves make the last digits cheap (Newton converges
 # quadratically).  On the iterative route each digit costs Krylov iterations, and the optimiser
 # needs far fewer: measured on the 25th design of a cantilever-3d and a pneunet-3d run (order
-# 2, 32 901 and 90 249 dofs; docs/benchmarks.md, "The iterative route's tolerance"), 1e-6
+# 2, 32 901 and 90 249 dofs; docs/studies.md, "The iterative route's tolerance"), 1e-6
 # against 1e-12 moves the objective by 1.2e-14 (compliance) and 5.8e-7 (pneunet-3d's -Δ/SE),
 # the gradient by 2.2e-9 and 1.9e-6 of its largest entry, far below the optimiser's
 # objective tolerance (obj_tol 1e-4), for 33 % and 36 % fewer CG iterations than 1e-10.

@@ -35,7 +35,7 @@ from math import fsum
 from .hyperelastic import LAWS, Law
 
 #: the Poisson ratio of a preset unless it states its own.  Silicones are nearly incompressible
-#: (ν ≈ 0.49-0.4999), but the displacement formulation locks as ν -> 0.5: docs/benchmarks.md,
+#: (ν ≈ 0.49-0.4999), but the displacement formulation locks as ν -> 0.5: docs/studies.md,
 #: "Volumetric locking": Q1 quadrilaterals bend 4.9 % too little at ν = 0.45 and 19 % at 0.49;
 #: its stability map (pa-inverter, 2026-12-02): Neo-Hookean completes 3e6 Pa at ν = 0.3 and
 #: 0.45 but 1e6 Pa at 0.49, and Wang 1e7 Pa at 0.45 but fails by inversion in the locked solid

@@ -26,7 +26,7 @@ preconditioned Krylov solver beyond.
 vertex dof, so that the iterative route is a direct solve plus iterations); the scalar
 order-1 systems (Darcy, the filter) take ``h1amg`` above the same number of dofs.  The
 threshold is measured by ``PACTO_THREADS=1 python3 -m benchmarks.solvers_3d``
-(docs/benchmarks.md, "3D solvers: direct against iterative"; see the constant's comment).
+(docs/studies.md, "3D solvers: direct against iterative"; see the constant's comment).
 
 The Krylov tolerance is relative to the right-hand side's (preconditioned) norm; the caller
 ties it to what it needs (Newton: its own residual test, whose tolerance on this route is
@@ -45,7 +45,7 @@ from ..parallel import distributed, free_norm
 SOLVERS = ("auto", "direct", "iterative")
 
 # Above this many dofs of a 3D system, ``auto`` takes the iterative route.  Measured
-# (docs/benchmarks.md, "3D solvers: direct against iterative": linear elasticity on a
+# (docs/studies.md, "3D solvers: direct against iterative": linear elasticity on a
 # cantilever box at order 2, one linear solve with its assembly, one thread, CG + BDDC to
 # 1e-8): the direct route is faster at 8 000 dofs (1.1 against 1.5 s), the iterative one at
 # 25 000 (5.0 against 8.0 s) and 56 000 (3.4 against 25 s), with slopes of 2 against 1.
@@ -54,7 +54,7 @@ SOLVERS = ("auto", "direct", "iterative")
 # linear step and of the adjoint are tighter than 1e-8 (12 digits against 8 at CG's linear
 # rate: about 1.5x the iterations, estimated), and SIMP's contrast adds some (measured: 57 ->
 # 65 iterations at 25 000 dofs, E0 = 1e-6 E1, a 0/1 design).  Whole optimisation iterations
-# favour the direct route further (docs/benchmarks.md, "3D optimisation iterations", order 2,
+# favour the direct route further (docs/studies.md, "3D optimisation iterations", order 2,
 # one thread): with the element-matrix assembly of linear runs it was the faster at every size
 # measured, 8.6 against 11.3 s per iteration at 78 000 dofs (cantilever-3d) and 4.0 against
 # 10.8 s at 50 000 (pneunet-3d); the fitted slopes (1.51 against 1.04, cantilever-3d) cross
@@ -69,7 +69,7 @@ GMRES_RESTART = 100  # GMRES keeps this many Krylov vectors at most (8 MB each p
 def adjoint_rtol(newton_rtol: float) -> float:
     """The Krylov tolerance of an adjoint solve with the tangent Newton solved to
     ``newton_rtol``: a tenth of it, never below :data:`ADJOINT_RTOL`, so that the gradient's
-    error is the equilibrium's.  The gradient errors of docs/benchmarks.md ("The iterative
+    error is the equilibrium's.  The gradient errors of docs/studies.md ("The iterative
     route's tolerance", pneunet-3d: 1.9e-6 of the largest entry at Newton's 1e-6) are of both
     solves together."""
     return max(ADJOINT_RTOL, 0.1 * newton_rtol)

@@ -6,7 +6,7 @@ pacto_ng ramps the load over the first iterations (``load_ramp``), warm-starts N
 previous equilibrium and cuts its load increments; the Wang model (Neo-Hookean in solid, linear
 in void) keeps the near-void elements from inverting (plain Neo-Hookean with the same settings
 stopped at iteration 46 with a Newton failure, measured).  This test reproduces the result of
-docs/benchmarks.md ("Nonlinear pressure-actuated design and extreme pressures") on its coarse
+docs/studies.md ("Nonlinear pressure-actuated design and extreme pressures") on its coarse
 mesh: the run finishes without a Newton failure at the full load, meets the volume constraint,
 improves the objective over iteration 0 and moves the output the desired way (Δ = -u_x > 0).
 
@@ -49,7 +49,7 @@ def test_pa_inverter_wang_high_pressure(tmp_path):
 ])
 def test_pa_inverter_5e7_pa_on_the_thesis_mesh(model, extra, tmp_path):
     """5e7 Pa (five times the thesis's limit) on the thesis mesh with the load ramped over the
-    first 100 of 160 iterations (docs/benchmarks.md, runs inv_w_5e7_r100 and
+    first 100 of 160 iterations (docs/studies.md, runs inv_w_5e7_r100 and
     inv_nh_5e7_e4_r100: 83 s and 47 s): a valid design at the full load, and its part,
     thresholded at 0.4, reaches the output and moves it the working way under a Neo-Hookean
     analysis at 5e7 Pa with the follower pressure."""
@@ -74,7 +74,7 @@ def test_pa_inverter_5e7_pa_on_the_thesis_mesh(model, extra, tmp_path):
 
 @pytest.fixture(scope="module")
 def pneunet_1e6(tmp_path_factory):
-    """The PneuNet at 1e6 Pa (ten times the thesis's limit; docs/benchmarks.md, runs pn_lin_1e6
+    """The PneuNet at 1e6 Pa (ten times the thesis's limit; docs/studies.md, runs pn_lin_1e6
     and pn_w_1e6_init_b8): the linear design of that pressure, then the Wang optimisation
     started from it (``init_design``) with the schedule continued at p = 3, β = 8."""
     root = tmp_path_factory.mktemp("pneunet_1e6")

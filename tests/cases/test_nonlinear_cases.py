@@ -76,7 +76,7 @@ def test_cantilever_144kN_converges_with_filter_and_projection(model, tmp_path):
 @pytest.mark.slow
 def test_inverter_neohookean_04N_moves_against_input(tmp_path):
     out = tmp_path / "inv"
-    # measured (docs/benchmarks.md): 4 iterations at β = 1 complete at 0.4 N; with β raised
+    # measured (docs/studies.md): 4 iterations at β = 1 complete at 0.4 N; with β raised
     # to 4 by iteration 6 (--set beta_every=3) Newton fails at iteration 7
     rc = main(["run", "--no-part", "inverter", "--model", "neohookean", "--load", "0.4", "--maxh", "3e-6",
                "--iterations", "4", "--out", str(out), "--quiet"])
@@ -91,7 +91,7 @@ def test_inverter_neohookean_04N_moves_against_input(tmp_path):
 @pytest.mark.slow
 def test_too_high_load_ends_in_clean_newton_failure(tmp_path):
     out = tmp_path / "fail"
-    # measured (docs/benchmarks.md): the thesis mesh at 300 kN fails at iteration 5 after
+    # measured (docs/studies.md): the thesis mesh at 300 kN fails at iteration 5 after
     # reaching load factor 0.427, so the failure comes after iterations with a history; the
     # stop at the failure is load_adapt=0 (the default goes on at the load reached)
     r = run_cli("run", "--no-part", "cantilever", "--model", "neohookean", "--load", "300e3", "--maxh", "0.01",

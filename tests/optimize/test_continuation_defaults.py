@@ -1,5 +1,5 @@
 """The continuation a case's defaults give.  pa-gripper-3d's and mm-gripper's final problems
-(p = 3, β = 32) start early enough for their default runs to converge (docs/benchmarks.md,
+(p = 3, β = 32) start early enough for their default runs to converge (docs/studies.md,
 "Convergence at defaults" and "3D cases at defaults": with the pa-inverter's continuation,
 final from iteration 100 or 125 of 160, both stopped at the cap still improving)."""
 import pytest
@@ -37,7 +37,7 @@ def test_settled_stages_leave_the_final_problem_room_even_if_none_ends_early(cas
                                                                             latest_final, left):
     """pneunet-3d's and cantilever-3d's β stages end once settled (at the latest after
     beta_every); their final problems needed 55-80 iterations to converge (the cases'
-    docstrings, docs/benchmarks.md '3D cases at defaults')."""
+    docstrings, docs/studies.md '3D cases at defaults')."""
     params, schedule = _schedule(case)
     assert schedule.beta_settle == 3e-3
     assert schedule.final_at() == latest_final

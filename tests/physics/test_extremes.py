@@ -145,7 +145,7 @@ def test_neohookean_below_its_load_names_the_model_that_carries_it(tmp_path, cap
     """The coarse pa-inverter at 1e7 Pa from a linear design (p = 3, β = 8): plain
     Neo-Hookean cannot carry the full load on that design (its crushed void elements invert;
     measured: load factor 0.587), so the run exits 1 and its last line names ``--model wang``;
-    the same run with ``--model wang`` exits 0 at the full load (docs/benchmarks.md, "Extreme
+    the same run with ``--model wang`` exits 0 at the full load (docs/studies.md, "Extreme
     pressures at defaults").  Slow: ~3 CPU minutes."""
     lin = tmp_path / "linear"
     proc = run_cli("run", "--no-part", "pa-inverter", *COARSE, "--iterations", "80", "--out", str(lin),
@@ -241,7 +241,7 @@ def test_adaptive_load_continuation_is_the_default(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_pneunet_part_at_1e6_pa(tmp_path, capsys):
-    """The PneuNet part at 1e6 Pa (docs/benchmarks.md, "PneuNet at 1e6 Pa"): Wang with the
+    """The PneuNet part at 1e6 Pa (docs/studies.md, "PneuNet at 1e6 Pa"): Wang with the
     follower load inside the optimisation and the leak limit converges at the full load with
     a sealed chamber, and its part's follower analysis converges at every pressure and moves
     the tip the intended way (Δ > 0).  Slow: ~7 CPU minutes."""

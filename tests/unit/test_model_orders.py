@@ -29,7 +29,7 @@ def test_sweep_resolves_each_model_separately():
 def test_cantilever_default_orders():
     """The cantilever's linear and Wang defaults are order 2 (the knees of their trade curves:
     order 1 is 1.0 % and 1.23 % from the finest objective); gnl and Neo-Hookean keep order 1
-    (docs/benchmarks.md, "Where the defaults sit")."""
+    (docs/studies.md, "Where the defaults sit")."""
     case = get_case("cantilever")
     assert case.defaults.order == 0
     assert [case.order_for(m) for m in ("linear", "gnl", "neohookean", "wang")] == [2, 1, 1, 2]
