@@ -72,6 +72,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "run: remove that run's files first (by default such a folder is refused)")
     r.add_argument("--no-part", action="store_true", help="end without making and analysing "
                    "the part (pacto analyse DIR makes it later)")
+    r.add_argument("--refine", action="store_true", help="after the part, refine its shape "
+                   "as 'pacto refine DIR' does (pressure cases; writes DIR/refine/)")
     e = sub.add_parser("evaluate", help="analyse a given design (no optimisation)")
     _case_options(e)
     e.add_argument("--density", required=True, help="element densities ρ̄ (.npy, .csv, .txt: "
@@ -93,6 +95,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="raise the run's iteration cap (e.g. a run that stopped at the cap)")
     s.add_argument("--quiet", action="store_true")
     s.add_argument("--no-part", action="store_true", help="as for run")
+    s.add_argument("--refine", action="store_true", help="as for run (replaces an earlier "
+                   "DIR/refine/)")
     w = sub.add_parser("sweep", help="run a case over a grid of loads and models (Dask)")
     w.add_argument("case", help="a built-in case's name or a case file's path")
     w.add_argument("--loads", required=True, help="comma-separated loads, e.g. 1e5,1e6,1e7")

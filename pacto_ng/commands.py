@@ -9,6 +9,7 @@ meshio): :mod:`pacto_ng.cli` imports this module for these commands only, so tha
 from __future__ import annotations
 
 import argparse
+import sys
 
 from .case import get_case
 from .cli_parser import params_from_args
@@ -84,10 +85,18 @@ def resume_with_part(args) -> int:
 
 
 def _with_part(done, out, args) -> int:
-    """A finished optimisation's part made, checked and analysed (unless ``--no-part``);
-    the run's exit code."""
+    """A finished optimisation's part made, checked and analysed (unless ``--no-part``), and
+    with ``--refine`` its shape refined (a refinement that cannot be made is said in one
+    line; the run's result stands); the run's exit code."""
     if leads() and not args.no_part:
-        finish_run(out, done.problem, done.summary, quiet=args.quiet)
+        summary = finish_run(out, done.problem, done.summary, quiet=args.quiet)
+        if args.refine and summary["part"].get("made"):
+            try:
+                refine_run(out, quiet=args.quiet, overwrite=args.command == "resume"
+                           or args.overwrite)
+            except InputError as err:
+                print(f"pacto: warning: the part was not refined: {err}", file=sys.stderr,
+                      flush=True)
     return done.exit_code
 
 

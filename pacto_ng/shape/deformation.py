@@ -89,9 +89,8 @@ class ShapeSpace:
         vertices with the deformation unset (a finite element function moves with the mesh:
         the NGSolve notes, "Shape derivatives"; a point search, exact to ~1e-8 relative)."""
         ref = np.array([v.point for v in self.mesh.vertices], dtype=float)
-        dim, nv = ref.shape[1], len(ref)
-        if self.space.globalorder == 1 and self.ndof == dim * nv:
-            return ref + self.deformation.vec.FV().NumPy().reshape(dim, nv).T
+        if self.vertex_dofs:
+            return self.points_at(self.deformation.vec.FV().NumPy())
         self.mesh.UnsetDeformation()
         try:
             where = self.mesh(*(ref[:, k] for k in range(ref.shape[1])))
@@ -99,6 +98,20 @@ class ShapeSpace:
         finally:
             self.mesh.SetDeformation(self.deformation)
         return ref + motion
+
+    @property
+    def vertex_dofs(self) -> bool:
+        """Whether the coefficients are the vertex displacements (an order-1 space)."""
+        return self.space.globalorder == 1 and self.ndof == self.mesh.dim * self.mesh.nv
+
+    def points_at(self, values) -> np.ndarray:
+        """The vertices moved by the coefficients ``values`` of an order-1 space (component
+        ``k`` of vertex ``i`` at ``k·nv + i``), (nv, dim); the mesh is not moved."""
+        if not self.vertex_dofs:
+            raise ValueError("points_at: the coefficients are vertex displacements only in "
+                             "an order-1 space")
+        ref = np.array([v.point for v in self.mesh.vertices], dtype=float)
+        return ref + np.asarray(values, dtype=float).reshape(self.mesh.dim, -1).T
 
     def direction(self, field, on: str | None = None) -> np.ndarray:
         """The coefficients of a vector CoefficientFunction ``field`` set into ``X`` on the

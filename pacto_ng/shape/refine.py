@@ -31,7 +31,10 @@ common simplification in shape optimisation, where an exact inner minimisation i
    ``min_step``) the loop stops with the status ``mesh_quality``: the mesh needs remeshing
    (:func:`~pacto_ng.shape.remesh.remesh_moved`), which a caller does and then goes on;
 4. the trial shape ``d + sθ`` is accepted if the merit at the same ``λ`` decreases (a plain
-   decrease), else ``s`` is halved (a trial whose Newton solve fails is rejected too); below
+   decrease), else ``s`` is halved (a trial whose Newton solve fails is rejected too, and,
+   in 2D, one where two walls cross each other across a void: no element folds there, but
+   the walls of a chamber or a slot have no element between them,
+   :func:`~pacto_ng.shape.remesh.crossing_walls`); below
    ``min_step`` the status is ``no_descent``.  The trial step of the next iteration is twice
    the accepted one, at most ``step_max``;
    with a box ``bounds`` (the run's design domain), every trial shape is projected into it
@@ -70,6 +73,7 @@ import numpy as np
 
 from ..physics.equilibrium import NewtonFailure
 from .deformation import ShapeSpace, volume, volume_integrals
+from .remesh import crossing_walls
 from .gradient import PartResponse
 from .riesz import Quality, RieszMap, step_length
 
@@ -179,6 +183,14 @@ class _Loop:
             raise ValueError("refine: the shape derivative vanishes on the free dofs")
         return theta / largest
 
+    def crossing(self, values) -> bool:
+        """Whether two walls of the shape ``values`` cross each other (2D, an order-1 space:
+        :func:`~pacto_ng.shape.remesh.crossing_walls`; no element folds, but walls facing
+        each other across a void can pass through each other)."""
+        if not self.space.vertex_dofs:
+            return False
+        return crossing_walls(self.space.mesh, self.space.points_at(values)) > 0
+
     def project(self, values) -> np.ndarray:
         """``values`` projected into the box (unchanged without one)."""
         return values if self.box is None else self.box.project(values)
@@ -198,7 +210,7 @@ class _Loop:
         while s >= min_step:
             trial = self.project(self.shape + s * theta)
             q = self.quality(trial)
-            if q >= q_min:
+            if q >= q_min and not self.crossing(trial):
                 trials += 1
                 try:
                     measures = self.evaluate(trial)
@@ -326,6 +338,14 @@ class _Box:
         mask = np.zeros(len(values), dtype=bool)
         mask[self.dofs[out]] = True
         return mask
+
+    def crossing(self, values) -> bool:
+        """Whether two walls of the shape ``values`` cross each other (2D, an order-1 space:
+        :func:`~pacto_ng.shape.remesh.crossing_walls`; no element folds, but walls facing
+        each other across a void can pass through each other)."""
+        if not self.space.vertex_dofs:
+            return False
+        return crossing_walls(self.space.mesh, self.space.points_at(values)) > 0
 
     def project(self, values) -> np.ndarray:
         """The coefficients with every free vertex coordinate clipped into the box."""

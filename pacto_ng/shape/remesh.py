@@ -164,3 +164,35 @@ def _name_points(ngm, mesh, points) -> None:
         if el.mat not in regions:
             regions[el.mat] = ngm.AddRegion(el.mat, dim=0)
         ngm.Add(Element0D(k + 1, index=regions[el.mat]))
+
+
+def crossing_walls(mesh, points, chunk: int = 256) -> int:
+    """How many pairs of boundary segments of the 2D ``mesh`` cross each other with its
+    vertices at ``points`` (segments sharing a vertex are not counted): 0 for a valid part.
+    Moving the mesh keeps each element unfolded, but two walls facing each other across a
+    void (a chamber, a slot) have no element between them and can pass through each other;
+    such a shape is no part (and Netgen cannot mesh it).  3D meshes: 0 (not checked).  The
+    test is the orientation test of two segments (each one's ends on opposite sides of the
+    other's line), on every pair, ``chunk`` segments at a time."""
+    if mesh.dim != 2:
+        return 0
+    ends = np.array([[v.nr for v in el.vertices] for el in mesh.Elements(BND)])
+    p = np.asarray(points, dtype=float)[:, :2]
+    a, b = p[ends[:, 0]], p[ends[:, 1]]
+    count = 0
+    for start in range(0, len(ends), chunk):
+        i = slice(start, start + chunk)
+        share = (ends[i, None, :, None] == ends[None, :, None, :]).any(axis=(2, 3))
+        d1 = _side(a[i, None], b[i, None], a[None])
+        d2 = _side(a[i, None], b[i, None], b[None])
+        d3 = _side(a[None], b[None], a[i, None])
+        d4 = _side(a[None], b[None], b[i, None])
+        cross = (d1 * d2 < 0) & (d3 * d4 < 0) & ~share
+        count += int(np.count_nonzero(cross))
+    return count // 2
+
+
+def _side(a, b, c):
+    """The orientation of ``c`` about the line ``a → b`` (positive on its left)."""
+    return ((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+            - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))

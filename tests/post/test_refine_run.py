@@ -231,3 +231,27 @@ def test_check_gradients_on_the_runs_part(solid_member, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--directions" in err[0]
 
+
+
+def test_resume_with_refine_ends_with_the_refined_part(solid_member, tmp_path, capsys):
+    """``pacto resume DIR --refine`` (as ``pacto run --refine``): one more iteration from the
+    solid member, its part made, then refined into DIR/refine/ (20 steps by default); the
+    refinement's last line follows the part's, and its summary compares the refined Δ with
+    the design's as the part line does (``gap``)."""
+    import shutil
+
+    run = tmp_path / "pn"
+    shutil.copytree(solid_member, run, ignore=shutil.ignore_patterns("refine"))
+    capsys.readouterr()
+    assert main(["resume", str(run), "--iterations", "2", "--refine"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[-1].startswith("refined: Δ ")
+    part = [k for k, line in enumerate(lines) if line.startswith("part: ")]
+    assert part and part[-1] < len(lines) - 1
+    s = json.loads((run / "refine" / "summary.json").read_text())
+    entry = json.loads((run / "summary.json").read_text())["part"]
+    assert s["steps"] == 20 or s["status"] != "steps"
+    assert s["design_delta"] == entry["output_displacement_design"]
+    assert s["gap"] == pytest.approx((s["delta_after"] - s["design_delta"])
+                                     / abs(s["design_delta"]), rel=1e-12)
+    assert "the design promised" in lines[-1]

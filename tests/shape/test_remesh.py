@@ -107,3 +107,25 @@ def test_a_3d_part_gets_a_new_interior_for_its_moved_surface():
     assert len(tip) == 1
     np.testing.assert_allclose(new.vertices[tip[0].vertices[0].nr].point, points[old],
                                atol=1e-14)
+
+
+def test_crossing_walls_counts_walls_that_pass_through_each_other():
+    """A square with a slot 0.1 wide: no crossing as made; the slot's left wall above
+    y = 0.5 moved 0.15 to the right (past the right wall, 0.1 away) crosses it: the upper
+    left wall and the segment joining it to the rest cross the right wall (2 pairs, counted
+    by hand); moved 0.05 (half the slot) it crosses nothing.  3D meshes are not checked."""
+    from netgen.occ import MoveTo
+
+    from pacto_ng.shape.remesh import crossing_walls
+
+    face = Rectangle(1, 1).Face() - MoveTo(0.45, 0.3).Rectangle(0.1, 0.8).Face()
+    mesh = ngsolve.Mesh(OCCGeometry(face, dim=2).GenerateMesh(maxh=0.05))
+    points = np.array([v.point for v in mesh.vertices])
+    assert crossing_walls(mesh, points) == 0
+    left = (np.abs(points[:, 0] - 0.45) < 1e-9) & (points[:, 1] > 0.5)
+    for shift, expected in ((0.05, 0), (0.15, 2)):
+        moved = points.copy()
+        moved[left, 0] += shift
+        assert crossing_walls(mesh, moved) == expected
+    cube = ngsolve.Mesh(OCCGeometry(Box((0, 0, 0), (1, 1, 1))).GenerateMesh(maxh=0.5))
+    assert crossing_walls(cube, np.zeros((cube.nv, 3))) == 0
