@@ -59,7 +59,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
-from ..shape import PartResponse, ShapeSpace, refine, remesh_moved, volume
+from ..shape import PartResponse, ShapeSpace, moved_field, refine, remesh_moved, volume
 from .analysis_options import analysis_params
 from .finish import say
 from .part import make_part, part_ports, present_supports
@@ -229,10 +229,13 @@ def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
     :data:`REMESHES` times.  The result's history spans every mesh (``mesh``: the mesh's
     number, 0 the part as made; the first row on a new mesh repeats the step number)."""
     history, remeshes, done, multipliers, scale = [], 0, 0, None, None
-    floor = None
+    floor, previous = None, None
     report = None if quiet else (lambda line: print("  " + line, flush=True))
     while True:
         response, space = shape_response(mesh, job)
+        if previous is not None:  # the last mesh's equilibrium, the first guess on this one
+            response.start_from(moved_field(previous[0].mesh, previous[0].moved_points(),
+                                            previous[1].u))
         try:
             if job.hold_ratio and floor is None:
                 response.solve()
@@ -243,9 +246,13 @@ def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
                             multipliers=multipliers, quality_step=QUALITY_STEP * job.maxh,
                             ratio_min=floor, say=report)
         except NewtonFailure as err:
-            raise InputError(f"refine: the part has no equilibrium at the run's load on its "
-                             f"{'starting' if not remeshes else 'remeshed'} shape "
-                             f"({err})") from None
+            if previous is None:
+                raise InputError(f"refine: the part has no equilibrium at the run's load on "
+                                 f"its starting shape ({err})") from None
+            say(quiet, f"  the remeshed part has no equilibrium at the load ({err}): the "
+                       f"refinement ends on the last mesh")
+            space, response, result = previous
+            break
         except ValueError as err:
             raise InputError(str(err)) from None
         scale = abs(result.history[0]["delta"]) if scale is None else scale
@@ -259,6 +266,7 @@ def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
             say(quiet, f"  the moved part could not be remeshed ({err}): stopped")
             break
         remeshes, multipliers = remeshes + 1, result.multipliers
+        previous = (space, response, result)
         say(quiet, f"  remeshed the moved part ({remeshes} of at most {REMESHES}): "
                    f"{mesh.ne} elements")
     result.history = history

@@ -8,9 +8,10 @@ bounded (:mod:`~pacto_ng.shape.refine`), the moved part remeshed
 from .deformation import ShapeSpace, volume, volume_integrals
 from .gradient import PartResponse, ShapeResponse, ShapeVolume
 from .refine import RefineResult, refine
-from .remesh import remesh_moved
+from .remesh import crossing_walls, moved_field, remesh_moved
 from .riesz import Quality, RieszMap, step_length
 
 __all__ = ["PartResponse", "Quality", "RefineResult", "RieszMap", "ShapeResponse",
+           "crossing_walls", "moved_field",
            "ShapeSpace", "ShapeVolume", "refine", "remesh_moved", "step_length", "volume",
            "volume_integrals"]

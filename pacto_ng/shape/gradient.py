@@ -200,6 +200,7 @@ class PartResponse:
         self._guard = None if guard is None else guard(Grad(self._trial), self.coeffs)
         self._points = mesh.MapToAllElements(integration_rules(2 * self.fes.globalorder), VOL)
         self.delta, self.strain_energy, self.result = math.nan, math.nan, None
+        self._started = False
         self._output, self._sizes = None, ()
 
     # -- the forms -----------------------------------------------------------------------------
@@ -326,8 +327,9 @@ class PartResponse:
         """Equilibrium on the current shape (warm-started from the last one's) and ``Δ``;
         NewtonFailure if Newton does not reach the pressure."""
         self._measure_springs()
+        warm = self.result is not None or self._started
         self.result = solve_with_continuation(self, self.u.vec, self.pressure, self.settings,
-                                              warm=self.result is not None, linear=self.linear)
+                                              warm=warm, linear=self.linear)
         if not self.result.converged:
             raise NewtonFailure(self.result)
         self.load.Set(self.pressure)
@@ -338,6 +340,12 @@ class PartResponse:
         self.delta = float(InnerProduct(self._output, self.u.vec))
         self.strain_energy = float(self._se.Energy(self.u.vec))
         return self.delta
+
+    def start_from(self, field) -> None:
+        """The next solve starts at the full load from ``field`` (a displacement, e.g. that of
+        the same part on another mesh), and ramps from zero only if that fails."""
+        self.u.Set(field)
+        self._started = True
 
     def value(self, objective: str = "delta") -> float:
         """The last solve's objective: ``Δ`` (``"delta"``) or ``Δ/SE`` (``"ratio"``)."""

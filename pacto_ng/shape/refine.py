@@ -204,7 +204,7 @@ class _Loop:
         the loop (``mesh_quality``)."""
         s, q = step_length(lambda values: self.quality(self.project(values)), self.shape,
                            theta, length, q_min=q_min)
-        if s < quality_step:
+        if s < quality_step and s < length:  # the quality bounds the step, not the trial
             return "mesh_quality", s, q, 0
         before, trials = self.merit(self.measures), 0
         while s >= min_step:

@@ -27,7 +27,7 @@ import numpy as np
 import ngsolve
 from netgen.geom2d import SplineGeometry
 from netgen.libngpy._meshing import NgException
-from netgen.meshing import Element0D, Element2D, FaceDescriptor, MeshPoint, Pnt
+from netgen.meshing import Element0D, Element2D, Element3D, FaceDescriptor, MeshPoint, Pnt
 from netgen.meshing import Mesh as NgMesh
 from ngsolve import BBBND, BBND, BND, VOL
 
@@ -196,3 +196,27 @@ def _side(a, b, c):
     """The orientation of ``c`` about the line ``a → b`` (positive on its left)."""
     return ((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
             - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0]))
+
+
+def moved_field(mesh, points, field):
+    """The vertex values of the vector GridFunction ``field`` on ``mesh`` as a piecewise
+    linear field on the moved part itself: a GridFunction on a copy of ``mesh`` whose
+    vertices are at ``points`` (same elements).  A GridFunction of another mesh can then be
+    set from it (NGSolve locates the points), e.g. a remeshed part's displacement from the
+    last one, where setting from ``field`` directly would locate the points on ``mesh``'s
+    reference, not its moved, positions.  The vertex values are the field's first
+    coefficients of each component (H1's vertex dofs: their nodal values)."""
+    dim, nv = mesh.dim, mesh.nv
+    copy = NgMesh(dim=dim)
+    index = [copy.Add(MeshPoint(Pnt(*np.r_[points[v], [0.0] * (3 - dim)])))
+             for v in range(nv)]
+    copy.Add(FaceDescriptor(bc=1, domin=1, domout=0, surfnr=1))
+    kind = Element2D if dim == 2 else Element3D
+    for el in mesh.Elements(VOL):
+        copy.Add(kind(1, [index[v.nr] for v in el.vertices]))
+    copy.SetMaterial(1, "copy")
+    moved = ngsolve.Mesh(copy)
+    out = ngsolve.GridFunction(ngsolve.VectorH1(moved, order=1))
+    values = np.asarray(field.vec.FV().NumPy()).reshape(dim, -1)[:, :nv]
+    out.vec.FV().NumPy()[:] = values.ravel()
+    return out

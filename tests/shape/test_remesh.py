@@ -129,3 +129,31 @@ def test_crossing_walls_counts_walls_that_pass_through_each_other():
         assert crossing_walls(mesh, moved) == expected
     cube = ngsolve.Mesh(OCCGeometry(Box((0, 0, 0), (1, 1, 1))).GenerateMesh(maxh=0.5))
     assert crossing_walls(cube, np.zeros((cube.nv, 3))) == 0
+
+
+def test_a_field_moves_with_the_part_onto_its_new_mesh():
+    """A linear field u(x0) = (x0 + y0, 2 x0 - y0) of the reference points, on the plate
+    moved by a linear deformation x = A x0: set on the remeshed moved plate through
+    ``moved_field`` it is u(A⁻¹ x) at every new point (exact: P1 reproduces a linear field);
+    set from the field directly, NGSolve would locate x on the reference mesh and give
+    u(x) instead (checked: it differs)."""
+    from pacto_ng.shape import moved_field
+
+    mesh = _plate()
+    A = np.array([[1.0, 0.1], [0.05, 1.0]])
+    space = _moved(mesh, CF((0.1 * y, 0.05 * x)))
+    points = space.moved_points()
+    mesh.UnsetDeformation()
+    u = ngsolve.GridFunction(ngsolve.VectorH1(mesh, order=2))
+    u.Set(CF((x + y, 2 * x - y)))
+    mesh.SetDeformation(space.deformation)
+    new = remesh_moved(mesh, points, 0.07)
+    moved, naive = (ngsolve.GridFunction(ngsolve.VectorH1(new, order=2)) for _ in range(2))
+    moved.Set(moved_field(mesh, points, u))
+    naive.Set(u)
+    X = np.array([[1.3, 0.4], [0.5, 0.9], [0.2, 0.1]])
+    for p in X:
+        x0 = np.linalg.solve(A, p)
+        np.testing.assert_allclose(moved(new(*p)), (x0[0] + x0[1], 2 * x0[0] - x0[1]),
+                                   atol=1e-12)
+    assert abs(naive(new(*X[0]))[0] - (X[0][0] + X[0][1])) < 1e-9  # u(x), not u(A⁻¹x)
