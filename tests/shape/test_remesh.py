@@ -10,7 +10,7 @@ import numpy as np
 import ngsolve
 import pytest
 from netgen.occ import X, Y, Z, Box, Circle, Glue, OCCGeometry, Rectangle
-from ngsolve import BBBND, BBND, CF, Integrate, ds, dx, x, y, z
+from ngsolve import BBBND, BBND, BND, CF, Integrate, ds, dx, x, y, z
 
 from pacto_ng.shape import ShapeSpace, remesh_moved
 
@@ -157,3 +157,27 @@ def test_a_field_moves_with_the_part_onto_its_new_mesh():
         np.testing.assert_allclose(moved(new(*p)), (x0[0] + x0[1], 2 * x0[0] - x0[1]),
                                    atol=1e-12)
     assert abs(naive(new(*X[0]))[0] - (X[0][0] + X[0][1])) < 1e-9  # u(x), not u(A⁻¹x)
+
+
+def test_short_segments_on_a_straight_wall_are_joined():
+    """The plate's top wall (straight, 2 long) with its vertices near x = 1 pulled together
+    (segments of ~0.1 squeezed to ~0.01): remeshed at maxh 0.1, no top segment is shorter
+    than 0.02 (the squeezed ones were joined; kept, they would be 0.01), the top wall keeps
+    its length 2 (straight: joining moves nothing), the area is kept, and the curved hole,
+    whose segments are not short, keeps every vertex."""
+    mesh = _plate()
+    points = np.array([v.point for v in mesh.vertices], dtype=float)
+    top = np.abs(points[:, 1] - 1.0) < 1e-9
+    squeeze = top & (np.abs(points[:, 0] - 1.0) < 0.35)
+    moved = points.copy()
+    moved[squeeze, 0] = 1.0 + 0.1 * (points[squeeze, 0] - 1.0)
+    new = remesh_moved(mesh, moved, 0.1)
+    coords = np.array([v.point for v in new.vertices])
+    lengths = [float(np.linalg.norm(coords[a] - coords[b])) for a, b in
+               ([v.nr for v in el.vertices] for el in new.Elements(BND))
+               if abs(coords[a][1] - 1.0) < 1e-9 and abs(coords[b][1] - 1.0) < 1e-9]
+    assert min(lengths) > 0.02 and sum(lengths) == pytest.approx(2.0, rel=1e-12)
+    assert Integrate(CF(1.0) * dx, new) == pytest.approx(Integrate(CF(1.0) * dx, mesh),
+                                                         rel=1e-12)
+    hole = lambda m: sum(1 for el in m.Elements(BND) if el.mat == "pressure")  # noqa: E731
+    assert hole(new) >= hole(mesh)
