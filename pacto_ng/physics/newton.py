@@ -189,13 +189,37 @@ def _attempt(problem, u, load, ref, s, linear, accept):
     return ok, it, why, res
 
 
+def _warm_start(problem, u, loads, s: NewtonSettings, hooks, result: NewtonResult) -> bool:
+    """The warm start of :func:`solve_with_continuation`: Newton from the current ``u`` at the
+    full load (``loads``: the target and its reference norm; ``hooks``: linear, accept,
+    on_step), recorded in ``result``; True if it converged.  On failure ``u`` is put back
+    and ``result.reason`` says why."""
+    (target, ref), (linear, accept, on_step) = loads, hooks
+    saved = u.CreateVector()
+    saved.data = u
+    ok, it, why, res = _attempt(problem, u, target, ref, s, linear, accept)
+    result.iterations += it
+    if ok:
+        result.converged, result.load_reached, result.steps = True, target, 1
+        result.residual = res / ref
+        result.history.append((target, it))
+        if on_step is not None:
+            on_step(target, u)
+        return True
+    u.data = saved
+    result.reason = why
+    return False
+
+
 def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, warm: bool,
                             linear: bool = False, on_step=None, accept=None,
-                            first_increment: float | None = None) -> NewtonResult:
+                            first_increment: float | None = None,
+                            ramp: bool = True) -> NewtonResult:
     """Bring ``u`` to equilibrium at load factor ``target``.
 
     With ``warm`` the current ``u`` (the previous design's equilibrium at the same load) is
-    tried first at the full load; otherwise, or if that fails, the load is ramped from zero.
+    tried first at the full load; otherwise, or if that fails, the load is ramped from zero
+    (unless ``ramp`` is False: then a failed warm start is the result, ``u`` restored).
     ``accept(load, u) -> str``, if given, may reject a converged equilibrium by returning a
     reason (an empty string accepts it); a rejected one counts as a failed increment.
     ``on_step(load, u)``, if given, is called at every accepted equilibrium.  On failure ``u``
@@ -214,20 +238,10 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
         u[:] = 0.0
         return NewtonResult(True, 0, target, 0, "no load", 0.0)
     result = NewtonResult(False)
-    if warm:
-        saved = u.CreateVector()
-        saved.data = u
-        ok, it, why, res = _attempt(problem, u, target, ref, s, linear, accept)
-        result.iterations += it
-        if ok:
-            result.converged, result.load_reached, result.steps, result.residual = True, target, 1, res / ref
-            result.history.append((target, it))
-            if on_step is not None:
-                on_step(target, u)
-            return result
-        u[:] = 0.0
-    else:
-        u[:] = 0.0
+    if warm and (_warm_start(problem, u, (target, ref), s, (linear, accept, on_step), result)
+                 or not ramp):
+        return result
+    u[:] = 0.0
     first = s.initial_increment if first_increment is None else min(1.0, max(first_increment, s.min_increment))
     load, inc = 0.0, first * target
     saved = u.CreateVector()

@@ -323,13 +323,15 @@ class PartResponse:
         return free_norm(out, self.free)
 
     # -- the response --------------------------------------------------------------------------
-    def solve(self) -> float:
+    def solve(self, ramp: bool = True) -> float:
         """Equilibrium on the current shape (warm-started from the last one's) and ``Δ``;
-        NewtonFailure if Newton does not reach the pressure."""
+        NewtonFailure if Newton does not reach the pressure (with ``ramp`` False, if the warm
+        start fails: no ramp from zero)."""
         self._measure_springs()
         warm = self.result is not None or self._started
         self.result = solve_with_continuation(self, self.u.vec, self.pressure, self.settings,
-                                              warm=warm, linear=self.linear)
+                                              warm=warm, linear=self.linear,
+                                              ramp=ramp or not warm)
         if not self.result.converged:
             raise NewtonFailure(self.result)
         self.load.Set(self.pressure)

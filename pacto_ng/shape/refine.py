@@ -128,11 +128,13 @@ class _Loop:
     def value(self) -> float:
         return self.measures[self.objective]
 
-    def evaluate(self, shape) -> dict:
+    def evaluate(self, shape, ramp: bool = True) -> dict:
         """The measures ``delta``, ``volume`` and (when the objective or a limit needs it)
-        ``ratio`` on the shape ``shape`` (the mesh is left at it)."""
+        ``ratio`` on the shape ``shape`` (the mesh is left at it); ``ramp`` False: the
+        equilibrium from the last one's at the full load only (a trial shape: if that fails,
+        the step is too long, and a ramp from zero would cost tens of Newton iterations)."""
         self.space.set(shape)
-        out = {"delta": self.response.solve(),
+        out = {"delta": self.response.solve(ramp=ramp),
                "volume": volume(self.space.mesh, self.thickness)}
         if "ratio" in (self.objective, *self.limits):
             out["ratio"] = self.response.value("ratio")
@@ -213,7 +215,7 @@ class _Loop:
             if q >= q_min and not self.crossing(trial):
                 trials += 1
                 try:
-                    measures = self.evaluate(trial)
+                    measures = self.evaluate(trial, ramp=False)
                 except (NewtonFailure, ValueError):  # no equilibrium, or no strain (SE = 0)
                     measures = None
                 if measures is not None and self.merit(measures) < before:
