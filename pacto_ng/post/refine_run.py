@@ -73,8 +73,9 @@ STEPS = 20
 #: largest is four times it (:func:`~pacto_ng.shape.refine.refine`), so that a step moves the
 #: boundary by a few elements at most and a thin wall is not crossed in one step
 STEP_SHARE = 1.0
-#: the augmented Lagrangian's penalty μ on the relative volume excess and the relative
-#: shortfall of Δ/SE (:func:`~pacto_ng.shape.refine.refine`).  Measured on the default
+#: the augmented Lagrangian's starting penalty μ on the relative volume excess and the
+#: relative shortfall of Δ/SE (:func:`~pacto_ng.shape.refine.refine`, which stiffens it
+#: where a violation persists).  Measured on the default
 #: pneunet run, 20 steps: μ = 1000 zig-zags across the Δ/SE floor (steps alternately gain Δ
 #: and restore Δ/SE) and gains 6 %; 100: 9.9 %; 10: 15.5 % with Δ/SE 0.17 % and the volume
 #: 0.05 % under their bounds; 3: 14.8 %, the volume 0.2 % over
@@ -228,7 +229,7 @@ def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
     goes on with the same objective scale, multiplier and volume bound, at most
     :data:`REMESHES` times.  The result's history spans every mesh (``mesh``: the mesh's
     number, 0 the part as made; the first row on a new mesh repeats the step number)."""
-    history, remeshes, done, multipliers, scale = [], 0, 0, None, None
+    history, remeshes, done, multipliers, scale, penalty = [], 0, 0, None, None, PENALTY
     floor, previous = None, None
     report = None if quiet else (lambda line: print("  " + line, flush=True))
     while True:
@@ -241,7 +242,7 @@ def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
                 response.solve()
                 floor = response.value("ratio")
             result = refine(response, space, volume_max=bound, steps=steps - done,
-                            step=STEP_SHARE * job.maxh, penalty=PENALTY,
+                            step=STEP_SHARE * job.maxh, penalty=penalty,
                             alpha=1.0 / part_size(mesh) ** 2, bounds=job.domain, scale=scale,
                             multipliers=multipliers, quality_step=QUALITY_STEP * job.maxh,
                             ratio_min=floor, say=report)
@@ -265,7 +266,7 @@ def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
         except ValueError as err:
             say(quiet, f"  the moved part could not be remeshed ({err}): stopped")
             break
-        remeshes, multipliers = remeshes + 1, result.multipliers
+        remeshes, multipliers, penalty = remeshes + 1, result.multipliers, result.penalties
         previous = (space, response, result)
         say(quiet, f"  remeshed the moved part ({remeshes} of at most {REMESHES}): "
                    f"{mesh.ne} elements")

@@ -12,11 +12,14 @@ the area in 2D).  The inequalities are treated by the augmented Lagrangian of Ro
 convex programming"; Nocedal and Wright 2006, *Numerical Optimization*, 2nd ed., ch. 17):
 the merit
 
-    M(d; λ) = f(d) + Σ_i (max(0, λ_i + μ c_i(d))² - λ_i²) / (2μ),
+    M(d; λ) = f(d) + Σ_i (max(0, λ_i + μ_i c_i(d))² - λ_i²) / (2μ_i),
 
-with the multipliers ``λ_i ≥ 0`` (start 0) and the fixed penalty ``μ``; its shape derivative
-is ``dM = df + Σ_i max(0, λ_i + μc_i) dc_i``.  Each step (one descent step per multiplier update, a
-common simplification in shape optimisation, where an exact inner minimisation is too dear):
+with the multipliers ``λ_i ≥ 0`` (start 0) and the penalties ``μ_i`` (each doubled, up to
+:data:`PENALTY_MAX`, after an accepted step whose violation is above :data:`VIOLATION` and
+not half the last one's: Nocedal and Wright, §17.4); its shape derivative is
+``dM = df + Σ_i max(0, λ_i + μ_i c_i) dc_i``.  Each step (one descent step per multiplier
+update, a common simplification in shape optimisation, where an exact inner minimisation is
+too dear):
 
 1. the state and adjoint on the current shape, ``dJ``, ``dV`` and (a floor active)
    ``d(Δ/SE)`` (a second adjoint)
@@ -54,7 +57,8 @@ common simplification in shape optimisation, where an exact inner minimisation i
    displacements (component ``k`` of vertex ``i`` is dof ``k·nv + i``), and the vertices,
    with them every straight edge, stay in the box (a curved edge of the reference mesh
    could bulge past a side by its own curvature: the bound is on the vertices);
-5. the multiplier update ``λ_i ← max(0, λ_i + μ c_i)`` at the accepted shape.
+5. the multiplier update ``λ_i ← max(0, λ_i + μ_i c_i)`` at the accepted shape, then the
+   penalties' (above).
 
 The loop stops after ``steps`` accepted steps (status ``steps``) or when the merit changes by
 less than ``rtol`` relative to ``max(1, |M|)`` with the constraints met to ``vtol``
@@ -78,6 +82,10 @@ from .gradient import PartResponse
 from .riesz import Quality, RieszMap, step_length
 
 STATUSES = ("converged", "steps", "mesh_quality", "no_descent")
+#: a constraint violation above this (relative) that does not halve from one accepted step
+#: to the next doubles that constraint's penalty μ, up to :data:`PENALTY_MAX`
+VIOLATION = 1e-3
+PENALTY_MAX = 1e4
 #: a vertex coordinate within this share of the box's size of one of its sides is on it
 ACTIVE_TOL = 1e-9
 
@@ -100,6 +108,7 @@ class RefineResult:
     volume: float
     multipliers: dict
     history: list[dict] = field(default_factory=list)
+    penalties: dict = field(default_factory=dict)
 
 
 class _Loop:
@@ -107,13 +116,16 @@ class _Loop:
     multipliers (see the module)."""
 
     def __init__(self, response: PartResponse, space: ShapeSpace, riesz: RieszMap, *,
-                 bounds=None, limits: dict, penalty: float, multipliers=None,
+                 bounds=None, limits: dict, penalty, multipliers=None,
                  scale: float | None = None, objective: str = "delta"):
         self.response, self.space, self.riesz = response, space, riesz
         self.objective, self.limits = objective, dict(limits)
         self.box = None if bounds is None else _Box(space, bounds)
         self.quality = Quality(space)
-        self.penalty = float(penalty)
+        # μ per constraint: a number for all, or a dict (an earlier refinement's)
+        self.penalties = (dict(penalty) if isinstance(penalty, dict)
+                          else dict.fromkeys(self.limits, float(penalty)))
+        self.violations = {}
         self.thickness = response.thickness
         self.multipliers = dict.fromkeys(self.limits, 0.0) | dict(multipliers or {})
         self.shape = space.deformation.vec.FV().NumPy().copy()
@@ -150,16 +162,22 @@ class _Loop:
 
     def merit(self, measures: dict) -> float:
         """``M`` at the current multipliers."""
-        mu, total = self.penalty, -measures[self.objective] / self.scale
+        total = -measures[self.objective] / self.scale
         for name, c in self.constraints(measures).items():
-            lam = self.multipliers[name]
+            lam, mu = self.multipliers[name], self.penalties[name]
             total += (max(0.0, lam + mu * c) ** 2 - lam * lam) / (2 * mu)
         return total
 
     def update(self) -> None:
         """The multiplier update ``λ_i ← max(0, λ_i + μ c_i)`` at the accepted shape."""
         for name, c in self.constraints(self.measures).items():
-            self.multipliers[name] = max(0.0, self.multipliers[name] + self.penalty * c)
+            mu = self.penalties[name]
+            self.multipliers[name] = max(0.0, self.multipliers[name] + mu * c)
+            # a violation that does not halve from one step to the next: a stiffer penalty
+            # (Nocedal and Wright 2006, §17.4; at most PENALTY_MAX)
+            if c > VIOLATION and c > 0.5 * self.violations.get(name, math.inf):
+                self.penalties[name] = min(PENALTY_MAX, 2.0 * mu)
+            self.violations[name] = max(c, 0.0)
 
     def _derivative(self, name: str) -> np.ndarray:
         """The shape gradient of the measure ``name`` at the current (solved) shape."""
@@ -171,7 +189,7 @@ class _Loop:
         """``θ`` for ``-dM`` at the current (accepted, solved) shape, largest coefficient 1."""
         g = self._derivative(self.objective) / self.scale
         for name, c in self.constraints(self.measures).items():
-            weight = max(0.0, self.multipliers[name] + self.penalty * c)
+            weight = max(0.0, self.multipliers[name] + self.penalties[name] * c)
             if weight > 0:  # dc_i: dV/V_max, or -d(Δ/SE)/r_min
                 sign = 1.0 if name == "volume" else -1.0
                 g -= weight * sign * self._derivative(name) / self.limits[name]
@@ -234,13 +252,14 @@ class _Loop:
                 "ratio": self.measures.get("ratio", math.nan),
                 "volume": self.measures["volume"], "det": det, "length": length,
                 "merit_before": merits[0], "merit": merits[1],
-                "multipliers": dict(self.multipliers), "trials": trials}
+                "multipliers": dict(self.multipliers), "penalties": dict(self.penalties),
+                "trials": trials}
 
 
 def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
            ratio_min: float | None = None, steps: int = 20, step: float = 0.02,
            step_max: float | None = None, min_step: float | None = None, q_min: float = 0.3,
-           penalty: float = 1000.0, rtol: float = 1e-5, vtol: float = 1e-3,
+           penalty=1000.0, rtol: float = 1e-5, vtol: float = 1e-3,
            alpha: float = 1.0, kind: str = "elasticity", bounds=None, multipliers=None,
            scale: float | None = None, quality_step: float | None = None,
            objective: str = "delta", say: Callable[[str], None] | None = None
@@ -252,7 +271,8 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
     ``response`` and ``space`` on the same mesh, ``space`` at the starting deformation;
     ``step`` the first trial step and ``step_max`` the largest (default ``4 step``), both in
     lengths of the mesh; ``min_step`` (default ``step / 1024``); ``q_min`` the lowest
-    Jacobian allowed; ``penalty`` ``μ``; ``alpha`` and ``kind`` those of the
+    Jacobian allowed; ``penalty`` the starting ``μ`` (a number, or one per constraint as
+    ``RefineResult.penalties`` gives them); ``alpha`` and ``kind`` those of the
     :class:`~pacto_ng.shape.riesz.RieszMap`; ``bounds`` ``(low, high)``, the lowest and
     highest corner of a box (one coordinate per dimension of the mesh) that every vertex of
     the part is kept in: each trial shape is projected into it (step 4 of the module; an
@@ -265,7 +285,8 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
     progress); ``say`` receives one line per step."""
     if space.mesh is not response.mesh:
         raise ValueError("the shape space and the response must be on the same mesh")
-    if not (volume_max > 0 and step > 0 and penalty > 0 and 0 < q_min < 1 and steps >= 0
+    mus = penalty.values() if isinstance(penalty, dict) else (penalty,)
+    if not (volume_max > 0 and step > 0 and min(mus) > 0 and 0 < q_min < 1 and steps >= 0
             and (ratio_min is None or ratio_min > 0)):
         raise ValueError("refine: volume_max, ratio_min, step and penalty must be positive, "
                          "q_min in (0, 1) and steps non-negative")
@@ -299,7 +320,7 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
             break
     m = loop.measures
     return RefineResult(status, loop.shape.copy(), m["delta"], loop.value, m["volume"],
-                        dict(loop.multipliers), history)
+                        dict(loop.multipliers), history, dict(loop.penalties))
 
 
 def _line(k: int, loop: _Loop, figures) -> str:
