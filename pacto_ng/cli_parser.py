@@ -204,6 +204,8 @@ def _refine_parser(sub):
                    "(default: the load the run reached)")
     f.add_argument("--load-type", choices=("fixed", "follower"), help="the wall pressure "
                    "fixed or following the deformation (default: the run's load_type)")
+    f.add_argument("--pressures", help="comma-separated inlet pressures at which the refined "
+                   "part is analysed afterwards (summary.json 'sweep'), e.g. 1e5,3e5,1e6")
     f.add_argument("--check-gradients", action="store_true", help="instead of refining, "
                    "check the refinement's shape gradients (Δ, volume, and Δ/SE for a "
                    "mechanism) against central differences on the run's part; writes nothing; "

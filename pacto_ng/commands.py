@@ -39,7 +39,8 @@ def post_command(args) -> int:
             return check_refine_gradients(args.dir, directions=args.directions, tol=args.tol,
                                           quiet=args.quiet, loading=loading)
         return refine_run(args.dir, steps=args.steps, quiet=args.quiet,
-                          overwrite=args.overwrite, loading=loading)
+                          overwrite=args.overwrite, loading=loading,
+                          pressures=parse_pressures(args.pressures) if args.pressures else ())
     if args.command == "export":
         return export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
                           maxh=args.maxh, quiet=args.quiet, threshold2=args.threshold2,

@@ -31,9 +31,13 @@ these files and nothing else):
                    mechanism run; NaN otherwise), volume (m³: area times thickness),
                    det (the lowest Jacobian of the mesh's motion since the last remesh),
                    length (the step, m), merit
-``summary.json``   status, Δ before and after, volume before, after and its bound, the lowest
-                   Jacobian, steps, remeshes, ``check`` (the independent remesh: its maxh,
-                   elements, Δ and difference), model, load type, load, the part's settings,
+``summary.json``   status, Δ before and after, ``design_delta`` and ``gap`` (the refined Δ
+                   against the design's, as the run's part line gives it; at the run's own
+                   loading only), ``ratio`` (Δ/SE before and after, a mechanism run), volume
+                   before, after and its bound, the lowest Jacobian, steps, remeshes,
+                   ``check`` (the independent remesh: its maxh, elements, Δ and
+                   difference), ``sweep`` (with ``--pressures``: the refined part analysed
+                   afresh at each pressure), model, load type, load, the part's settings,
                    warnings (the refined part reaching out of the run's design domain beyond
                    round-off: the refinement keeps it in, so none is expected), wall time
 ``refined.vtu``    the refined part (points at their moved positions, m) with ``u`` (the
@@ -111,7 +115,7 @@ class Loading:
 
 
 def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bool = False,
-               loading: Loading = Loading()) -> int:
+               loading: Loading = Loading(), pressures=()) -> int:
     """``pacto refine RUN``: the run's part made, its shape refined for a larger Δ at no more
     volume, the results written into ``RUN/refine/`` (the module docstring).  Returns the exit
     code (0); bad input is an InputError (one line, exit 2)."""
@@ -137,6 +141,8 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
                                   job.domain)))
     summary["warnings"] = _leaves(space, job.domain, start)
     check_mesh, summary["check"] = _check(job, space, result.delta, quiet)
+    summary["sweep"] = (_sweep(job, check_mesh, pressures, quiet)
+                        if pressures and check_mesh is not None else [])
     for line in summary["warnings"]:
         say(quiet, f"  warning: {line}")
     summary["wall_time_s"] = time.perf_counter() - t0
@@ -300,6 +306,24 @@ def _check(job: Job, space, delta: float, quiet: bool):
                f"{maxh:.4g} m): Δ {check:.6g} m, {100 * entry['difference']:+.2f} % from the "
                f"refinement's")
     return mesh, entry
+
+
+def _sweep(job: Job, mesh, pressures, quiet: bool) -> list[dict]:
+    """The refined part (``mesh``: its independent remesh) analysed afresh at each of
+    ``pressures`` with the refinement's model and load type (Newton's load ramp from zero):
+    ``[{"pressure", "converged", "delta", "newton_iterations"}]``, one line each."""
+    out = []
+    for p in pressures:
+        response, _ = shape_response(mesh, replace(job, load=float(p)))
+        try:
+            delta, ok = response.solve(), True
+        except NewtonFailure:
+            delta, ok = None, False
+        out.append({"pressure": float(p), "converged": ok, "delta": delta,
+                    "newton_iterations": response.result.iterations})
+        say(quiet, f"  the refined part at {p:g}: " + (f"Δ {delta:.6g} m" if ok else
+                                                        "no equilibrium"))
+    return out
 
 
 def _remeshed(space, maxh: float):

@@ -45,7 +45,7 @@ def refined(solid_member):
 
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        code = main(["refine", str(solid_member), "--steps", "3"])
+        code = main(["refine", str(solid_member), "--steps", "3", "--pressures", "5e4,1e5"])
     return solid_member, code, out.getvalue().strip().splitlines()
 
 
@@ -96,6 +96,20 @@ def test_the_refined_part_is_checked_on_an_independent_remesh(refined):
     assert s["remeshes"] == 0  # three steps leave the mesh fit to move
     assert any(line.strip().startswith("an independent remesh of the refined part")
                for line in lines)
+
+
+def test_the_refined_part_is_swept_over_the_pressures_asked(refined):
+    """``--pressures 5e4,1e5``: the refined part analysed afresh at each pressure on its
+    independent remesh; at the run's load (1e5 Pa) that is the check's own analysis (the
+    same Δ), and the run's model is linear with a fixed pressure, so Δ is proportional to
+    the pressure (half at 5e4 Pa)."""
+    run, _, lines = refined
+    s = json.loads((run / "refine" / "summary.json").read_text())
+    sweep = {entry["pressure"]: entry for entry in s["sweep"]}
+    assert sorted(sweep) == [5e4, 1e5] and all(e["converged"] for e in sweep.values())
+    assert sweep[1e5]["delta"] == pytest.approx(s["check"]["delta"], rel=1e-10)
+    assert sweep[5e4]["delta"] == pytest.approx(0.5 * sweep[1e5]["delta"], rel=1e-9)
+    assert sum(line.strip().startswith("the refined part at ") for line in lines) == 2
 
 
 def test_the_refined_stl_is_the_whole_part_closed_in_mm(refined):
