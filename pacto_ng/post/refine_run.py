@@ -140,6 +140,11 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
     start = float(np.max(_outside(np.array([v.point for v in part.mesh.vertices]),
                                   job.domain)))
     summary["warnings"] = _leaves(space, job.domain, start)
+    summary["sealed"] = part.sealed
+    if part.sealed is False:
+        summary["warnings"].append(
+            "the part as made is not sealed (" + part.seal.message() + "): the refinement "
+            "keeps its topology, so the refined part leaks too")
     check_mesh, summary["check"] = _check(job, space, result.delta, quiet)
     summary["sweep"] = (_sweep(job, check_mesh, pressures, quiet)
                         if pressures and check_mesh is not None else [])
