@@ -23,7 +23,8 @@ from .post.cli_commands import export_run
 from .post.compare import compare_runs
 from .post.part_stage import finish_run
 from .post.refine_check import check_refine_gradients
-from .post.refine_run import Loading, refine_run
+from .post.refine_run import refine_run
+from .post.refine_setup import Loading
 from .runner import optimise_case, resume_run
 from .sweep import run_sweep
 from .sweep_plan import parse_loads, parse_models

@@ -23,7 +23,7 @@ from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
 from ..shape import RieszMap, volume, volume_integrals
 from .finish import say
-from .refine_run import Loading, part_size, refinement, shape_response
+from .refine_setup import Loading, part_size, refinement, shape_response
 from .runs import load_run
 
 #: the directions checked when ``--directions`` is not given

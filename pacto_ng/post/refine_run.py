@@ -55,21 +55,18 @@ objective is neither a mechanism's nor an output's, are refused with one line.
 """
 from __future__ import annotations
 
-import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
 from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
-from ..shape import PartResponse, ShapeSpace, moved_field, refine, remesh_moved, volume
-from .analysis_options import analysis_params
+from ..shape import moved_field, refine, remesh_moved, volume
 from .finish import say
-from .part import make_part, part_ports, present_supports
-from .part_stage import PART_MAXH, PART_ORDER
 from .refine_files import write_refinement, write_stl
-from .runs import copy_gridfunction, load_run, rebuild
+from .refine_setup import Job, Loading, part_size, refinement, shape_response
+from .runs import load_run
 
 #: the refinement's steps when ``--steps`` is not given
 STEPS = 20
@@ -84,11 +81,6 @@ STEP_SHARE = 1.0
 #: and restore Δ/SE) and gains 6 %; 100: 9.9 %; 10: 15.5 % with Δ/SE 0.17 % and the volume
 #: 0.05 % under their bounds; 3: 14.8 %, the volume 0.2 % over
 PENALTY = 10.0
-#: the run objectives refined, each with whether its mechanism ratio Δ/SE is held: the
-#: refinement raises Δ, and for a mechanism (a run minimising -Δ/SE) keeps Δ/SE at least
-#: the part's own, so that the run's objective is not worsened either (raising Δ/SE alone
-#: stiffens the part and lowers Δ: -15 % on pneunet, -5 % on pa-inverter, measured)
-REFINED = {"mechanism": True, "output": False}
 #: a step the mesh's quality bounds below this (in the part's element sizes) asks for a
 #: remesh: smaller ones make little progress (measured on pa-inverter: four steps of 1e-3 to
 #: 4e-6 maxh gained 0.1 % of Δ before the mesh could not move at all)
@@ -101,17 +93,6 @@ CHECK_MAXH = 0.7
 #: the share of the design domain's size beyond which a refined vertex is reported out of
 #: the domain (round-off only: the refinement clips the vertices into the domain's box)
 OUTSIDE_TOL = 1e-9
-
-
-@dataclass(frozen=True)
-class Loading:
-    """What a user may change of the run's loading for the refinement (None: the run's own):
-    the material ``model``, the inlet pressure ``load`` and its ``kind`` (``fixed`` or
-    ``follower``)."""
-
-    model: str | None = None
-    load: float | None = None
-    kind: str | None = None
 
 
 def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bool = False,
@@ -189,48 +170,6 @@ def _check_text(check: dict) -> str:
         return "no independent check (the refined part could not be remeshed or analysed)"
     return (f"on an independent remesh Δ {check['delta']:.4g} m "
             f"({100 * check['difference']:+.2f} %)")
-
-
-def refinement(run, quiet: bool, what: str, loading: Loading = Loading()):
-    """``(Part, Job)``: the part of the finished run ``run`` (:func:`~.runs.load_run`) as
-    ``pacto analyse`` makes it, and what its refinement shares on every mesh, at the run's
-    loading or ``loading``; InputError (one line) for a run the refinement does not apply
-    to.  Prints the set-up's lines (``what``: the task, e.g. "20 steps")."""
-    if loading.load is not None and not (math.isfinite(loading.load) and loading.load > 0):
-        raise InputError(f"--load: must be a positive pressure, got {loading.load:g}")
-    setup, kind, objective = _checked(run, loading.kind)
-    load = loading.load or float(run.summary.get("load_reached") or run.load)
-    problem = rebuild(run)
-    dim = problem.mesh.dim
-    params = analysis_params(run.params, loading.model, PART_ORDER[dim])
-    say(quiet, f"refine {run.path}: {run.case.name}, model {params.model}, {kind} "
-               f"pressure {load:g} {run.case.load_unit}, {what}")
-    part, maxh = _part(run, problem, setup)
-    job = Job(setup, params, load, kind, maxh, _bounds(problem.mesh), REFINED[objective])
-    say(quiet, f"  the part: {part.mesh.ne} elements, maxh {maxh:.4g} m, order "
-               f"{job.params.order}, volume {volume(part.mesh, job.thickness(dim)):.4g} m³ "
-               f"(the bound)")
-    return part, job
-
-
-@dataclass(frozen=True)
-class Job:
-    """What every mesh of one refinement shares: the case's set-up, the analysis parameters,
-    the load and its kind, the part's element size and the run's design domain (its lowest
-    and highest corner)."""
-
-    setup: object
-    params: object
-    load: float
-    kind: str
-    maxh: float
-    domain: tuple
-    hold_ratio: bool
-
-    def thickness(self, dim: int) -> float:
-        """The part's thickness: the run's for a 2D part (its volume is thickness × area),
-        1 in 3D."""
-        return float(self.params.thickness) if dim == 2 else 1.0
 
 
 def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
@@ -354,26 +293,6 @@ def _remeshed(space, maxh: float):
         return remesh_moved(space.mesh, space.moved_points(), maxh), maxh
 
 
-def _checked(run, kind: str | None):
-    """``(Setup, load type, the run's objective)`` of a run the refinement applies to, the
-    load type ``kind`` or the run's; InputError (one line) otherwise, before anything is
-    rebuilt."""
-    setup = run.case.make_setup(run.params)
-    if kind is not None and kind not in ("fixed", "follower"):
-        raise InputError(f"--load-type: must be fixed or follower, got '{kind}'")
-    kind = kind or run.params.load_type
-    if setup.pressure is None or kind not in ("fixed", "follower"):
-        raise InputError(f"refine: case '{run.case.name}' has no wall pressure to refine for "
-                         f"(the refinement applies to pressure cases, fixed or follower)")
-    if not setup.ports:
-        raise InputError(f"refine: case '{run.case.name}' has no output port")
-    objective = run.params.objective or setup.objective
-    if objective not in REFINED:
-        raise InputError(f"refine: the run's objective '{objective}' is not refined (the "
-                         f"refinement takes {' and '.join(REFINED)})")
-    return setup, kind, objective
-
-
 def _outside(points, domain) -> np.ndarray:
     """How far each of ``points`` lies out of the box ``domain`` (its lowest and highest
     corner), m."""
@@ -395,45 +314,6 @@ def _leaves(space, domain, start: float) -> list[str]:
     where = ", ".join(f"{c:.3g}" for c in moved[int(np.argmax(out))])
     return [f"the refined part reaches {far:.3g} m out of the run's design domain (at "
             f"({where}) m)"]
-
-
-def _part(run, problem, setup):
-    """``(Part, maxh)``: the run's part as ``pacto analyse RUN`` makes it at its defaults."""
-    maxh = PART_MAXH[problem.mesh.dim] * float(problem.h)
-    part = make_part(problem, setup, threshold=0.5, maxh=maxh, threshold2=0.5, connect=True,
-                     pressure=copy_gridfunction(problem.pressure_block.gfp), p_in=run.load,
-                     mesh_time_limit=run.params.mesh_time_limit)
-    return part, maxh
-
-
-def shape_response(mesh, job: Job):
-    """``(PartResponse, ShapeSpace)`` of the part: the run's supports, ports and pressure;
-    the clamp and the ports held, the symmetry lines held in their normal component."""
-    supports = present_supports(job.setup.supports, mesh)
-    ports = part_ports(job.setup)
-    regions = set(mesh.GetBoundaries()) | set(mesh.GetBBoundaries())
-    held = tuple(dict.fromkeys(supports.clamp + tuple(p.region for p in ports
-                                                      if p.region in regions)))
-    hold = replace(supports, clamp=held)
-    try:
-        response = PartResponse(mesh, params=job.params, supports=supports, ports=ports,
-                                pressure=job.load, kind=job.kind)
-        space = ShapeSpace(mesh, hold=hold)
-    except ValueError as err:
-        raise InputError(f"refine: the part cannot be refined: {err}") from None
-    return response, space
-
-
-def _bounds(mesh) -> tuple[np.ndarray, np.ndarray]:
-    """The lowest and highest vertex coordinates of ``mesh`` (m)."""
-    points = np.array([v.point for v in mesh.vertices])
-    return points.min(axis=0), points.max(axis=0)
-
-
-def part_size(mesh) -> float:
-    """The part's size: its bounding box's largest side (m)."""
-    low, high = _bounds(mesh)
-    return float(np.max(high - low))
 
 
 def _summary(run, result, bound: float, kind: str, load: float, settings: dict) -> dict:
