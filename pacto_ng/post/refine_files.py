@@ -96,23 +96,24 @@ def plot_outlines(path, before, after, summary: dict, name: str, *, domain=None,
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
 
-    fig, ax = plt.subplots(figsize=(8, 5.5))
-    drawn = set()
-    colours = {"pressure": "tab:red", "clamp": "black", "after": "tab:blue"}
-    labels = {"pressure": "after: the pressure walls", "clamp": "the clamp (held)",
-              "after": "after: the other walls"}
+    fig, ax = plt.subplots(figsize=(8, 6))
+    styles = {"before": ("0.55", 0.8, "before (the part as made)"),
+              "pressure": ("tab:red", 1.6, "after: the pressure walls"),
+              "clamp": ("black", 2.6, "the clamp (held)"),
+              "after": ("tab:blue", 1.6, "after: the other walls")}
     (ref, edges0), (moved, edges) = before, after
-    for (a, b), region in edges0:
-        ax.plot(ref[[a, b], 0], ref[[a, b], 1], color="0.55", lw=0.8,
-                label=None if "before" in drawn else "before (the part as made)")
-        drawn.add("before")
+    groups = {"before": [ref[[a, b], :2] for (a, b), _ in edges0]}
     for (a, b), region in edges:
         key = ("pressure" if region == "pressure" else "clamp" if region in clamp else
                "after")
-        ax.plot(moved[[a, b], 0], moved[[a, b], 1], lw=2.6 if key == "clamp" else 1.6,
-                color=colours[key], label=None if key in drawn else labels[key])
-        drawn.add(key)
+        groups.setdefault(key, []).append(moved[[a, b], :2])
+    for key, segments in groups.items():  # one collection per kind: thousands of segments
+        colour, width, label = styles[key]
+        ax.add_collection(LineCollection(segments, colors=colour, linewidths=width,
+                                         label=label))
+    ax.autoscale_view()
     if domain is not None:
         (x0, y0), (x1, y1) = domain[0][:2], domain[1][:2]
         ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="0.3", lw=0.8, ls=":",
@@ -120,7 +121,7 @@ def plot_outlines(path, before, after, summary: dict, name: str, *, domain=None,
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.legend(loc="best", fontsize=8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3, fontsize=8)
     s = summary
     ax.set_title(f"{name} part refined (status {s['status']}, {s['steps']} steps): Δ "
                  f"{s['delta_before']:.4g} → {s['delta_after']:.4g} m "

@@ -281,9 +281,13 @@ class PartResponse:
         form += Variation(self.thickness * self.energy(Grad(u), self.coeffs) * shape_dx())
         return form
 
-    def _scales(self, objective: str) -> tuple[float, float]:
+    def _scales(self, objective) -> tuple[float, float]:
         """``(α, β)`` with ``J``'s partial derivatives ``α ∂Δ - β ∂SE`` (in ``u`` and in the
-        shape): ``(1, 0)`` for ``Δ``, ``(1/SE, Δ/SE²)`` for ``Δ/SE``."""
+        shape): ``(1, 0)`` for ``Δ``, ``(1/SE, Δ/SE²)`` for ``Δ/SE``; for a combination
+        ``{name: weight}`` the weighted sums (one adjoint and one shape derivative for all)."""
+        if isinstance(objective, dict):
+            pairs = [(w, self._scales(name)) for name, w in objective.items()]
+            return (sum(w * a for w, (a, _) in pairs), sum(w * b for w, (_, b) in pairs))
         if _objective(objective) == "delta":
             return 1.0, 0.0
         if not self.strain_energy > 0.0:
@@ -392,10 +396,10 @@ class PartResponse:
         springs = self._spring_terms()
         return L if springs is None else L + springs
 
-    def gradient(self, space: ShapeSpace, objective: str = "delta") -> np.ndarray:
-        """``dJ/dV`` of ``J = Δ`` (``"delta"``) or ``Δ/SE`` (``"ratio"``) on ``space`` (its
-        held dofs zeroed) at the last equilibrium: the adjoint solve and the shape derivative
-        of :meth:`lagrangian`."""
+    def gradient(self, space: ShapeSpace, objective="delta") -> np.ndarray:
+        """``dJ/dV`` of ``J = Δ`` (``"delta"``), ``Δ/SE`` (``"ratio"``) or a weighted sum
+        (``{"delta": a, "ratio": b}``) on ``space`` (its held dofs zeroed) at the last
+        equilibrium: the adjoint solve and the shape derivative of :meth:`lagrangian`."""
         self.adjoint(objective)
         return space.derivative(self.lagrangian(objective))
 

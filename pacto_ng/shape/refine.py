@@ -179,20 +179,21 @@ class _Loop:
                 self.penalties[name] = min(PENALTY_MAX, 2.0 * mu)
             self.violations[name] = max(c, 0.0)
 
-    def _derivative(self, name: str) -> np.ndarray:
-        """The shape gradient of the measure ``name`` at the current (solved) shape."""
-        if name == "volume":
-            return self.space.derivative(volume_integrals(self.thickness))
-        return self.response.gradient(self.space, name)
-
     def direction(self) -> np.ndarray:
-        """``θ`` for ``-dM`` at the current (accepted, solved) shape, largest coefficient 1."""
-        g = self._derivative(self.objective) / self.scale
+        """``θ`` for ``-dM`` at the current (accepted, solved) shape, largest coefficient 1.
+        The objective's and the Δ/SE floor's terms are one weighted gradient (one adjoint,
+        one shape derivative: :meth:`~pacto_ng.shape.gradient.PartResponse.gradient`)."""
+        weights, g = {self.objective: 1.0 / self.scale}, 0.0
         for name, c in self.constraints(self.measures).items():
             weight = max(0.0, self.multipliers[name] + self.penalties[name] * c)
-            if weight > 0:  # dc_i: dV/V_max, or -d(Δ/SE)/r_min
-                sign = 1.0 if name == "volume" else -1.0
-                g -= weight * sign * self._derivative(name) / self.limits[name]
+            if weight == 0:
+                continue
+            if name == "volume":  # dc = dV / V_max
+                g = g - weight * self.space.derivative(
+                    volume_integrals(self.thickness)) / self.limits[name]
+            else:  # dc = -d(Δ/SE) / r_min
+                weights[name] = weights.get(name, 0.0) + weight / self.limits[name]
+        g = g + self.response.gradient(self.space, weights)
         theta = self.riesz(g)
         if self.box is not None:
             active = self.box.active(self.shape, theta)

@@ -28,6 +28,7 @@ import math
 
 import numpy as np
 import ngsolve
+from scipy.spatial import cKDTree
 from netgen.geom2d import SplineGeometry
 from netgen.libngpy._meshing import NgException
 from netgen.meshing import Element0D, Element2D, Element3D, FaceDescriptor, MeshPoint, Pnt
@@ -217,30 +218,29 @@ def _name_points(ngm, mesh, points) -> None:
         ngm.Add(Element0D(k + 1, index=regions[el.mat]))
 
 
-def crossing_walls(mesh, points, chunk: int = 256) -> int:
+def crossing_walls(mesh, points) -> int:
     """How many pairs of boundary segments of the 2D ``mesh`` cross each other with its
     vertices at ``points`` (segments sharing a vertex are not counted): 0 for a valid part.
     Moving the mesh keeps each element unfolded, but two walls facing each other across a
     void (a chamber, a slot) have no element between them and can pass through each other;
     such a shape is no part (and Netgen cannot mesh it).  3D meshes: 0 (not checked).  The
-    test is the orientation test of two segments (each one's ends on opposite sides of the
-    other's line), on every pair, ``chunk`` segments at a time."""
+    candidates are the pairs whose midpoints lie within the longest segment's length of each
+    other (two crossing segments always do: scipy's ``cKDTree.query_pairs``), each tested by
+    orientation (each one's ends on opposite sides of the other's line)."""
     if mesh.dim != 2:
         return 0
     ends = np.array([[v.nr for v in el.vertices] for el in mesh.Elements(BND)])
     p = np.asarray(points, dtype=float)[:, :2]
     a, b = p[ends[:, 0]], p[ends[:, 1]]
-    count = 0
-    for start in range(0, len(ends), chunk):
-        i = slice(start, start + chunk)
-        share = (ends[i, None, :, None] == ends[None, :, None, :]).any(axis=(2, 3))
-        d1 = _side(a[i, None], b[i, None], a[None])
-        d2 = _side(a[i, None], b[i, None], b[None])
-        d3 = _side(a[None], b[None], a[i, None])
-        d4 = _side(a[None], b[None], b[i, None])
-        cross = (d1 * d2 < 0) & (d3 * d4 < 0) & ~share
-        count += int(np.count_nonzero(cross))
-    return count // 2
+    reach = float(np.max(np.linalg.norm(b - a, axis=1)))
+    pairs = cKDTree(0.5 * (a + b)).query_pairs(reach, output_type="ndarray")
+    if len(pairs) == 0:
+        return 0
+    i, j = pairs[:, 0], pairs[:, 1]
+    share = (ends[i, :, None] == ends[j, None, :]).any(axis=(1, 2))
+    cross = ((_side(a[i], b[i], a[j]) * _side(a[i], b[i], b[j]) < 0)
+             & (_side(a[j], b[j], a[i]) * _side(a[j], b[j], b[i]) < 0) & ~share)
+    return int(np.count_nonzero(cross))
 
 
 def _side(a, b, c):

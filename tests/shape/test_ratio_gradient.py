@@ -171,3 +171,22 @@ def test_refused_objectives(meshes):
         part.solve()
         with pytest.raises(ValueError, match="objective"):
             part.gradient(space, objective="energy")
+
+
+@pytest.mark.parametrize("kind", ["fixed", "follower"])
+def test_a_weighted_gradient_is_the_weighted_sum(meshes, kind):
+    """``gradient(space, {"delta": a, "ratio": b})`` (one adjoint and one shape derivative,
+    as the refinement's step takes it) equals ``a dΔ + b d(Δ/SE)`` computed separately, to
+    round-off: the adjoint right-hand side and the Lagrangian are linear in the weights."""
+    mesh = meshes[2]
+    part = response(mesh, "neohookean", kind)
+    space = ShapeSpace(mesh, hold=("left",))
+    a, b = 0.7, -3.0
+    try:
+        with compute(THREADS):
+            part.solve()
+            both = part.gradient(space, {"delta": a, "ratio": b})
+            each = a * part.gradient(space, "delta") + b * part.gradient(space, "ratio")
+    finally:
+        mesh.UnsetDeformation()
+    np.testing.assert_allclose(both, each, rtol=0, atol=1e-10 * np.max(np.abs(each)))
