@@ -187,16 +187,16 @@ def _post_parsers(sub):
 
 
 def _refine_parser(sub):
-    """refine: a finished 2D pressure run's part, its shape refined (pacto_ng.post.refine_run)."""
-    f = sub.add_parser("refine", help="refine the shape of a finished 2D pressure run's part",
-                       description="Make the part of a finished 2D pressure run as 'pacto "
-                       "analyse' does and move its boundary to raise the output displacement "
-                       "at the run's load with no more volume than the part starts with (the "
-                       "clamp, the ports and the symmetry lines held; the part remeshed when its "
-                       "mesh would fold), then check it on an independent remesh; writes "
-                       "DIR/refine/ (history.csv, summary.json, refined.vtu, refined.png, "
-                       "refined.stl).")
-    f.add_argument("dir", help="a finished run folder (2D, a pressure case)")
+    """refine: a finished pressure run's part, its shape refined (pacto_ng.post.refine_run)."""
+    f = sub.add_parser("refine", help="refine the shape of a finished pressure run's part",
+                       description="Make the part of a finished pressure run (2D or 3D) as "
+                       "'pacto analyse' does and move its boundary to raise the output "
+                       "displacement at the run's load with no more volume than the part "
+                       "starts with and, for a mechanism, no lower Δ/SE (the clamp, the ports "
+                       "and the symmetry lines held; the part remeshed when its mesh would "
+                       "fold), then check it on an independent remesh; writes DIR/refine/ "
+                       "(history.csv, summary.json, refined.vtu, refined.png, refined.stl).")
+    f.add_argument("dir", help="a finished run folder (a pressure case, 2D or 3D)")
     f.add_argument("--steps", type=int, default=20, help="descent steps (default 20)")
     f.add_argument("--model", help="the material law of the part's analysis (default: the "
                    "run's), e.g. neohookean")
