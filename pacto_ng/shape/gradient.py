@@ -96,7 +96,7 @@ from ..physics.newton import solve_with_continuation
 from ..physics.quadrature import integration_rules
 from ..physics.spaces import dirichlet_options
 from ..post.part_analysis import outward_normal, solid_fields
-from .deformation import ShapeSpace, shape_ds, shape_dx, volume, volume_integrals
+from .deformation import ShapeSpace, shape_ds, shape_dx
 
 KINDS = ("fixed", "follower")
 #: the objectives whose shape gradient :meth:`PartResponse.gradient` gives: ``Δ`` and ``Δ/SE``
@@ -120,7 +120,7 @@ def _ports(mesh, ports) -> tuple[Port, ...]:
     return ports
 
 
-def _objective(objective: str) -> str:
+def checked_objective(objective: str) -> str:
     """``objective`` if it is one of :data:`OBJECTIVES` (ValueError otherwise)."""
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, not {objective!r}")
@@ -288,7 +288,7 @@ class PartResponse:
         if isinstance(objective, dict):
             pairs = [(w, self._scales(name)) for name, w in objective.items()]
             return (sum(w * a for w, (a, _) in pairs), sum(w * b for w, (_, b) in pairs))
-        if _objective(objective) == "delta":
+        if checked_objective(objective) == "delta":
             return 1.0, 0.0
         if not self.strain_energy > 0.0:
             raise ValueError(f"the ratio Δ/SE needs a strained state (SE = "
@@ -402,50 +402,3 @@ class PartResponse:
         equilibrium: the adjoint solve and the shape derivative of :meth:`lagrangian`."""
         self.adjoint(objective)
         return space.derivative(self.lagrangian(objective))
-
-
-class ShapeResponse:
-    """Block ``shape -> J``: the coefficients of the mesh deformation ``d`` on ``space`` to
-    the part's objective ``J``, ``Δ`` (``objective="delta"``) or ``Δ/SE`` (``"ratio"``)
-    (:class:`PartResponse`); the output is named after the objective unless ``output`` is
-    given.
-
-    forward: ``SetDeformation(d)`` (:meth:`ShapeSpace.set`), equilibrium, ``J``.
-    backward: ``ḡ dJ/dV`` on ``space`` (held dofs zero; the module's Lagrangian).
-    """
-
-    def __init__(self, response: PartResponse, space: ShapeSpace, *, inputs=("shape",),
-                 output: str | None = None, objective: str = "delta"):
-        if space.mesh is not response.mesh:
-            raise ValueError("the shape space and the response must be on the same mesh")
-        self.response, self.space, self.objective = response, space, _objective(objective)
-        self.inputs, self.output = tuple(inputs), output or objective
-
-    def forward(self, shape) -> float:
-        self.space.set(shape)
-        self.response.solve()
-        return self.response.value(self.objective)
-
-    def backward(self, grad_output) -> tuple[np.ndarray]:
-        return (float(grad_output) * self.response.gradient(self.space, self.objective),)
-
-
-class ShapeVolume:
-    """Block ``shape -> t |Ω|``, the part's volume
-    (:func:`~pacto_ng.shape.deformation.volume`; ``t`` the thickness of a 2D part, 1 in 3D).
-
-    forward: ``SetDeformation(d)``, ``t ∫_Ω dx``.
-    backward: ``ḡ t ∫_Ω div V dx`` on ``space`` (``DiffShape``; held dofs zero).
-    """
-
-    def __init__(self, space: ShapeSpace, *, thickness: float = 1.0, inputs=("shape",),
-                 output: str = "volume"):
-        self.space, self.thickness = space, float(thickness)
-        self.inputs, self.output = tuple(inputs), output
-
-    def forward(self, shape) -> float:
-        self.space.set(shape)
-        return volume(self.space.mesh, self.thickness)
-
-    def backward(self, grad_output) -> tuple[np.ndarray]:
-        return (float(grad_output) * self.space.derivative(volume_integrals(self.thickness)),)
