@@ -343,7 +343,7 @@ class _Box:
         if low.shape != (dim,) or high.shape != (dim,) or not np.all(low <= high):
             raise ValueError(f"refine: bounds must be (low, high) with {dim} coordinates "
                              f"each and low <= high")
-        if space.space.globalorder != 1 or space.ndof != dim * mesh.nv:
+        if not space.vertex_dofs:
             raise ValueError("refine: bounds need an order-1 shape space (its dofs the "
                              "vertex displacements)")
         # dof k·nv + i is component k of vertex i (VectorH1 of order 1: tests/shape)
@@ -362,14 +362,6 @@ class _Box:
         mask = np.zeros(len(values), dtype=bool)
         mask[self.dofs[out]] = True
         return mask
-
-    def crossing(self, values) -> bool:
-        """Whether two walls of the shape ``values`` cross each other (2D, an order-1 space:
-        :func:`~pacto_ng.shape.remesh.crossing_walls`; no element folds, but walls facing
-        each other across a void can pass through each other)."""
-        if not self.space.vertex_dofs:
-            return False
-        return crossing_walls(self.space.mesh, self.space.points_at(values)) > 0
 
     def project(self, values) -> np.ndarray:
         """The coefficients with every free vertex coordinate clipped into the box."""

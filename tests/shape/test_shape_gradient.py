@@ -260,26 +260,44 @@ def test_gradient_with_a_boundary_spring_matches_central_differences(meshes, dim
     d = (1.0,) + (0.0,) * (dim - 1)
     space = ShapeSpace(mesh, hold=("left",))
     V = space.direction(smooth_field(dim, seed=dim + 10))
+    k = 0.1 if dim == 2 else 1.0
+    deltas, rel = spring_check(space, V, (0.0, k), lambda spring: PartResponse(
+        mesh, params=params(model, dim, order=2, newton_rtol=NEWTON_RTOL),
+        supports=Supports(clamp=("left",)), kind=kind, pressure=0.05,
+        ports=Port("right", d, spring=spring)), f"boundary spring {dim}D {model} {kind}")
+    assert 0.0 < deltas[k] < 0.9 * deltas[0.0]
+    assert rel <= 1e-5
+
+
+def radial_ring():
+    """``(mesh, supports, space, V)``: the quarter ring (symmetry lines ``left`` and
+    ``bottom``), its P1 shape space (as the refinement's) and the direction ``V`` that moves
+    the inner radius out by 1 and the outer not at all."""
+    mesh = ring(0.15, 2)
+    sym = Supports(fix_x=("left",), fix_y=("bottom",))
+    space = ShapeSpace(mesh, hold=sym)
+    r = sqrt(x * x + y * y)
+    return mesh, sym, space, space.direction(CF((x / r, y / r)) * (B - r) / (B - A))
+
+
+def spring_check(space, V, stiffnesses, build, label: str):
+    """``({k: Δ}, relative error)``: the response ``build(k)`` read through a ShapeResponse
+    at each output-spring stiffness ``k``, and for the last one dΔ·V against the central
+    difference (Δ(hV) - Δ(-hV)) / 2h."""
     deltas = {}
     try:
         with compute(THREADS):
-            for k in (0.0, 0.1 if dim == 2 else 1.0):
-                response = PartResponse(mesh, params=params(model, dim, order=2,
-                                                            newton_rtol=NEWTON_RTOL),
-                                        supports=Supports(clamp=("left",)), kind=kind,
-                                        pressure=0.05, ports=Port("right", d, spring=k))
-                block_ = ShapeResponse(response, space)
+            for k in stiffnesses:
+                block_ = ShapeResponse(build(k), space)
                 deltas[k] = block_.forward(np.zeros(space.ndof))
             grad = block_.backward(1.0)[0]
             numeric = (block_.forward(STEP * V) - block_.forward(-STEP * V)) / (2 * STEP)
     finally:
-        mesh.UnsetDeformation()
+        space.mesh.UnsetDeformation()
     analytic = float(grad @ V)
     rel = abs(analytic - numeric) / abs(numeric)
-    print(f"boundary spring {dim}D {model} {kind}: Δ {deltas}, dΔ·V = {analytic:.10e}, "
-          f"FD {numeric:.10e}, rel {rel:.1e}")
-    assert 0.0 < deltas[k] < 0.9 * deltas[0.0]
-    assert rel <= 1e-5
+    print(f"{label}: Δ {deltas}, dΔ·V = {analytic:.10e}, FD {numeric:.10e}, rel {rel:.1e}")
+    return deltas, rel
 
 
 # -- an output spring at a named point ---------------------------------------------------------
@@ -295,27 +313,10 @@ def test_gradient_with_a_point_spring_matches_central_differences(model, kind):
     derivative nearly cancels (dΔ·V ≈ -1e-5 against 3.5e-3 without) and the error is 1.4e-6
     with a P1 shape, 8.6e-5 with a P2 shape, whose central differences have a floor of ~6e-7
     even without the spring."""
-    mesh = ring(0.15, 2)
-    sym = Supports(fix_x=("left",), fix_y=("bottom",))
-    space = ShapeSpace(mesh, hold=sym)  # P1 shape, as the refinement's
-    r = sqrt(x * x + y * y)
-    V = space.direction(CF((x / r, y / r)) * (B - r) / (B - A))
+    mesh, sym, space, V = radial_ring()
     pars = params(model, 2, thickness=1.0, newton_rtol=NEWTON_RTOL)
-    deltas = {}
-    try:
-        with compute(THREADS):
-            for k in (0.0, 0.1):
-                response = PartResponse(mesh, params=pars, order=2, supports=sym, kind=kind,
-                                        ports=Port("inner", (1.0, 0.0), spring=k), pressure=P)
-                block_ = ShapeResponse(response, space)
-                deltas[k] = block_.forward(np.zeros(space.ndof))
-            grad = block_.backward(1.0)[0]
-            numeric = (block_.forward(STEP * V) - block_.forward(-STEP * V)) / (2 * STEP)
-    finally:
-        mesh.UnsetDeformation()
-    analytic = float(grad @ V)
-    rel = abs(analytic - numeric) / abs(numeric)
-    print(f"spring {model} {kind}: Δ {deltas}, dΔ·V = {analytic:.10e}, FD {numeric:.10e}, "
-          f"rel {rel:.1e}")
+    deltas, rel = spring_check(space, V, (0.0, 0.1), lambda spring: PartResponse(
+        mesh, params=pars, order=2, supports=sym, kind=kind,
+        ports=Port("inner", (1.0, 0.0), spring=spring), pressure=P), f"spring {model} {kind}")
     assert 0.0 < deltas[0.1] < 0.9 * deltas[0.0]
     assert rel <= 1e-5
