@@ -25,7 +25,7 @@ import numpy as np
 
 from . import responses as R
 from .core import Chain
-from .design import DesignField, Embed, FixPassive
+from .design import DesignField, Embed, FixPassive, near_boundary
 from .errors import InputError
 from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
 from .parallel import bounding_box
@@ -53,6 +53,9 @@ class DesignSettings(Settings):
     filter_radius: float = setting(0.0, "m", "filter radius R (0: 3 mesh sizes)",
                                    range="[0, inf)")
     eta: float = setting(0.5, "", "projection threshold η", range="(0, 1)")
+    inlet_wall: float = setting(0.0, "m", "thickness of the passive solid wall kept around a "
+                                "pressure inlet, so that its chamber stays sealed (0: none)",
+                                range="[0, inf)")
     seed_density: float = setting(0.0, "", "initial design density (0: volfrac)",
                                   range="[0, 1]")
     init_design: str = setting("", "", "start from the design x of this run folder (its "
@@ -150,7 +153,12 @@ class Builder:
 
         mesh, setup, params = self.mesh, self.setup, self.params
         try:
-            field_ = DesignField(mesh, solid=setup.solid, void=setup.void)
+            wall = None
+            if params.inlet_wall > 0:
+                if setup.pressure is None:
+                    raise ValueError(f"inlet_wall: case '{self.case.name}' has no pressure inlet")
+                wall = near_boundary(mesh, setup.pressure.inlet, params.inlet_wall)
+            field_ = DesignField(mesh, solid=setup.solid, void=setup.void, wall=wall)
         except ValueError as err:
             raise InputError(str(err)) from None
         radius = params.filter_radius or 3.0 * self.meshed.h

@@ -217,6 +217,14 @@ class DesignNumbering:
         return out.ravel()
 
 
+def all_rows(mesh, rows: np.ndarray) -> np.ndarray:
+    """Every rank's local ``rows`` (an array of shape (n, k)) stacked, on every rank."""
+    rows = np.asarray(rows, dtype=float)
+    if not distributed(mesh):
+        return rows
+    return np.concatenate(mesh.comm.mpi4py.allgather(rows))
+
+
 def union(mesh, values: np.ndarray) -> np.ndarray:
     """The sorted distinct values of every rank's local ``values``, on every rank."""
     values = np.unique(np.asarray(values, dtype=float))

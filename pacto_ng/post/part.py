@@ -32,7 +32,7 @@ from ..errors import InputError
 from ..physics.loads import Port
 from ..physics.mechanics import Supports
 from .materials import material_areas
-from .part3d import part3d, void_regions
+from .part3d import boundary_surface, part3d, void_regions
 from .post3d import RHO2, split_materials, stiff_sampler
 from .remesh3d import PRESSURE, remesh_part
 from .remesh import remesh
@@ -274,13 +274,15 @@ def _part_3d(problem, setup, rho, requested, maxh, threshold2, connect, pressure
     for t in ladder:
         solid = part3d(mesh, rho, float(t), clamp=setup.supports.clamp, exclude=exclude,
                        fields={RHO2: problem.values["rho_bar2"]} if two else None)
+        unsmoothed = boundary_surface(solid.solid)
         if two:
             solid.solid = split_materials(solid.solid, threshold2)
         rm = remesh_part(solid.surface, mesh, maxh, problem.h, clamp=setup.supports.clamp,
                          exclude=exclude,
                          wet_boundaries=inlet_names(problem, setup),
                          pressure=pressure, p_in=p_in, timeout=mesh_time_limit,
-                         stiff_at=stiff_sampler(solid.solid, threshold2) if two else None)
+                         stiff_at=stiff_sampler(solid.solid, threshold2) if two else None,
+                         unsmoothed=unsmoothed)
         missing = [r for r in wanted if r not in rm.areas and r not in rm.ports]
         if not missing:
             break
@@ -292,6 +294,12 @@ def _part_3d(problem, setup, rho, requested, maxh, threshold2, connect, pressure
                                     f" lowered to {t:.3g}: above it the part misses an output")
     if rm.maxh != maxh:
         note += f"; Netgen could not mesh the part at maxh {maxh:.4g}, meshed at {rm.maxh:.4g}"
+    if rm.surface == "unsmoothed":
+        solid.surface = unsmoothed  # the STL is the surface analysed
+    if rm.surface != "remeshed":
+        which = "smoothed" if rm.surface == "kept" else "unsmoothed"
+        note += (f"; Netgen could not remesh the part's surface: its {which} iso-surface "
+                 "kept as the boundary, the volume filled")
     choice = {"requested": requested, "used": t, "lowered": t != start, "note": note,
               "exclude": tuple(exclude)}
     volumes = problem.field.areas  # element volumes in 3D

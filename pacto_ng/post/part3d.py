@@ -138,17 +138,22 @@ def part3d(mesh, rho, threshold: float, *, clamp=(), exclude=(), fields=None) ->
         raise ValueError(f"no solid touches the clamp ({', '.join(clamp)}) at threshold "
                          f"{threshold:g}")
     kept = conn if not clamp else conn.extract_cells(np.flatnonzero(np.isin(region, on_clamp)))
-    surface = kept.extract_surface(pass_pointid=False, pass_cellid=False,
-                                   algorithm="dataset_surface").triangulate().clean()
-    # the clipped cells' faces come in either orientation: outward normals, consistently
-    surface = surface.compute_normals(cell_normals=True, point_normals=False,
-                                      consistent_normals=True, auto_orient_normals=True,
-                                      split_vertices=False)
+    surface = boundary_surface(kept)
     vol_kept = float(cell_volumes(kept).sum())
     smooth(surface)
     keep_volume(surface, vol_kept)
     return Part3D(surface, kept, float(threshold), vol_all, vol_kept, n_pieces,
                   n_pieces - (on_clamp.size if clamp else n_pieces), tuple(exclude))
+
+
+def boundary_surface(cells):
+    """The closed, triangulated boundary of the cells (pyvista UnstructuredGrid), its normals
+    outward (the clipped cells' faces come in either orientation)."""
+    surface = cells.extract_surface(pass_pointid=False, pass_cellid=False,
+                                    algorithm="dataset_surface").triangulate().clean()
+    return surface.compute_normals(cell_normals=True, point_normals=False,
+                                   consistent_normals=True, auto_orient_normals=True,
+                                   split_vertices=False)
 
 
 def _faces(surface) -> np.ndarray:

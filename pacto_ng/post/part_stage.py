@@ -225,8 +225,9 @@ def last_line(summary: dict, path) -> str:
         chambers = [c for c in part["seal"]["chambers"] if not c["sealed"]]
         where = (f"chamber '{chambers[0]['name']}' is open to '{chambers[0]['boundary']}' near "
                  f"({', '.join(f'{c:.3g}' for c in chambers[0]['opening'])}) m")
-        bits.append(f"NOT SEALED: {where}, it will not hold pressure (raise volfrac, or "
-                    f"limit the leak: --set leak_max=1e-3)")
+        bits.append(f"NOT SEALED: {where}, it will not hold pressure (keep a wall around the "
+                    f"inlet: --set inlet_wall=<one element size, m>; or limit the leak: "
+                    f"--set leak_max=1e-3)")
     elif part.get("sealed"):
         bits.append("sealed")
     if part.get("analysed"):

@@ -2,7 +2,10 @@
 
 :func:`remesh_part` writes the closed surface of :mod:`.part3d` as STL, meshes it with Netgen's
 STL geometry (``netgen.stl.STLGeometry(...).GenerateMesh(maxh=...)``: the surface is
-remeshed, then the volume) and names the new mesh's boundary faces by position:
+remeshed, then the volume; where that fails at every size tried, the surface's own triangles
+are kept and Netgen fills the volume, and where the smoothed surface touches itself, the
+unsmoothed one's)
+and names the new mesh's boundary faces by position:
 
 * a face lying on a face of the source mesh that bounds its material region (the outer faces
   and the walls of the passive void regions) takes that face's name (``fixed``,
@@ -54,6 +57,7 @@ class Remeshed3D:
     materials: str | None = None  # two materials: how they were assigned ("element-wise")
     ports: dict = field(default_factory=dict)  # named point -> (source position, new vertex)
     maxh: float = 0.0  # the element size Netgen meshed it with (MESH_RETRY)
+    surface: str = "remeshed"  # remeshed by Netgen, or "kept" / "unsmoothed" (_netgen_stl)
 
 
 def _bounding_faces(source, exclude):
@@ -93,13 +97,26 @@ def _sample(field, source, pts):
     return out
 
 
-#: Netgen's STL mesher in a child process: on some surfaces it aborts the process (SIGABRT
+#: Netgen's meshers in a child process: on some surfaces they abort the process (SIGABRT
 #: after "Intersecting elements" in the volume mesher, seen on a 40-iteration pa-inverter-3d
-#: part), which no exception would catch
+#: part), which no exception would catch.  ``stl``: the surface remeshed from its STL, then
+#: the volume; ``fill``: the surface's own triangles kept and the volume filled
 _MESHER = ("import sys\n"
+           "import numpy as np\n"
+           "from netgen.meshing import Element2D, FaceDescriptor, Mesh, MeshPoint, Pnt\n"
            "from netgen.stl import STLGeometry\n"
-           "m = STLGeometry(sys.argv[1]).GenerateMesh(maxh=float(sys.argv[2]))\n"
-           "sys.exit(3) if m.ne == 0 else m.Save(sys.argv[3])\n")
+           "kind, path, h, out = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]\n"
+           "if kind == 'stl':\n"
+           "    m = STLGeometry(path).GenerateMesh(maxh=h)\n"
+           "else:\n"
+           "    data = np.load(path)\n"
+           "    m = Mesh(dim=3)\n"
+           "    ids = [m.Add(MeshPoint(Pnt(*p))) for p in data['points']]\n"
+           "    fd = m.Add(FaceDescriptor(bc=1, domin=1, domout=0, surfnr=1))\n"
+           "    for t in data['triangles']:\n"
+           "        m.Add(Element2D(fd, [ids[i] for i in t]))\n"
+           "    m.GenerateVolumeMesh(maxh=h)\n"
+           "sys.exit(3) if m.ne == 0 else m.Save(out)\n")
 
 
 #: the element sizes (fractions of the requested one) tried in turn when Netgen's mesher
@@ -107,34 +124,49 @@ _MESHER = ("import sys\n"
 MESH_RETRY = (1.0, 0.7, 0.5)
 
 
-def _netgen_stl(surface, maxh: float, timeout: float):
-    """The Netgen tetrahedral mesh of the closed ``surface`` (its STL meshed in a child
-    process, read back from a .vol file) and the element size that gave it: ``maxh``, or
-    after a crash of the mesher the next size of :data:`MESH_RETRY`; ValueError when every
-    size fails, or at once when one takes longer than ``timeout`` s."""
+def _netgen_stl(surface, maxh: float, timeout: float, unsmoothed=None):
+    """The Netgen tetrahedral mesh of the closed, outward-oriented ``surface``, the element
+    size that gave it and how its surface was made: its STL remeshed at ``maxh``, or after a
+    crash of the mesher at the next size of :data:`MESH_RETRY` (``"remeshed"``); when every
+    size fails (thin walls of one or two source elements, seen on pneunet-3d parts), the
+    surface's own triangles kept and the volume filled at ``maxh`` (``"kept"``), and where
+    the smoothing made the surface touch itself, the same with the ``unsmoothed`` surface
+    (the clipped cells' boundary: ``"unsmoothed"``).  ValueError when that fails too, or at
+    once when one try takes longer than ``timeout`` s."""
     with tempfile.TemporaryDirectory() as tmp:
-        stl = Path(tmp) / "part.stl"
+        stl, vol = Path(tmp) / "part.stl", Path(tmp) / "part.vol"
         surf = surface.copy()
         surf.clear_data()
         surf.save(str(stl), binary=True)
         tried = []
         for h in (f * maxh for f in MESH_RETRY):
-            why = _mesh_stl(stl, h, Path(tmp) / "part.vol", timeout)
+            why = _mesh_child("stl", stl, h, vol, timeout)
             if not isinstance(why, str):
-                return why, h
+                return why, h, "remeshed"
             tried.append(f"{h:.3g}: {why}")
+        for how, surf in (("kept", surface), ("unsmoothed", unsmoothed)):
+            if surf is None:
+                continue
+            triangles = Path(tmp) / "part.npz"
+            np.savez(triangles, points=np.asarray(surf.points, dtype=float),
+                     triangles=np.asarray(surf.faces).reshape(-1, 4)[:, 1:])
+            why = _mesh_child("fill", triangles, maxh, vol, timeout)
+            if not isinstance(why, str):
+                return why, maxh, how
+            tried.append(f"the {how} surface filled, {maxh:.3g}: {why}")
     raise ValueError(f"Netgen could not mesh the part (maxh {'; '.join(tried)}; a thin or "
                      f"self-touching part: try another --maxh or --threshold)")
 
 
-def _mesh_stl(stl: Path, maxh: float, vol: Path, timeout: float):
-    """One try of the child-process mesher: the Netgen mesh, or why it failed (a string);
-    ValueError after ``timeout`` s."""
+def _mesh_child(kind: str, source: Path, maxh: float, vol: Path, timeout: float):
+    """One try of the child-process mesher (``kind`` ``stl`` or ``fill``, :data:`_MESHER`):
+    the Netgen mesh, or why it failed (a string); ValueError after ``timeout`` s."""
     from netgen.meshing import Mesh as NGMesh
 
     try:
-        proc = subprocess.run([sys.executable, "-c", _MESHER, str(stl), repr(float(maxh)),
-                               str(vol)], capture_output=True, timeout=timeout)
+        proc = subprocess.run([sys.executable, "-c", _MESHER, kind, str(source),
+                               repr(float(maxh)), str(vol)], capture_output=True,
+                              timeout=timeout)
     except subprocess.TimeoutExpired:
         raise ValueError(f"Netgen could not mesh the part at maxh {maxh:g} within "
                          f"{timeout:g} s") from None
@@ -143,6 +175,7 @@ def _mesh_stl(stl: Path, maxh: float, vol: Path, timeout: float):
                 f"its mesher stopped with exit code {proc.returncode}")
     gen = NGMesh()
     gen.Load(str(vol))
+    vol.unlink()
     return gen
 
 
@@ -207,19 +240,20 @@ def _face_names(pts, tris, tets, source, h_source, *, exclude, wet_boundaries, p
 def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), exclude=(),
                 wet_boundaries=(), pressure=None, p_in: float | None = None,
                 wet_fraction: float = 0.5, probe: float | None = None,
-                timeout: float = 300.0, stiff_at=None) -> Remeshed3D:
+                timeout: float = 300.0, stiff_at=None, unsmoothed=None) -> Remeshed3D:
     """Mesh the closed ``surface`` (pyvista PolyData) with Netgen tetrahedra of ``maxh`` and
     name its boundary faces (see the module docstring; ``h_source`` is the source mesh's
     element size: the wetting rule's probe distance by default, and 1e-4 of it the distance
     within which a face lies on a source face).  Only the pieces joined through faces to a
     face on ``clamp`` are kept.  ``stiff_at``: a two-material part's rule, points (n, 3) ->
     whether the stiff material is there (the tetrahedra's centroids are asked; see the
-    module docstring).  ValueError when Netgen fails (or takes longer than ``timeout`` s) or
+    module docstring).  ``unsmoothed``: the surface before smoothing, Netgen's last resort
+    (:func:`_netgen_stl`).  ValueError when Netgen fails (or takes longer than ``timeout`` s) or
     no face lies on the clamp."""
     import ngsolve
     from netgen.meshing import Element0D, FaceDescriptor, Mesh as NGMesh
 
-    gen, meshed_at = _netgen_stl(surface, maxh, timeout)
+    gen, meshed_at, surface_kind = _netgen_stl(surface, maxh, timeout, unsmoothed)
     pts = np.asarray(gen.Coordinates(), dtype=float)
     tris = np.asarray(gen.Elements2D().NumPy()["nodes"], dtype=np.int64)[:, :3] - 1
     tets = np.asarray(gen.Elements3D().NumPy()["nodes"], dtype=np.int64)[:, :4] - 1
@@ -275,4 +309,5 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
         ports[name] = (tuple(map(float, point)), tuple(map(float, pts[k])))
     mesh = ngsolve.Mesh(new)
     return Remeshed3D(mesh, float(ngsolve.Integrate(1.0, mesh)), areas, dropped,
-                      None if stiff_at is None else "element-wise", ports, meshed_at)
+                      None if stiff_at is None else "element-wise", ports, meshed_at,
+                      surface_kind)

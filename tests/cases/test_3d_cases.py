@@ -84,9 +84,10 @@ def test_smoke_run(case, tmp_path):
 def test_iterative_route_recorded(tmp_path):
     """--set solver=iterative: every system by a Krylov method, as summary.json says with
     Newton's tolerance (the route's own unless set: 1e-10 direct, 1e-6 iterative).  At the
-    iterative route's default the objective is the direct route's to a tenth of the
-    optimiser's objective tolerance (obj_tol 1e-4); with Newton's tolerance set to the direct
-    route's, to 1e-8."""
+    iterative route's default the objective is the direct route's to a tenth of the case's
+    objective tolerance (pneunet-3d's obj_tol 1e-3; measured 1.7e-5 apart); with Newton's
+    tolerance set to the direct route's, to 1e-8."""
+    from pacto_ng.case import get_case
     from pacto_ng.physics.newton import DIRECT_RTOL, ITERATIVE_RTOL
 
     objectives = {}
@@ -105,7 +106,8 @@ def test_iterative_route_recorded(tmp_path):
         assert rtol == (ITERATIVE_RTOL if route == "iterative" else DIRECT_RTOL)
     assert summ["solvers"]["displacement"]["method"] == "CG"
     assert summ["solvers"]["displacement"]["preconditioner"] == "bddc"
-    assert objectives["iterative"] == pytest.approx(objectives["direct"], rel=1e-5)
+    obj_tol = get_case("pneunet-3d").defaults.obj_tol
+    assert objectives["iterative"] == pytest.approx(objectives["direct"], rel=0.1 * obj_tol)
     assert objectives["iterative_tight"] == pytest.approx(objectives["direct"], rel=1e-8)
 
 

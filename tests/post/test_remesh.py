@@ -188,28 +188,57 @@ def test_unmeshed_edges_counts_segments_without_a_triangle():
     assert _unmeshed_edges(m) == 2
 
 
-def test_a_3d_mesher_crash_is_retried_finer(monkeypatch):
+def test_a_3d_mesher_crash_is_retried_finer_then_with_the_surface_kept(monkeypatch):
     """Netgen's STL mesher crashes on some part surfaces (a thin wall); the part is meshed
-    again at the next, finer size of MESH_RETRY, and the size that worked is returned."""
+    again at the next, finer size of MESH_RETRY, and the size that worked is returned.  When
+    every size fails, the surface's own triangles are kept and the volume filled: the mesh
+    then encloses exactly the surface's volume (a sphere's, whose flat triangles the STL
+    mesher would have replaced) and its boundary is those triangles; when that fails too, the
+    unsmoothed surface's triangles."""
     import pyvista as pv
+    from ngsolve import Integrate, Mesh
 
     from pacto_ng.post import remesh3d
 
-    real = remesh3d._mesh_stl
-    sizes = []
+    real = remesh3d._mesh_child
+    tries = []
 
-    def crash_first(stl, maxh, vol, timeout):
-        sizes.append(maxh)
-        if len(sizes) == 1:
+    def crash_first(kind, source, maxh, vol, timeout):
+        tries.append((kind, maxh))
+        if len(tries) == 1:
             return "its mesher stopped with exit code -6"
-        return real(stl, maxh, vol, timeout)
+        return real(kind, source, maxh, vol, timeout)
 
-    monkeypatch.setattr(remesh3d, "_mesh_stl", crash_first)
+    monkeypatch.setattr(remesh3d, "_mesh_child", crash_first)
     cube = pv.Cube(center=(0.5, 0.5, 0.5)).triangulate()
-    gen, used = remesh3d._netgen_stl(cube, 0.5, 60.0)
-    assert sizes == [0.5, 0.5 * remesh3d.MESH_RETRY[1]]
-    assert used == sizes[1] and gen.ne > 0
+    gen, used, how = remesh3d._netgen_stl(cube, 0.5, 60.0)
+    assert tries == [("stl", 0.5), ("stl", 0.5 * remesh3d.MESH_RETRY[1])]
+    assert used == tries[1][1] and gen.ne > 0 and how == "remeshed"
 
-    monkeypatch.setattr(remesh3d, "_mesh_stl", lambda *a: "no tetrahedra")
-    with pytest.raises(ValueError, match=r"^Netgen could not mesh the part \(maxh 0\.5: no "):
+    def stl_fails(kind, *args):
+        return "its mesher stopped with exit code -6" if kind == "stl" else real(kind, *args)
+
+    monkeypatch.setattr(remesh3d, "_mesh_child", stl_fails)
+    sphere = pv.Sphere(radius=1.0, theta_resolution=24, phi_resolution=12).triangulate()
+    gen, used, how = remesh3d._netgen_stl(sphere, 0.4, 60.0)
+    assert how == "kept" and used == 0.4
+    assert Integrate(1.0, Mesh(gen)) == pytest.approx(sphere.volume, rel=1e-12)
+    assert len(gen.Elements2D()) == sphere.n_cells
+
+    fills = []
+
+    def first_fill_fails(kind, *args):
+        if kind == "fill":
+            fills.append(kind)
+            if len(fills) == 1:
+                return "no tetrahedra"
+        return stl_fails(kind, *args)
+
+    monkeypatch.setattr(remesh3d, "_mesh_child", first_fill_fails)
+    gen, used, how = remesh3d._netgen_stl(cube, 0.5, 60.0, unsmoothed=sphere)
+    assert how == "unsmoothed" and len(gen.Elements2D()) == sphere.n_cells
+
+    monkeypatch.setattr(remesh3d, "_mesh_child", lambda *a: "no tetrahedra")
+    with pytest.raises(ValueError, match=r"^Netgen could not mesh the part \(maxh 0\.5: no "
+                       r".*the kept surface filled, 0\.5: no tetrahedra"):
         remesh3d._netgen_stl(cube, 0.5, 60.0)
