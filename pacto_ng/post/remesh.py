@@ -216,16 +216,20 @@ def remesh(th: Thresholded, maxh: float, *, clamp=("fixed",), pressure=None,
 
 
 def _clamped_pieces(th: Thresholded, clamp) -> tuple[list, float]:
-    """``(kept, dropped area)``: the solid pieces that touch a ``clamp`` boundary (every piece
-    when ``clamp`` is empty), and the area of the others, which would float."""
+    """``(kept, dropped area)``: the solid pieces that touch a ``clamp`` boundary or hold a
+    clamped named point (every piece when ``clamp`` is empty), and the area of the others,
+    which would float."""
     clamp = (clamp,) if isinstance(clamp, str) else tuple(clamp)
     comps = list(th.components)
     if not comps:
         raise ValueError("the thresholded design has no solid")
     if clamp:
-        kept = [c for c in comps if c.names & set(clamp)]
+        # a clamped point (a pin support) holds the piece it lies in
+        points = [q for name, q in named_points(th.source).items() if name in clamp]
+        tol = 1e-6 * th.h
+        kept = [c for c in comps if c.names & set(clamp) or any(c.holds(q, tol) for q in points)]
         if not kept:
-            raise ValueError(f"no solid touches the clamp boundary {'|'.join(clamp)} "
+            raise ValueError(f"no solid touches the clamp {'|'.join(clamp)} "
                              f"(threshold {th.threshold:g})")
     else:
         kept = comps

@@ -92,6 +92,15 @@ class Component:
     def loops(self) -> tuple[Loop, ...]:
         return (self.outer,) + self.holes
 
+    def holds(self, point, tol: float) -> bool:
+        """Whether ``point`` (x, y) lies in the piece: inside its outer loop and outside its
+        holes, or within ``tol`` of one of its loops (a support point on its boundary)."""
+        q = np.asarray(point, dtype=float)[:2]
+        if any(_distance_to_loop(loop.points, q) <= tol for loop in self.loops):
+            return True
+        return _inside(self.outer.points, q) and not any(_inside(h.points, q)
+                                                         for h in self.holes)
+
 
 @dataclass(frozen=True, eq=False)
 class Thresholded:
@@ -136,6 +145,24 @@ class Thresholded:
     @property
     def loops(self) -> tuple[Loop, ...]:
         return tuple(lp for c in self.components for lp in c.loops)
+
+
+def _inside(P, q) -> bool:
+    """Whether ``q`` lies inside the closed polygon ``P`` (n, 2): the even-odd rule along a
+    ray in +x."""
+    a, b = P, np.roll(P, -1, axis=0)
+    crosses = (a[:, 1] > q[1]) != (b[:, 1] > q[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = a[:, 0] + (q[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    return bool(np.count_nonzero(crosses & (x > q[0])) % 2)
+
+
+def _distance_to_loop(P, q) -> float:
+    """The distance from ``q`` to the closed polygon ``P`` (n, 2)."""
+    a, d = P, np.roll(P, -1, axis=0) - P
+    t = np.clip(np.einsum("ij,ij->i", q - a, d) / np.maximum(np.einsum("ij,ij->i", d, d),
+                                                              1e-300), 0.0, 1.0)
+    return float(np.min(np.linalg.norm(a + t[:, None] * d - q, axis=1)))
 
 
 def _signed_area(p) -> float:

@@ -1,6 +1,7 @@
 """A user's case file outside the repository: every command works on it and on its runs, and a
 mistake in it is one line with exit code 2."""
 import json
+import shutil
 import subprocess
 import sys
 
@@ -51,18 +52,21 @@ def user_run(tmp_path_factory):
     folder = tmp_path_factory.mktemp("user")
     case = write_case(folder)
     out = folder / "run"
-    assert main(["run", str(case), "--iterations", "3", "--out", str(out), *FAST]) == 0
+    # 4 iterations: after 3 no element reaches the threshold, and analyse has no part
+    assert main(["run", str(case), "--iterations", "4", "--out", str(out), *FAST]) == 0
     return case, out
 
 
 def test_resume_evaluate_and_check_gradients_on_a_case_file(user_run, tmp_path):
-    case, out = user_run
+    case, run = user_run
+    out = tmp_path / "resumed"
+    shutil.copytree(run, out)  # the other tests see the module's run as it was made
     info = json.loads((out / "params.json").read_text())
     assert info["case_file"] == str(case.resolve())
     # resume finds the case through the run folder alone
-    assert main(["resume", str(out), "--iterations", "4", "--quiet"]) == 0
+    assert main(["resume", str(out), "--iterations", "5", "--quiet"]) == 0
     s = json.loads((out / "summary.json").read_text())
-    assert s["iterations"] == 4
+    assert s["iterations"] == 5
     # the run's own checkpoint: its design variables at its last penalty and β, so the run's
     # response again
     ev = tmp_path / "ckpt"

@@ -242,3 +242,26 @@ def test_a_3d_mesher_crash_is_retried_finer_then_with_the_surface_kept(monkeypat
     with pytest.raises(ValueError, match=r"^Netgen could not mesh the part \(maxh 0\.5: no "
                        r".*the kept surface filled, 0\.5: no tetrahedra"):
         remesh3d._netgen_stl(cube, 0.5, 60.0)
+
+
+def test_a_piece_pinned_at_a_clamped_point_is_kept():
+    """topress is supported at its two bottom corners (named points, no clamped boundary): the
+    piece holding them is the part, a piece clear of them floats and is dropped, and a design
+    without solid at either corner has no part."""
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.parallel import element_centroids
+
+    case = get_case("topress")
+    problem = build_problem(case, case.resolve(case.defaults.replace(nelx=30, nely=20)))
+    c = element_centroids(problem.mesh)
+    clamp = problem.setup.supports.clamp
+    floor = (c[:, 1] < 4).astype(float)
+    island = ((c[:, 1] > 12) & (c[:, 1] < 16) & (np.abs(c[:, 0] - 15) < 4)).astype(float)
+    th = threshold(problem.mesh, floor + island)
+    assert len(th.components) == 2
+    rm = remesh(th, 1.0, clamp=clamp)
+    assert rm.dropped_area == pytest.approx(min(p.area for p in th.components), rel=1e-12)
+    assert set(rm.ports) >= {"support_left", "support_right"}
+    inner = ((c[:, 1] < 4) & (np.abs(c[:, 0] - 15) < 10)).astype(float)
+    with pytest.raises(ValueError, match="no solid touches the clamp support_left"):
+        remesh(threshold(problem.mesh, inner), 1.0, clamp=clamp)
