@@ -68,8 +68,13 @@ def finish_run(path, problem, summary: dict, *, quiet: bool = False) -> dict:
     ``path/summary.json``; print the run's last line.  Returns the updated summary."""
     path = Path(path)
     t0 = time.perf_counter()
+
+    def say(what: str) -> None:  # one line per step of the part's making
+        if not quiet:
+            print(f"  part: {what} ({time.perf_counter() - t0:.1f} s)", flush=True)
+
     try:
-        part, analysis = _part_and_analysis(path, problem, summary)
+        part, analysis = _part_and_analysis(path, problem, summary, say)
         entry = dict(made=True, **part.summary(), **analysis)
     except InputError as err:
         entry, part = {"made": False, "why": str(err)}, None
@@ -82,8 +87,9 @@ def finish_run(path, problem, summary: dict, *, quiet: bool = False) -> dict:
     return summary
 
 
-def _part_and_analysis(path, problem, summary):
-    """``(Part, analysis entry)``: the part made and written, analysed at the run's load."""
+def _part_and_analysis(path, problem, summary, say):
+    """``(Part, analysis entry)``: the part made and written, analysed at the run's load;
+    ``say(what)`` reports each step."""
     params, setup = problem.params, problem.setup
     if problem.numbering is not None:
         raise InputError("the part of a distributed run is made by 'pacto analyse DIR' "
@@ -93,14 +99,16 @@ def _part_and_analysis(path, problem, summary):
                      pressure=None if pressure is None else copy_gridfunction(pressure.gfp),
                      p_in=params.load, mesh_time_limit=params.mesh_time_limit)
     write_part_stl(path / "part.stl", part, problem)
+    say(f"made, {part.mesh.ne} elements"
+        + ("" if part.sealed is None else ", sealed" if part.sealed else ", NOT sealed"))
     if pressure is None or not setup.ports:
         return part, {"analysed": False,
                       "why_not_analysed": "the part is analysed for pressure cases with an "
                                           "output port"}
-    return part, _analyse(path, part, problem, summary)
+    return part, _analyse(path, part, problem, summary, say)
 
 
-def _analyse(path, part: Part, problem, summary) -> dict:
+def _analyse(path, part: Part, problem, summary, say) -> dict:
     """The part at the run's load (the load it reached) with the run's model and load type."""
     params, setup = problem.params, problem.setup
     load = float(summary.get("load_reached") or params.load)
@@ -113,6 +121,8 @@ def _analyse(path, part: Part, problem, summary) -> dict:
     except ValueError as err:
         raise InputError(f"the part cannot be analysed: {err}") from None
     point = ana.solve(load)
+    say(f"analysed at {load:.4g} {problem.case.load_unit} ({kind}, {ana.model}, order {order})"
+        + ("" if point.converged else ": no equilibrium"))
     entry = {"analysed": True, "kind": kind, "model": ana.model, "order": order,
              "formulation": ana.formulation, "load": load, "converged": point.converged,
              "newton_iterations": point.iterations, "min_J": _num(point.min_j),
@@ -121,6 +131,8 @@ def _analyse(path, part: Part, problem, summary) -> dict:
                        for p, a, v in zip(ports, point.ports, point.vectors)}}
     run_delta = summary.get("output_displacement")
     design = _design_at(problem, order, run_delta)
+    if int(problem.params.order) != order:
+        say(f"the design analysed at order {order} on its own mesh")
     entry.update(output_displacement_design=design, design_order=order,
                  output_displacement_run=run_delta, run_order=int(params.order))
     entry["gap"] = (None if not point.converged or not design else

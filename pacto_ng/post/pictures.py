@@ -75,8 +75,9 @@ def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mi
     fig, ax = _framed(lo, hi)
     tc = ax.tripcolor(Triangulation(def_pts[:, 0], def_pts[:, 1], tri), mag, shading="gouraud",
                       cmap="viridis")
-    ax.add_collection(LineCollection(segs, colors="k", linewidths=0.8, label="undeformed"))
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), frameon=False)
+    ax.add_collection(LineCollection(segs, colors="k", linewidths=0.8))
+    # said under the axis (a legend below a wide, flat part ran into the axis label)
+    ax.set_xlabel(f"{ax.get_xlabel()}; black: the undeformed outline")
     fig.colorbar(tc, ax=ax, label="|u| (m), deformed solid", shrink=0.9)
     ax.set_title(title or "deformed solid (true scale) over the undeformed outline")
     with atomic_path(path) as tmp:
