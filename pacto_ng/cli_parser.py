@@ -155,6 +155,8 @@ def _post_parsers(sub):
     a.add_argument("--out", help="as built: the output folder (default output/CASE-as-built)")
     a.add_argument("--time-limit", type=_positive, default=3600.0, help="refuse an analysis "
                    "estimated to take longer (seconds, default 3600)")
+    a.add_argument("--contact", action="store_true", help="the part's walls in frictionless "
+                   "self-contact, so that they cannot pass through each other (2D)")
     a.add_argument("--quiet", action="store_true", help="no progress output")
     x = sub.add_parser("export", help="the thresholded, remeshed part of a run as STL, VTK, "
                        "VTU or MSH")

@@ -61,7 +61,7 @@ def _analyse_command(args) -> int:
             set=args.set, model=args.model, maxh=args.maxh, nelx=None))
         return analyse_as_built(case, params, pressures=pressures, kinds=kinds,
                                 order=args.order, out=args.out, quiet=args.quiet,
-                                time_limit=args.time_limit)
+                                time_limit=args.time_limit, contact=args.contact)
     for flag, value in (("--set", args.set), ("--out", args.out)):
         if value:
             raise InputError(f"{flag}: applies to --as-built; a run's part is analysed with the "
@@ -70,7 +70,8 @@ def _analyse_command(args) -> int:
                        maxh=args.maxh, order=args.order,
                        kinds=kinds if kinds is not None else ("darcy", "fixed", "follower"),
                        quiet=args.quiet, connect=not args.keep_threshold,
-                       threshold2=args.threshold2, model=args.model, time_limit=args.time_limit)
+                       threshold2=args.threshold2, model=args.model, time_limit=args.time_limit,
+                       contact=args.contact)
 
 
 def run_with_part(case, params, out, args) -> int:

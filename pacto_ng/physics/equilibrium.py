@@ -89,6 +89,7 @@ class Equilibrium:
                 guard_rules(self.rules, self._traits.guard_points), VOL)
         self._rhs = self.gfx.vec.CreateVector()
         self._ext = self.gfx.vec.CreateVector()
+        self.contact = None  # a SelfContact (use_contact)
         # with only design-independent loads the load vector is fixed: its norm is computed once
         self._fixed_loads = fixed_loads
         self._unit_load_norm = None
@@ -102,6 +103,26 @@ class Equilibrium:
             for ld in self.loads:
                 self._load_form += ld.work(self.mesh, v)
             self._load_form.Assemble()
+
+    def use_contact(self, contact) -> None:
+        """Add the self-contact ``contact`` (:class:`~pacto_ng.physics.contact.SelfContact` on
+        this block's displacement space) to the equilibrium, paired at the current state; the
+        pairs stay until the caller updates them (:meth:`contact_settled`).  A block on the
+        linear route (a fixed K) or with the mixed formulation takes no contact:
+        ValueError."""
+        if self._lin is not None or self.mixed is not None:
+            raise ValueError("contact needs the displacement formulation on the nonlinear "
+                             "route (build the block with linear=False)")
+        self.contact = contact
+        contact.update(self.a, self.gfx.vec)
+
+    def contact_settled(self) -> bool:
+        """Pair the contact surface anew at the current equilibrium; whether that equilibrium
+        still holds with the new pairs (the residual within Newton's tolerance)."""
+        self.contact.update(self.a, self.gfx.vec)
+        r = self.gfx.vec.CreateVector()
+        self.residual(self.gfx.vec, r, self.target)
+        return free_norm(r, self.free) <= self.settings.rtol * self.load_norm(self.target)
 
     # -- the problem interface used by Newton --------------------------------------------------
     def residual(self, vec, out, load):

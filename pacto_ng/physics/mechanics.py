@@ -228,7 +228,6 @@ class Mechanics(Equilibrium, Adjoint):
         self.loads, self.springs = tuple(loads), tuple(springs)
         self._build_forms(body, residual_terms, residual_density)
         self._start_routes(guard, linear, body, residual_terms)
-
     def _declare(self, energy, body, residual_density) -> None:
         """The energy, the body load and the residual density, with what the energy declares
         (checked against the block's fields)."""

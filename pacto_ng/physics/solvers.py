@@ -168,6 +168,7 @@ class LinearSolver:
         self.preconditioner = None
         self._pre = None
         self._inv = None
+        self._factorised = None  # the matrix _inv factorises
         self._condensed_rhs = None
         self._free = None  # the free dofs as a numpy mask (_cg_to_residual)
         self.iterations = 0  # Krylov iterations of the last solve
@@ -196,8 +197,12 @@ class LinearSolver:
         if self.direct:
             # on a distributed mesh the direct route is NGSolve's MasterInverse (the matrix
             # gathered on rank 0), which has no numeric update: it is made anew
-            if self._inv is None or distributed(self.form.space.mesh):
+            # a new matrix (a form whose couplings change, e.g. contact pairs, is assembled
+            # into a new sparsity pattern) is factorised anew too
+            if self._inv is None or distributed(self.form.space.mesh) \
+                    or self._factorised is not self.form.mat:
                 self._inv = self.form.mat.Inverse(self.freedofs, inverse=self.inverse)
+                self._factorised = self.form.mat
             else:
                 self._inv.Update()
 

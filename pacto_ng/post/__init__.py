@@ -9,11 +9,12 @@ fixed or follower pressure (:class:`.part_analysis.PartAnalysis`) → STL and VT
 (:mod:`.export`) and pictures (:mod:`.pictures`); ``pacto analyse`` chains it all (:func:`.analyse.analyse_run`; a case's own
 geometry as built: :mod:`.as_built`).
 """
+from ..physics.walls import outward_normal, pressure_body_force
 from .boundary import outer_boundary
 from .export import convert, deformation_fields, extrude_solid, write_stl, write_vtu
 from .grid import mesh_to_pyvista, nodal_density
 from .part import Part, make_part
-from .part_analysis import PartAnalysis, Sweep, SweepPoint, outward_normal, pressure_body_force
+from .part_analysis import PartAnalysis, Sweep, SweepPoint
 from .pictures import plot_deformed, plot_sweeps
 from .remesh import Remeshed, remesh
 from .sampler import pressure_sampler

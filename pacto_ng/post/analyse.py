@@ -64,12 +64,14 @@ KINDS = ("darcy", "fixed", "follower")
 # -- a run's part ----------------------------------------------------------------------------
 def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order=None,
                 kinds=KINDS, quiet: bool = False, connect: bool = True, threshold2=0.5,
-                model: str | None = None, time_limit: float = TIME_LIMIT) -> int:
+                model: str | None = None, time_limit: float = TIME_LIMIT,
+                contact: bool = False) -> int:
     """``pacto analyse DIR``: the part of a finished run analysed (the module docstring).
     ``order`` and ``maxh`` default those of the run's own part (:mod:`.part_stage`: order 2,
     half the design's element size in 2D, the design's in 3D); ``model`` the part's
     analysis model (default the run's); ``connect`` lower the threshold until the part
-    reaches every output (``--keep-threshold``: False).  Returns the exit code (0)."""
+    reaches every output (``--keep-threshold``: False); ``contact`` the part's boundaries in
+    self-contact.  Returns the exit code (0)."""
     t0 = time.perf_counter()
     threshold_value = check_threshold(threshold_value, allow_volume=True)
     threshold2 = check_threshold(threshold2, name="--threshold2")
@@ -120,6 +122,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
     subject = Subject(run.case, params, setup, problem.mesh, part, run.path / "analysis",
                       entry, float(problem.h), expected, (darcy, run.load),
                       part_measures(part))
+    subject.contact = contact
     subject.warnings += [w for w in (entry["load_path_note"], entry.get("failure")) if w]
     if part.sealed is False:
         subject.warnings.append("the part is not sealed: " + part.seal.message())

@@ -121,7 +121,8 @@ def as_built_part(mesh, setup, inlet, order: int) -> Part:
 
 
 def analyse_as_built(case, params, *, pressures=None, kinds=None, order: int | None = None,
-                     out=None, quiet: bool = False, time_limit: float = TIME_LIMIT) -> int:
+                     out=None, quiet: bool = False, time_limit: float = TIME_LIMIT,
+                     contact: bool = False) -> int:
     """``pacto analyse CASE --as-built``: the case's geometry (with ``params``: ``--set``,
     ``--model``, ``--maxh``) analysed as its part (the module docstring), written to ``out``
     (default ``output/CASE-as-built``).  Returns the exit code (0)."""
@@ -162,7 +163,8 @@ def analyse_as_built(case, params, *, pressures=None, kinds=None, order: int | N
            "model": params.model, "load": float(params.load), "load_unit": case.load_unit,
            "mesh_h": h, "dim": dim, "load_path_note": None}
     subject = Subject(case, params, setup, mesh, part, out, run, h,
-                      measures={"part": part.measure, "wetted": part.wetted})
+                      measures={"part": part.measure, "wetted": part.wetted},
+                      contact=contact)
     if not part.seal.sealed:
         subject.warnings.append("the inlet walls do not bound a closed chamber: "
                                 + _chamber_line(part.seal) + "; the pressure is applied to "

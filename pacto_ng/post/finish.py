@@ -16,11 +16,12 @@ import numpy as np
 from ..errors import InputError
 from ..files import atomic_write_text
 from ..params import Parameters
+from ..physics.walls import pressure_body_force
 from .domain import symmetry_line
 from .export import material_names, write_vtu
 from .materials import STIFF
 from .part import Part, part_ports, present_supports
-from .part_analysis import PartAnalysis, pressure_body_force
+from .part_analysis import PartAnalysis
 from .part_entries import materials_entry, part_entry, part_warnings
 from .part_stage import write_part_stl
 from .pictures import plot_deformed, plot_materials, plot_sweeps
@@ -37,7 +38,8 @@ class Subject:
     part; ``params`` the analysis's parameters (model, order, material); ``run`` the ``run``
     entry of analysis.json; ``expected`` the rows of :func:`~.expected.expected_sweep` (None
     as built); ``darcy`` ``(p, P_in)``: the thresholded design's Darcy field on ``mesh``
-    (None as built); ``h`` the design's element size."""
+    (None as built); ``h`` the design's element size; ``contact``: every boundary of the part
+    in frictionless self-contact (2D)."""
 
     case: object
     params: Parameters
@@ -51,6 +53,7 @@ class Subject:
     darcy: tuple | None = None
     measures: dict = dataclasses.field(default_factory=dict)
     warnings: list = dataclasses.field(default_factory=list)
+    contact: bool = False  # the part's boundaries in self-contact (--contact)
 
 
 def say(quiet, msg):
@@ -64,6 +67,10 @@ def finish(subject: Subject, kinds, pressures, settings: dict, *, quiet: bool, t
     of the module docstring into ``subject.out``; ``settings`` holds what the flow chose (the
     threshold and its choice, threshold2, maxh).  Returns 0."""
     part, params = subject.part, subject.params
+    if subject.contact and part.mesh.dim != 2:
+        raise InputError("--contact: self-contact is analysed in 2D only so far (in 3D its "
+                         "pairs did not settle on a test block: docs/benchmarks.md, Limits)")
+    settings = dict(settings, contact=subject.contact)
     ports = part_ports(subject.setup)
     supports = present_supports(subject.setup.supports, part.mesh)
     sweeps = {kind: _sweep(subject, kind, pressures, ports, supports, quiet) for kind in kinds}
@@ -111,6 +118,8 @@ def _sweep(subject: Subject, kind, pressures, ports, supports, quiet):
     if kind == "darcy":
         p, p_in = subject.darcy
         extra = dict(body=pressure_body_force(p), body_pressure=p_in)
+    if subject.contact:
+        extra["contact"] = tuple(sorted(set(subject.part.mesh.GetBoundaries())))
     try:
         ana = PartAnalysis(subject.part.mesh, kind, params=subject.params, supports=supports,
                            ports=ports, **extra)

@@ -31,35 +31,11 @@ solid material (unless the run prescribed a constant γ with ``wang_gamma``, whi
 here too).  The displacement or mixed formulation is
 :func:`~pacto_ng.physics.mixed.formulation_for` of the run's setting.
 
-Loads, on the wall ``Γp`` (``boundary``) with ``N0`` the outward unit normal of the solid
-(:func:`outward_normal`), or in the volume, with the pressure ``P`` as the load factor of
-:class:`~pacto_ng.physics.mechanics.Mechanics`:
-
-``fixed``
-    deformation independent, the potential term ``-t ∫_Γp P N0 · u dA0``: the residual gains
-    ``t ∫ P N0 · v dA0``, the traction ``-P N0`` pushes into the solid.  A linear model is one
-    linear solve per pressure (the block's linear route).
-``follower``
-    the pressure on the deformed wall, ``-P n da = -P cof(F) N0 dA0`` (Nanson's formula,
-    ``cof F = J F⁻ᵀ``; Bonet and Wood 2008, *Nonlinear continuum mechanics for finite element
-    analysis*, 2nd ed., the area change and the linearised work of a follower pressure; docs/
-    theory.md §4): the residual gains ``t ∫_Γp P cof(F̃) N0 · v dA0`` with
-    ``F̃ = I + ∇_Γ u`` (``Grad(u).Trace()``, the surface gradient, the only gradient NGSolve
-    gives on a boundary).  It is exact: ``F̃ T = F T`` on every tangent ``T`` and ``F̃ N0 =
-    N0``, and ``cof(A) N0`` depends only on ``A T`` -- in 3D ``cof(F̃) N0 = F T1 × F T2`` for
-    tangents with ``T1 × T2 = N0``, in 2D ``cof(A) = R A Rᵀ`` (``R = ((0, 1), (-1, 0))``)
-    gives ``cof(F̃) N0 = R F T`` for ``N0 = R T``, the identity ``J F⁻ᵀ N0 = Rot(F T)``
-    (docs/theory.md §4).  In plane stress the change of thickness is not followed.  Not the
-    derivative of a potential: a residual term, with its load stiffness from
-    ``AssembleLinearization`` (an unsymmetric tangent); Newton for every model.
-``darcy``
-    a Darcy pressure field ``p`` of the design (thesis §6.1.1, "deformation-independent load
-    analysis"; docs/theory.md §4) as the body force ``-∇p`` on the part, scaled with
-    ``P / P_in``: the residual gains ``-t ∫ (P/P_in) (-∇p) · v dΩ0``.  ``p`` is a field at inlet
-    pressure ``P_in`` on any mesh (the design's, on which the Darcy block solved it), set onto
-    an H1 space of the part (:func:`pressure_body_force`: NGSolve's ``Set`` evaluates a field
-    of another mesh by point search) and differentiated there.  Deformation independent and
-    conservative: a linear model is one linear solve per pressure, as ``fixed``.
+Loads (:mod:`pacto_ng.physics.walls`): the wall pressure ``fixed`` or ``follower`` on the
+wetted wall ``Γp`` (``boundary``), or the ``darcy`` body force of a design's pressure field,
+with the pressure ``P`` as the load factor of :class:`~pacto_ng.physics.mechanics.Mechanics`.
+With ``contact``, the part's walls are in frictionless self-contact
+(:mod:`pacto_ng.physics.contact`).
 
 Output.  The ports are read with :meth:`~pacto_ng.physics.loads.Port.functional`, the
 functional of the optimisation's output (a named point's value, or the mean over a named edge
@@ -78,18 +54,26 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+from ngsolve import Integrate
 
 from ..errors import InputError
+from ..physics.contact import SelfContact
 from ..physics.energy import make_energy
 from ..physics.equilibrium import NewtonFailure
 from ..physics.loads import Port, Spring
 from ..physics.materials import jacobian
 from ..physics.mechanics import Mechanics, Supports
 from ..physics.mixed import formulation_for, has_simplices
+from ..physics.walls import WallPressure, follower_terms, outward_normal
 from ..threads import compute
 from .materials import STIFF
 
 KINDS = ("fixed", "follower", "darcy")
+#: self-contact: the penalty stiffness in units of E1 / h (an overlap of 1e-3 h at a contact
+#: pressure of E1), and the distance within which pairs are sought, in element sizes
+CONTACT_PENALTY, CONTACT_REACH = 1e3, 3.0
+#: ... and the most pairings per pressure (Newton with the pairs fixed between them)
+CONTACT_CYCLES = 20
 AXES = "xyz"
 
 
@@ -162,64 +146,6 @@ class Sweep:
         return rows
 
 
-def outward_normal(mesh, boundary: str):
-    """The outward unit normal ``N0`` of the solid on ``boundary`` (a CF for ``ds``).
-
-    NGSolve orients a boundary element's normal by the element's own orientation: on the edges
-    of a hole in 2D it points into the body.  The sign is decided per facet, all at once: on a
-    facet of the boundary ``∫ n_T dA`` of its one volume element ``T`` (``dx(element_boundary
-    =True)``, the element's outward normal) equals ``±∫ n dA`` of the boundary element; the
-    sign of their dot product, on ``FacetFESpace(order=0)``, multiplies
-    ``specialcf.normal(d)``.  ValueError if a facet of ``boundary`` lies inside the mesh
-    (its two elements' normals cancel): a wall must bound the solid.
-    """
-    from ngsolve import FacetFESpace, GridFunction, LinearForm, ds, dx, specialcf
-
-    d = mesh.dim
-    fes = FacetFESpace(mesh, order=0)
-    q, n = fes.TestFunction(), specialcf.normal(d)
-    elem = [LinearForm(n[i] * q * dx(element_boundary=True)).Assemble().vec.FV().NumPy()
-            for i in range(d)]
-    wall = [LinearForm(n[i] * q * ds(boundary)).Assemble().vec.FV().NumPy() for i in range(d)]
-    dot = sum(a * b for a, b in zip(elem, wall))
-    size = sum(b * b for b in wall)
-    on = size > 0
-    if np.any(np.abs(dot[on]) < 0.5 * size[on]):
-        raise ValueError(f"boundary '{boundary}' runs inside the part: the pressure must act on "
-                         f"walls that bound the solid")
-    sign = GridFunction(fes)
-    sign.vec.FV().NumPy()[:] = np.where(dot < 0.0, -1.0, 1.0)
-    return sign * n
-
-
-@dataclass(frozen=True)
-class WallPressure:
-    """The fixed wall pressure as a load of :class:`Mechanics`: work ``W(u) = -t ∫ p N0 · u
-    dA0`` (``p`` the pressure per unit load factor, ``N0`` from :func:`outward_normal`)."""
-
-    boundary: str
-    pressure: object
-    thickness: float
-    normal: object
-
-    def work(self, mesh, u, scale=1.0):
-        from ngsolve import ds
-
-        return (scale * (-self.thickness) * self.pressure * (self.normal * u)) * ds(self.boundary)
-
-
-def follower_terms(boundary: str, pressure, thickness: float, normal, dim: int) -> Callable:
-    """Residual terms ``(u, v, s) -> s t ∫ p cof(I + ∇_Γ u) N0 · v dA0`` on a mesh of
-    dimension ``dim`` (see the module)."""
-    from ngsolve import Cof, Grad, Id, ds
-
-    def terms(u, v, load):
-        Ft = Id(dim) + Grad(u).Trace()
-        return (load * thickness * pressure * ((Cof(Ft) * normal) * v)) * ds(boundary)
-
-    return terms
-
-
 def solid_fields(mesh) -> dict:
     """The element fields of a solid part (numpy, one value per element in NGSolve's order):
     ``{"rho_bar": 1}``, or for a part with an element material named ``stiff``
@@ -232,26 +158,6 @@ def solid_fields(mesh) -> dict:
     if STIFF not in mats:
         return {"rho_bar": ones}
     return {"rho_bar1": ones, "rho_bar2": np.array([m == STIFF for m in mats], dtype=float)}
-
-
-def pressure_body_force(p, order: int = 1) -> Callable:
-    """A body-force callable ``mesh -> -∇p`` for the ``darcy`` kind.
-
-    ``p`` is a pressure field (a GridFunction or CF, e.g. the Darcy pressure of the thresholded
-    design on the design's mesh at inlet pressure ``P_in``, which the analysis then takes as
-    ``body_pressure``); it is set onto an H1 space of ``order`` on the part's mesh (NGSolve's
-    ``Set`` evaluates a field of another mesh by point search; a point a little outside it,
-    as the smoothed 3D part's, takes the nearest element's value) and differentiated there.
-    """
-
-    def body(mesh):
-        from ngsolve import H1, Grad, GridFunction
-
-        gp = GridFunction(H1(mesh, order=order))
-        gp.Set(p)
-        return -Grad(gp)
-
-    return body
 
 
 class PartAnalysis:
@@ -281,6 +187,11 @@ class PartAnalysis:
         (:func:`pressure_body_force`); the load scales with ``P / body_pressure``.
     body_pressure : float, optional
         The inlet pressure ``body`` belongs to.
+    contact : tuple of str, optional
+        Boundaries in frictionless self-contact (:class:`~pacto_ng.physics.contact.
+        SelfContact`, the displacement formulation only), with the penalty stiffness
+        ``contact_penalty`` E1 / h (h the part's mean element size) and pairs sought within
+        :data:`CONTACT_REACH` h.
 
     Attributes: ``formulation`` (``displacement`` or ``mixed``), ``model``, ``mech`` (the
     :class:`Mechanics` block), ``ports``, ``kind``, ``order``, ``thickness``.
@@ -288,7 +199,8 @@ class PartAnalysis:
 
     def __init__(self, mesh, kind: str, *, params, supports: Supports, ports,
                  springs: tuple = (), order: int | None = None, boundary: str = "pressure",
-                 body: Callable | None = None, body_pressure: float | None = None):
+                 body: Callable | None = None, body_pressure: float | None = None,
+                 contact: tuple = (), contact_penalty: float = CONTACT_PENALTY):
         from ngsolve import VOL, Grad, InnerProduct, Parameter
 
         if kind not in KINDS:
@@ -338,9 +250,16 @@ class PartAnalysis:
             mesh, order=self.order, energy=energy, fields=tuple(self._values),
             supports=supports, loads=loads, body=bodyf,
             springs=tuple(sp for p in self.ports for sp in p.springs()) + tuple(springs),
-            thickness=self.thickness, guard=guard, linear=linear and kind != "follower",
+            thickness=self.thickness, guard=guard,
+            linear=linear and kind != "follower" and not contact,
             newton=params.newton.settings(), residual_terms=terms,
             realcompile=params.realcompile, formulation=self.formulation)
+        if contact:
+            h = (Integrate(1.0, mesh) / mesh.ne) ** (1.0 / mesh.dim)
+            self.mech.use_contact(SelfContact(
+                self.mech.space, tuple(contact), contact_penalty * float(params.E1) / h,
+                CONTACT_REACH * h, normal=outward_normal(mesh, "|".join(contact)),
+                thickness=self.thickness))
         self._forms = self._port_forms()
         self._J = jacobian(Grad(self.mech.gfu)).Compile()
         self._qpoints = mesh.MapToAllElements(self.mech.rules, VOL)
@@ -403,12 +322,21 @@ class PartAnalysis:
             self._unit.Set(sign)
             self.mech.load_changed()  # the unit load vector changed sign
         self.mech.target = abs(P)
+        iterations = 0
         try:
-            self.mech.forward(*self._values.values())
+            # with contact: Newton with the pairs fixed, then paired anew, until they hold
+            for _ in range(CONTACT_CYCLES if self.mech.contact is not None else 1):
+                self.mech.forward(*self._values.values())
+                iterations += self.mech.result.iterations
+                if self.mech.contact is None or self.mech.contact_settled():
+                    break
+            else:
+                return self._failed(P, iterations, 1.0)
         except NewtonFailure as failure:
             res = failure.result
-            return self._failed(P, res.iterations, res.load_reached / abs(P) if P else 0.0)
-        return self._read(P, self.mech.result.iterations)
+            return self._failed(P, iterations + res.iterations,
+                                res.load_reached / abs(P) if P else 0.0)
+        return self._read(P, iterations)
 
     def sweep(self, pressures, *, say: Callable[[str], None] | None = None) -> Sweep:
         """Solve at every pressure in turn, each from the last equilibrium; ``pressures`` in

@@ -11,13 +11,13 @@ the run's :class:`~pacto_ng.params.Parameters` on solid material everywhere,
 :func:`~pacto_ng.post.part_analysis.solid_fields`, as
 :class:`~pacto_ng.post.part_analysis.PartAnalysis` builds it), the thickness ``t`` of a 2D
 part (1 in 3D), the wall pressure ``P`` on ``Γp`` with ``N`` the solid's outward normal
-(:func:`~pacto_ng.post.part_analysis.outward_normal`) and
+(:func:`~pacto_ng.physics.walls.outward_normal`) and
 
 * ``fixed``: ``a(u) = N`` (the potential ``t ∫ P N · u ds``: a symmetric tangent);
 * ``follower``: ``a(u) = cof(F̃) N``, ``F̃ = I + ∇_Γ u`` (``Grad(u).Trace()``; Nanson's
   formula ``n da = cof(F) N dA``, exact with the surface gradient: Bonet and Wood 2008,
   *Nonlinear continuum mechanics for finite element analysis*, 2nd ed., §4.2.5; the terms of
-  :func:`~pacto_ng.post.part_analysis.follower_terms`): an unsymmetric tangent.
+  :func:`~pacto_ng.physics.walls.follower_terms`): an unsymmetric tangent.
 
 Newton's method with load continuation and the ``det F`` guard
 (:func:`~pacto_ng.physics.newton.solve_with_continuation`) solves it, warm-started from the
@@ -95,7 +95,8 @@ from ..physics.mechanics import Supports
 from ..physics.newton import solve_with_continuation
 from ..physics.quadrature import integration_rules
 from ..physics.spaces import dirichlet_options
-from ..post.part_analysis import outward_normal, solid_fields
+from ..physics.walls import outward_normal
+from ..post.part_analysis import solid_fields
 from .deformation import ShapeSpace, shape_ds, shape_dx
 
 KINDS = ("fixed", "follower")

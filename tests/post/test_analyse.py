@@ -122,3 +122,29 @@ def test_the_gap_taken_apart_adds_up(edge_run):
         assert g["total"] == pytest.approx(d["gap_at_largest_pressure"][kind], rel=1e-12)
     md = (out / "analysis" / "report.md").read_text()
     assert "Where it comes from" in md and "| fixed |" in md
+
+
+def test_contact_changes_nothing_where_no_walls_touch_and_is_refused_in_3d(edge_run, run3d,
+                                                                          tmp_path, capsys):
+    """``--contact``: the part's boundaries in self-contact.  The chamber beam's walls do not
+    touch at 1e3 and 1e4 Pa, so each kind's Δ is the one without contact (to Newton's
+    tolerance: the linear model then takes Newton's route); analysis.json records the
+    setting.  3D is refused in one line with exit code 2 (its pairs did not settle)."""
+    import shutil
+
+    out, plain = edge_run
+    copy = tmp_path / "run"
+    shutil.copytree(out, copy)
+    assert main(["analyse", str(copy), "--pressures", "1e3,1e4", "--contact", "--quiet"]) == 0
+    data = json.loads((copy / "analysis" / "analysis.json").read_text())
+    assert data["settings"]["contact"] is True and plain["settings"]["contact"] is False
+    for row, ref in zip(data["pressures"], plain["pressures"]):
+        for kind in ("fixed", "follower", "darcy"):
+            assert row[kind]["delta"] == pytest.approx(ref[kind]["delta"], rel=1e-8)
+    capsys.readouterr()
+    copy3d = tmp_path / "run3d"
+    shutil.copytree(run3d[0], copy3d)
+    assert main(["analyse", str(copy3d), "--pressures", "1e3", "--kinds", "fixed",
+                 "--contact"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--contact" in err[0] and "2D only" in err[0]

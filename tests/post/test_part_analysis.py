@@ -21,8 +21,8 @@ import pytest
 from pacto_ng.params import Parameters
 from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
-from pacto_ng.post.part_analysis import (PartAnalysis, outward_normal, pressure_body_force,
-                                        solid_fields)
+from pacto_ng.physics.walls import outward_normal, pressure_body_force
+from pacto_ng.post.part_analysis import PartAnalysis, solid_fields
 from rings import quarter_ring
 
 A, B, E, NU = 0.5, 1.0, 1e6, 0.3

@@ -16,7 +16,8 @@ import pytest
 from pacto_ng.params import Parameters
 from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
-from pacto_ng.post.part_analysis import PartAnalysis, outward_normal, pressure_body_force
+from pacto_ng.physics.walls import outward_normal, pressure_body_force
+from pacto_ng.post.part_analysis import PartAnalysis
 
 E, NU, A, B = 1e6, 0.3, 1.0, 2.0
 NEO = Parameters(model="neohookean", E1=E, E0=1e-3 * E, E2=E, nu=NU, thickness=1.0,
