@@ -15,10 +15,11 @@ sides of a wall thinner than the pairing distance, overlapped at u = 0 (measured
 pneunet part: a residual of 1.5e6 N/m at zero load, and no equilibrium).
 
 and the energy ``t ∫_Γc k/2 max(g, 0)² dA`` (``t`` the thickness in 2D) joins the body's
-potential, so that the contact pressure is ``k g`` where ``g > 0``: a penalty method, whose
-overlap ``P / k`` under a contact pressure ``P`` vanishes as ``k`` grows.  ``k`` is
-``penalty`` times the modulus over the element size, ``E / h``: the stiffness of a layer one
-element deep (``penalty`` 1e3 leaves an overlap of 1e-3 h · P / E).
+potential: a penalty method.  Both walls of a contact belong to Γc, so each overlap is
+counted from both sides: the contact pressure is ``2 k g``, and the overlap under a contact
+pressure ``P`` is ``P / (2 k)``, which vanishes as ``k`` grows (tests/physics/test_contact.py
+checks it against a closed form to 1e-13).  ``k`` is a multiple of the modulus over the
+element size, ``E / h``, the stiffness of a layer one element deep.
 
 NGSolve pairs the points once per :meth:`SelfContact.update` (within ``maxdist`` of the
 surface, at ``intorder`` quadrature points per face): the pairs are those of the state given,
@@ -30,7 +31,8 @@ positive.
 """
 from __future__ import annotations
 
-from ngsolve import CoefficientFunction, ContactBoundary, GridFunction, IfPos, specialcf, x, y, z
+from ngsolve import (BilinearForm, CoefficientFunction, ContactBoundary, GridFunction, IfPos,
+                     specialcf, x, y, z)
 
 #: the cosine of the least angle between two walls' normals for them to be in contact (120°)
 FACING = 0.5
@@ -84,6 +86,26 @@ class SelfContact:
                   * IfPos((X.Other() - X) * N + 1e-6 * self.maxdist, 1.0, 0.0))
         self.cb.AddEnergy(facing * IfPos(gap, (0.5 * thickness * self.stiffness) * gap * gap, 0))
         self._state = GridFunction(fes)
+        # the measures, each its own ContactBoundary and form (energies: t ∫ [g > 0] and
+        # t k ∫ max(g, 0) over both walls)
+        self._probes = []
+        for density in (lambda g: IfPos(g, 0.5 * thickness, 0),
+                        lambda g: IfPos(g, thickness * self.stiffness * g, 0)):
+            cb = ContactBoundary(region, region)
+            g = (X + u - X.Other() - u.Other()) * cb.normal
+            cb.AddEnergy(facing * density(g))
+            self._probes.append((cb, BilinearForm(fes)))
+
+    def measure(self, vec) -> tuple[float, float]:
+        """``(area, force)`` of the contact at the state ``vec``: the area of either wall
+        where they overlap (in 2D the length times the thickness) and the normal force
+        between them, ``2 k ∫ max(g, 0)`` over one wall (times the thickness in 2D)."""
+        self._state.vec.data = vec
+        out = []
+        for cb, form in self._probes:
+            cb.Update(self._state, form, intorder=self.intorder, maxdist=self.maxdist)
+            out.append(float(form.Energy(self._state.vec)))
+        return out[0], out[1]
 
     def update(self, form, vec) -> None:
         """Pair the candidate surface with itself at the state ``vec`` (a vector of ``fes``)

@@ -69,7 +69,7 @@ from ..threads import compute
 from .materials import STIFF
 
 KINDS = ("fixed", "follower", "darcy")
-#: self-contact: the penalty stiffness in units of E1 / h (an overlap of 1e-3 h at a contact
+#: self-contact: the penalty stiffness in units of E1 / h (an overlap of 5e-4 h at a contact
 #: pressure of E1), and the distance within which pairs are sought, in element sizes
 CONTACT_PENALTY, CONTACT_REACH = 1e3, 3.0
 #: ... and the most pairings per pressure (Newton with the pairs fixed between them)
@@ -90,6 +90,8 @@ class SweepPoint:
     load_reached: float = 1.0  # fraction of the pressure at which equilibrium was found
     ports: tuple = ()  # d_k·u of every port, in the order of the analysis's ports
     vectors: tuple = ()  # every port's displacement vector (its mean over an edge or a face)
+    contact_area: float | None = None  # with contact: where the walls touch (m², per wall)
+    contact_force: float | None = None  # ... and the normal force between them (N)
 
 
 @dataclass
@@ -299,10 +301,11 @@ class PartAnalysis:
         vectors = tuple(tuple(float(f.InnerProduct(x)) for f in forms) for forms in axes)
         along = tuple(float(np.dot(p.direction, vec)) for p, vec in zip(self.ports, vectors))
         u_v = np.asarray(self.mech.gfu(self._vertices)).reshape(-1, self.mesh.dim)
+        contact = (None, None) if self.mech.contact is None else self.mech.contact.measure(x)
         return SweepPoint(pressure, float(delta_form.InnerProduct(x)),
                           float(np.max(np.linalg.norm(u_v, axis=1))),
                           float(np.min(self._J(self._qpoints))), int(iterations), True, 1.0,
-                          along, vectors)
+                          along, vectors, *contact)
 
     def _failed(self, pressure: float, iterations: int, load_reached: float) -> SweepPoint:
         n = len(self.ports)
@@ -366,6 +369,9 @@ class PartAnalysis:
         head = f"  {self.kind} {self.model} P = {pt.pressure:.4g}: "
         if pt.converged:
             what = f"Δ = {pt.delta:.5g}"
+            if pt.contact_area:
+                what += (f", walls in contact over {pt.contact_area:.3g} m² with "
+                         f"{pt.contact_force:.3g} N")
         elif skipped:
             what = "not attempted (a lower pressure failed)"
         else:

@@ -122,7 +122,10 @@ def _point(pt, ports) -> dict:
             "vectors": {q.region: [num(c) for c in vec] for q, vec in zip(ports, pt.vectors)},
             "max_u": num(pt.max_u), "min_J": num(pt.min_j),
             "newton_iterations": int(pt.iterations), "converged": bool(pt.converged),
-            "load_reached": num(pt.load_reached)}
+            "load_reached": num(pt.load_reached),
+            # --contact: where the walls touch (m²) and the force between them (N)
+            "contact": None if pt.contact_area is None else
+            {"area": num(pt.contact_area), "force": num(pt.contact_force)}}
 
 
 def _gaps(row, kinds) -> dict:

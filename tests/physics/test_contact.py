@@ -5,7 +5,7 @@ on the side the slot does not reach, is squeezed by a pressure of 3 kPa on its t
 faces (E = 1 MPa): the slot's two walls close at its open end.  Without contact they pass
 through each other (the walls' vertical gap falls to -0.037 m, linear, and -0.039 m,
 Neo-Hookean); with the slot's walls in self-contact the gap stays at the penalty's overlap,
-contact pressure / k, which shrinks tenfold when k grows tenfold (k = 1e2 and 1e3 E/h:
+contact pressure / 2k, which shrinks tenfold when k grows tenfold (k = 1e2 and 1e3 E/h:
 measured -1.70e-6 and -1.69e-7 m linear, -1.73e-6 and -1.72e-7 m Neo-Hookean)."""
 import numpy as np
 import pytest
@@ -56,3 +56,46 @@ def test_slot_walls_pass_through_each_other_without_contact_and_not_with_it(mode
     assert -1e-4 * (HIGH - LOW) < fine < 0 and coarse < 0
     assert coarse / fine == pytest.approx(10.0, rel=0.05)  # the overlap is p / k
 
+
+
+def test_two_blocks_pressed_together_against_a_spring_move_as_the_closed_form_says():
+    """Two unit blocks, one above the other with a gap g0 = 0.1 mm (plane strain, E = 1 MPa,
+    ν = 0.3, linear): the lower stands on its bottom, both are held in x on their left edges,
+    and the upper's top carries a pressure P = 1 kPa against a spring ks = 1 MN/m on its mean
+    displacement Δ.  Without contact the upper block passes through the lower: Δ = P / ks.
+    With contact a force F = P - ks Δ passes through both blocks in uniaxial stress, each
+    shortened by F (1 - ν²) / E, and the walls overlap by F / (2k): Δ = (a P + g0) / (1 + ks a)
+    with a = 2 (1 - ν²) / E + 1 / (2k).  The analysis reports the walls in contact over the
+    whole width, with the force F."""
+    from netgen.occ import Compound
+    from ngsolve import Integrate
+
+    g0, E, nu, P, ks = 1e-4, 1e6, 0.3, 1e3, 1e6
+    lo, up = MoveTo(0, 0).Rectangle(1, 1).Face(), MoveTo(0, 1 + g0).Rectangle(1, 1).Face()
+    for face, tag in ((lo, "lo"), (up, "up")):
+        face.edges.name = "free"
+        face.edges.Min(X).name = f"{tag}_left"
+        face.faces.name = "solid"
+    lo.edges.Min(Y).name, lo.edges.Max(Y).name = "bottom", "lo_top"
+    up.edges.Max(Y).name, up.edges.Min(Y).name = "pressure", "up_bottom"
+    mesh = Mesh(OCCGeometry(Compound([lo, up]), dim=2).GenerateMesh(maxh=0.25))
+    params = Parameters(model="linear", E1=E, E0=1.0, nu=nu, plane="strain", thickness=1.0,
+                        order=2)
+    got, points = [], []
+    for contact in ((), ("lo_top", "up_bottom")):
+        an = PartAnalysis(mesh, "fixed", params=params,
+                          supports=Supports(fix_y=("bottom",), fix_x=("lo_left", "up_left")),
+                          ports=Port("pressure", (0.0, -1.0), spring=ks), contact=contact)
+        point = an.solve(P)
+        assert point.converged
+        got.append(point.delta)
+        points.append(point)
+    k = 1e3 * E / (Integrate(1.0, mesh) / mesh.ne) ** 0.5
+    a = 2 * (1 - nu ** 2) / E + 1 / (2 * k)
+    assert got[0] == pytest.approx(P / ks, rel=1e-12)
+    assert got[1] == pytest.approx((a * P + g0) / (1 + ks * a), rel=1e-12)
+    force = P - ks * got[1]  # through the blocks, per unit thickness and width
+    assert force > 0 and points[0].contact_area is None
+    # the contact's measures: the whole unit width, and the force the blocks carry
+    assert points[1].contact_area == pytest.approx(1.0, rel=1e-9)
+    assert points[1].contact_force == pytest.approx(force, rel=1e-9)
