@@ -156,7 +156,7 @@ def _post_parsers(sub):
     a.add_argument("--time-limit", type=_positive, default=3600.0, help="refuse an analysis "
                    "estimated to take longer (seconds, default 3600)")
     a.add_argument("--contact", action="store_true", help="the part's walls in frictionless "
-                   "self-contact, so that they cannot pass through each other (2D)")
+                   "self-contact, so that they cannot pass through each other")
     a.add_argument("--quiet", action="store_true", help="no progress output")
     x = sub.add_parser("export", help="the thresholded, remeshed part of a run as STL, VTK, "
                        "VTU or MSH")

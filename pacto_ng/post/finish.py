@@ -39,7 +39,7 @@ class Subject:
     entry of analysis.json; ``expected`` the rows of :func:`~.expected.expected_sweep` (None
     as built); ``darcy`` ``(p, P_in)``: the thresholded design's Darcy field on ``mesh``
     (None as built); ``h`` the design's element size; ``contact``: every boundary of the part
-    in frictionless self-contact (2D)."""
+    in frictionless self-contact."""
 
     case: object
     params: Parameters
@@ -67,9 +67,6 @@ def finish(subject: Subject, kinds, pressures, settings: dict, *, quiet: bool, t
     of the module docstring into ``subject.out``; ``settings`` holds what the flow chose (the
     threshold and its choice, threshold2, maxh).  Returns 0."""
     part, params = subject.part, subject.params
-    if subject.contact and part.mesh.dim != 2:
-        raise InputError("--contact: self-contact is analysed in 2D only so far (in 3D its "
-                         "pairs did not settle on a test block: docs/benchmarks.md, Limits)")
     settings = dict(settings, contact=subject.contact)
     ports = part_ports(subject.setup)
     supports = present_supports(subject.setup.supports, part.mesh)

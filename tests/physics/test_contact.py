@@ -99,3 +99,34 @@ def test_two_blocks_pressed_together_against_a_spring_move_as_the_closed_form_sa
     # the contact's measures: the whole unit width, and the force the blocks carry
     assert points[1].contact_area == pytest.approx(1.0, rel=1e-9)
     assert points[1].contact_force == pytest.approx(force, rel=1e-9)
+
+
+def test_slot_walls_do_not_pass_through_each_other_in_3d():
+    """The slotted block extruded 0.2 m (711 tetrahedra, linear, order 1): without contact
+    the slot's walls overlap by 0.032 m at mid-depth; with contact by at most 1e-3 of the
+    slot's height (measured 4.3e-6 m), touching over part of their area."""
+    from netgen.occ import Box
+
+    body = Box((0, 0, 0), (1, 1, 0.2)) - Box((0.3, LOW, -0.1), (1.1, HIGH, 0.3))
+    body.faces.name = "free"
+    body.faces.Min(X).name = "fixed"
+    body.faces.Max(Y).name = "pressure"
+    body.faces.Min(Y).name = "pressure"
+    for face in body.faces:
+        if LOW - 0.01 < face.center.y < HIGH + 0.01 and face.center.x > 0.29:
+            face.name = "slot"
+    mesh = Mesh(OCCGeometry(body).GenerateMesh(maxh=0.2))
+    params = Parameters(model="linear", E1=1e6, E0=1.0, nu=0.3, thickness=1.0, order=1)
+    gaps, points = [], []
+    for contact in ((), ("slot",)):
+        an = PartAnalysis(mesh, "fixed", params=params, supports=Supports(clamp=("fixed",)),
+                          ports=Port("pressure", (0.0, -1.0, 0.0)), contact=contact)
+        points.append(an.solve(3e3))
+        assert points[-1].converged
+        u = an.mech.gfu
+        gaps.append(min(HIGH + u(mesh(x, HIGH, 0.1))[1] - LOW - u(mesh(x, LOW, 0.1))[1]
+                        for x in np.linspace(0.35, 0.99, 30)))
+    assert gaps[0] < -0.03
+    assert gaps[1] > -1e-3 * (HIGH - LOW)
+    slot_area = 0.7 * 0.2
+    assert 0 < points[1].contact_area < slot_area and points[1].contact_force > 0
