@@ -256,6 +256,9 @@ class PartAnalysis:
             linear=linear and kind != "follower" and not contact,
             newton=params.newton.settings(), residual_terms=terms,
             realcompile=params.realcompile, formulation=self.formulation)
+        if contact and self.formulation != "displacement":
+            raise ValueError(f"contact: the part is analysed with the {self.formulation} "
+                             "formulation (the run's), which takes no contact yet")
         if contact:
             h = (Integrate(1.0, mesh) / mesh.ne) ** (1.0 / mesh.dim)
             self.mech.use_contact(SelfContact(

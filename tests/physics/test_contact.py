@@ -130,3 +130,12 @@ def test_slot_walls_do_not_pass_through_each_other_in_3d():
     assert gaps[1] > -1e-3 * (HIGH - LOW)
     slot_area = 0.7 * 0.2
     assert 0 < points[1].contact_area < slot_area and points[1].contact_force > 0
+
+
+def test_contact_with_the_mixed_formulation_is_refused_in_one_line():
+    params = Parameters(model="neohookean", E1=1e6, E0=1.0, nu=0.45, plane="strain",
+                        thickness=1.0, order=2, formulation="mixed")
+    with pytest.raises(ValueError, match="mixed formulation") as err:
+        PartAnalysis(slotted(), "fixed", params=params, supports=Supports(clamp=("fixed",)),
+                     ports=Port("pressure", (0.0, -1.0)), contact=("slot",))
+    assert "\n" not in str(err.value)
