@@ -8,12 +8,6 @@ normal), the penetration is
 
     g = (X + u - (X + u)') · n        (> 0: the surfaces overlap)
 
-counted only where the two points face each other in the reference configuration: their
-outward normals ``N``, ``N'`` more than 120° apart and the paired point in front, ``(X' - X) ·
-N >= 0``.  Without these two conditions the walls meeting at a chamber's corner, and the two
-sides of a wall thinner than the pairing distance, overlapped at u = 0 (measured on the
-pneunet part: a residual of 1.5e6 N/m at zero load, and no equilibrium).
-
 and the energy ``t ∫_Γc k/2 max(g, 0)² dA`` (``t`` the thickness in 2D) joins the body's
 potential: a penalty method.  Both walls of a contact belong to Γc, so each overlap is
 counted from both sides: the contact pressure is ``2 k g``, and the overlap under a contact
@@ -21,13 +15,17 @@ pressure ``P`` is ``P / (2 k)``, which vanishes as ``k`` grows (tests/physics/te
 checks it against a closed form to 1e-13).  ``k`` is a multiple of the modulus over the
 element size, ``E / h``, the stiffness of a layer one element deep.
 
+Only points that face each other in the reference configuration count: their outward normals
+``N``, ``N'`` more than 120° apart and the paired point in front, ``(X' - X) · N >= 0``.
+Without these two conditions the walls meeting at a chamber's corner, and the two sides of a
+wall thinner than the pairing distance, overlapped at u = 0 (measured on the pneunet part: a
+residual of 1.5e6 N/m at zero load, and no equilibrium).
+
 NGSolve pairs the points once per :meth:`SelfContact.update` (within ``maxdist`` of the
-surface, at ``intorder`` quadrature points per face): the pairs are those of the state given,
-and the block updates them at every Newton iteration (:meth:`~pacto_ng.physics.mechanics.
-Mechanics.use_contact`).  Measured with NGSolve 6.2.2608: two Neo-Hookean blocks pressed
-together, penalty 1e4, smallest gap -5.9e-5 (-5.0e-2 without contact); intorder 4 gave
--2.7e-4; an energy that simplifies to zero (k = 0) crashes NGSolve, so ``penalty`` must be
-positive.
+surface, at ``intorder`` quadrature points per face), at the state given; the pairs then stay
+until the next update: the caller solves with them fixed and pairs again until they hold
+(:meth:`~pacto_ng.physics.equilibrium.Equilibrium.contact_settled`).  An energy that
+simplifies to zero (k = 0) crashes NGSolve, so the stiffness must be positive.
 """
 from __future__ import annotations
 
