@@ -14,8 +14,8 @@ class DesignField:
     Elements whose material is listed in ``solid`` get density 1, those in ``void`` density 0;
     every other element (normally material ``design``) is a design element.  ``wall``, a mask
     over the elements (:func:`near_boundary`), adds passive solid elements outside ``void``.
-    The element order is NGSolve's (= ``mesh.ngmesh.Elements2D()`` on a 2D mesh, ``Elements3D()`` on a 3D one);
-    ``areas`` are the element areas in 2D and volumes in 3D.
+    The element order is NGSolve's (= ``mesh.ngmesh.Elements2D()`` on a 2D mesh,
+    ``Elements3D()`` on a 3D one); ``areas`` are the element areas in 2D and volumes in 3D.
 
     The block :class:`Embed` puts ``x`` into a full element vector; :class:`FixPassive` resets
     the passive elements after filtering and projection so that they stay exactly 0 or 1.

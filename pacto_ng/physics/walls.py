@@ -71,8 +71,9 @@ def outward_normal(mesh, boundary: str):
 
 @dataclass(frozen=True)
 class WallPressure:
-    """The fixed wall pressure as a load of :class:`~pacto_ng.physics.mechanics.Mechanics`: work ``W(u) = -t ∫ p N0 · u
-    dA0`` (``p`` the pressure per unit load factor, ``N0`` from :func:`outward_normal`)."""
+    """The fixed wall pressure as a load of :class:`~pacto_ng.physics.mechanics.Mechanics`:
+    work ``W(u) = -t ∫ p N0 · u dA0`` (``p`` the pressure per unit load factor, ``N0`` from
+    :func:`outward_normal`)."""
 
     boundary: str
     pressure: object

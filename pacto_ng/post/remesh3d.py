@@ -4,8 +4,7 @@
 STL geometry (``netgen.stl.STLGeometry(...).GenerateMesh(maxh=...)``: the surface is
 remeshed, then the volume; where that fails at every size tried, the surface's own triangles
 are kept and Netgen fills the volume, and where the smoothed surface touches itself, the
-unsmoothed one's)
-and names the new mesh's boundary faces by position:
+unsmoothed one's) and names the new mesh's boundary faces by position:
 
 * a face lying on a face of the source mesh that bounds its material region (the outer faces
   and the walls of the passive void regions) takes that face's name (``fixed``,
@@ -57,7 +56,7 @@ class Remeshed3D:
     materials: str | None = None  # two materials: how they were assigned ("element-wise")
     ports: dict = field(default_factory=dict)  # named point -> (source position, new vertex)
     maxh: float = 0.0  # the element size Netgen meshed it with (MESH_RETRY)
-    surface: str = "remeshed"  # remeshed by Netgen, or "kept" / "unsmoothed" (_netgen_stl)
+    surface: str = "remeshed"  # remeshed by Netgen, or "kept" / "unsmoothed" (_netgen_mesh)
 
 
 def _bounding_faces(source, exclude):
@@ -124,7 +123,7 @@ _MESHER = ("import sys\n"
 MESH_RETRY = (1.0, 0.7, 0.5)
 
 
-def _netgen_stl(surface, maxh: float, timeout: float, unsmoothed=None):
+def _netgen_mesh(surface, maxh: float, timeout: float, unsmoothed=None):
     """The Netgen tetrahedral mesh of the closed, outward-oriented ``surface``, the element
     size that gave it and how its surface was made: its STL remeshed at ``maxh``, or after a
     crash of the mesher at the next size of :data:`MESH_RETRY` (``"remeshed"``); when every
@@ -248,12 +247,12 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
     face on ``clamp`` are kept.  ``stiff_at``: a two-material part's rule, points (n, 3) ->
     whether the stiff material is there (the tetrahedra's centroids are asked; see the
     module docstring).  ``unsmoothed``: the surface before smoothing, Netgen's last resort
-    (:func:`_netgen_stl`).  ValueError when Netgen fails (or takes longer than ``timeout`` s) or
+    (:func:`_netgen_mesh`).  ValueError when Netgen fails (or takes longer than ``timeout`` s) or
     no face lies on the clamp."""
     import ngsolve
     from netgen.meshing import Element0D, FaceDescriptor, Mesh as NGMesh
 
-    gen, meshed_at, surface_kind = _netgen_stl(surface, maxh, timeout, unsmoothed)
+    gen, meshed_at, surface_kind = _netgen_mesh(surface, maxh, timeout, unsmoothed)
     pts = np.asarray(gen.Coordinates(), dtype=float)
     tris = np.asarray(gen.Elements2D().NumPy()["nodes"], dtype=np.int64)[:, :3] - 1
     tets = np.asarray(gen.Elements3D().NumPy()["nodes"], dtype=np.int64)[:, :4] - 1

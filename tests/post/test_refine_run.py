@@ -168,9 +168,9 @@ def test_a_3d_part_is_refined_checked_and_written(tmp_path_factory, capsys):
     replaced by the solid lower part (as tests/post/test_3d_post.py makes it), refined for two
     steps: Δ grows (measured 3.7e-8 → 4.9e-6 m: the block barely bends at first), the
     independent remesh (a new interior for the same surface, finer) gives the refinement's Δ
-    to 2 % (measured -1.8 %), refined.vtu holds tetrahedra, and refined.stl is the whole part, closed, in mm:
-    its volume twice the half's (pneunet-3d is solved on its half in z: one symmetry plane)
-    to the STL's single precision."""
+    to 2 % (measured -1.8 %), refined.vtu holds tetrahedra, and refined.stl is the whole
+    part, closed, in mm: its volume twice the half's (pneunet-3d is solved on its half in z:
+    one symmetry plane) to the STL's single precision."""
     import meshio
     import pyvista as pv
     from small_cases import run_with_design

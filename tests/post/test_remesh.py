@@ -211,7 +211,7 @@ def test_a_3d_mesher_crash_is_retried_finer_then_with_the_surface_kept(monkeypat
 
     monkeypatch.setattr(remesh3d, "_mesh_child", crash_first)
     cube = pv.Cube(center=(0.5, 0.5, 0.5)).triangulate()
-    gen, used, how = remesh3d._netgen_stl(cube, 0.5, 60.0)
+    gen, used, how = remesh3d._netgen_mesh(cube, 0.5, 60.0)
     assert tries == [("stl", 0.5), ("stl", 0.5 * remesh3d.MESH_RETRY[1])]
     assert used == tries[1][1] and gen.ne > 0 and how == "remeshed"
 
@@ -220,7 +220,7 @@ def test_a_3d_mesher_crash_is_retried_finer_then_with_the_surface_kept(monkeypat
 
     monkeypatch.setattr(remesh3d, "_mesh_child", stl_fails)
     sphere = pv.Sphere(radius=1.0, theta_resolution=24, phi_resolution=12).triangulate()
-    gen, used, how = remesh3d._netgen_stl(sphere, 0.4, 60.0)
+    gen, used, how = remesh3d._netgen_mesh(sphere, 0.4, 60.0)
     assert how == "kept" and used == 0.4
     assert Integrate(1.0, Mesh(gen)) == pytest.approx(sphere.volume, rel=1e-12)
     assert len(gen.Elements2D()) == sphere.n_cells
@@ -235,13 +235,13 @@ def test_a_3d_mesher_crash_is_retried_finer_then_with_the_surface_kept(monkeypat
         return stl_fails(kind, *args)
 
     monkeypatch.setattr(remesh3d, "_mesh_child", first_fill_fails)
-    gen, used, how = remesh3d._netgen_stl(cube, 0.5, 60.0, unsmoothed=sphere)
+    gen, used, how = remesh3d._netgen_mesh(cube, 0.5, 60.0, unsmoothed=sphere)
     assert how == "unsmoothed" and len(gen.Elements2D()) == sphere.n_cells
 
     monkeypatch.setattr(remesh3d, "_mesh_child", lambda *a: "no tetrahedra")
     with pytest.raises(ValueError, match=r"^Netgen could not mesh the part \(maxh 0\.5: no "
                        r".*the kept surface filled, 0\.5: no tetrahedra"):
-        remesh3d._netgen_stl(cube, 0.5, 60.0)
+        remesh3d._netgen_mesh(cube, 0.5, 60.0)
 
 
 def test_a_piece_pinned_at_a_clamped_point_is_kept():
