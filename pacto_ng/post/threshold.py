@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from matplotlib.path import Path
 
 from .boundary import BoundaryLocator, outer_boundary
 from .grid import (area_weighted_nodal, cell_areas, element_size, grid_and_densities,
@@ -98,8 +99,8 @@ class Component:
         q = np.asarray(point, dtype=float)[:2]
         if any(_distance_to_loop(loop.points, q) <= tol for loop in self.loops):
             return True
-        return _inside(self.outer.points, q) and not any(_inside(h.points, q)
-                                                         for h in self.holes)
+        return Path(self.outer.points).contains_point(q) and not any(
+            Path(h.points).contains_point(q) for h in self.holes)
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,16 +146,6 @@ class Thresholded:
     @property
     def loops(self) -> tuple[Loop, ...]:
         return tuple(lp for c in self.components for lp in c.loops)
-
-
-def _inside(P, q) -> bool:
-    """Whether ``q`` lies inside the closed polygon ``P`` (n, 2): the even-odd rule along a
-    ray in +x."""
-    a, b = P, np.roll(P, -1, axis=0)
-    crosses = (a[:, 1] > q[1]) != (b[:, 1] > q[1])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x = a[:, 0] + (q[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
-    return bool(np.count_nonzero(crosses & (x > q[0])) % 2)
 
 
 def _distance_to_loop(P, q) -> float:
@@ -307,8 +298,6 @@ def _labelled_loops(solid, mesh, exclude, h: float) -> list:
 def _nesting(polygons) -> tuple[list, list]:
     """``(paths, depth)``: a matplotlib Path per polygon and the number of the others that
     enclose it, by point-in-polygon tests (the polygons do not cross)."""
-    from matplotlib.path import Path
-
     paths = [Path(p) for p in polygons]
     depth = []
     for i, p in enumerate(polygons):
