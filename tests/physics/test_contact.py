@@ -9,7 +9,7 @@ contact pressure / 2k, which shrinks tenfold when k grows tenfold (k = 1e2 and 1
 measured -1.70e-6 and -1.69e-7 m linear, -1.73e-6 and -1.72e-7 m Neo-Hookean)."""
 import numpy as np
 import pytest
-from netgen.occ import MoveTo, OCCGeometry, X, Y
+from netgen.occ import Box, MoveTo, OCCGeometry, X, Y
 from ngsolve import Mesh
 
 from pacto_ng import Parameters, Port
@@ -19,21 +19,35 @@ from pacto_ng.post.part_analysis import PartAnalysis
 LOW, HIGH = 0.49, 0.51  # the slot's walls
 
 
-def slotted():
-    body = MoveTo(0, 0).Rectangle(1, 1).Face() - MoveTo(0.3, LOW).Rectangle(0.8, 0.02).Face()
-    body.edges.name = "free"
-    body.edges.Min(X).name = "fixed"
-    body.edges.Max(Y).name = "pressure"
-    body.edges.Min(Y).name = "pressure"
-    for edge in body.edges:
-        if LOW - 0.01 < edge.center.y < HIGH + 0.01 and edge.center.x > 0.29:
-            edge.name = "slot"
-    return Mesh(OCCGeometry(body, dim=2).GenerateMesh(maxh=0.05))
+def _name_walls(walls) -> None:
+    """Name a slotted block's edges (2D) or faces (3D): ``fixed`` at x = 0, ``pressure`` on
+    top and bottom, ``slot`` the slot's walls, ``free`` the rest."""
+    walls.name = "free"
+    walls.Min(X).name = "fixed"
+    walls.Max(Y).name = "pressure"
+    walls.Min(Y).name = "pressure"
+    for wall in walls:
+        if LOW - 0.01 < wall.center.y < HIGH + 0.01 and wall.center.x > 0.29:
+            wall.name = "slot"
+
+
+def slotted(dim: int = 2):
+    """The slotted block (module docstring), in 3D extruded 0.2 m."""
+    if dim == 2:
+        body = (MoveTo(0, 0).Rectangle(1, 1).Face()
+                - MoveTo(0.3, LOW).Rectangle(0.8, 0.02).Face())
+        _name_walls(body.edges)
+        return Mesh(OCCGeometry(body, dim=2).GenerateMesh(maxh=0.05))
+    body = Box((0, 0, 0), (1, 1, 0.2)) - Box((0.3, LOW, -0.1), (1.1, HIGH, 0.3))
+    _name_walls(body.faces)
+    return Mesh(OCCGeometry(body).GenerateMesh(maxh=0.2))
 
 
 def smallest_gap(mesh, analysis) -> float:
+    """The least vertical gap between the slot's walls along it (3D: at mid-depth)."""
     u = analysis.mech.gfu
-    return min(HIGH + u(mesh(x, HIGH))[1] - LOW - u(mesh(x, LOW))[1]
+    at = (lambda x, y: mesh(x, y)) if mesh.dim == 2 else (lambda x, y: mesh(x, y, 0.1))
+    return min(HIGH + u(at(x, HIGH))[1] - LOW - u(at(x, LOW))[1]
                for x in np.linspace(0.35, 0.99, 30))
 
 
@@ -105,17 +119,7 @@ def test_slot_walls_do_not_pass_through_each_other_in_3d():
     """The slotted block extruded 0.2 m (711 tetrahedra, linear, order 1): without contact
     the slot's walls overlap by 0.032 m at mid-depth; with contact by at most 1e-3 of the
     slot's height (measured 4.3e-6 m), touching over part of their area."""
-    from netgen.occ import Box
-
-    body = Box((0, 0, 0), (1, 1, 0.2)) - Box((0.3, LOW, -0.1), (1.1, HIGH, 0.3))
-    body.faces.name = "free"
-    body.faces.Min(X).name = "fixed"
-    body.faces.Max(Y).name = "pressure"
-    body.faces.Min(Y).name = "pressure"
-    for face in body.faces:
-        if LOW - 0.01 < face.center.y < HIGH + 0.01 and face.center.x > 0.29:
-            face.name = "slot"
-    mesh = Mesh(OCCGeometry(body).GenerateMesh(maxh=0.2))
+    mesh = slotted(3)
     params = Parameters(model="linear", E1=1e6, E0=1.0, nu=0.3, thickness=1.0, order=1)
     gaps, points = [], []
     for contact in ((), ("slot",)):
@@ -123,9 +127,7 @@ def test_slot_walls_do_not_pass_through_each_other_in_3d():
                           ports=Port("pressure", (0.0, -1.0, 0.0)), contact=contact)
         points.append(an.solve(3e3))
         assert points[-1].converged
-        u = an.mech.gfu
-        gaps.append(min(HIGH + u(mesh(x, HIGH, 0.1))[1] - LOW - u(mesh(x, LOW, 0.1))[1]
-                        for x in np.linspace(0.35, 0.99, 30)))
+        gaps.append(smallest_gap(mesh, an))
     assert gaps[0] < -0.03
     assert gaps[1] > -1e-3 * (HIGH - LOW)
     slot_area = 0.7 * 0.2
