@@ -3,8 +3,9 @@
 :func:`outer_boundary` gives the edges that belong to one element only, with the names of the
 boundaries they lie on (:data:`FREE` where the mesh names none); a :class:`BoundaryLocator`
 answers which of those named edges a point lies on (how a traced polygon's edges and the new
-mesh's boundary segments get their names); :func:`named_points` gives the named points (the
-output ports); :func:`segment_distance` measures a point's distance from segments.
+mesh's boundary segments get their names); :func:`point_sets` and :func:`named_points` give
+the named points (the supports' pins, the output ports); :func:`segment_distance` measures a
+point's distance from segments.
 """
 from __future__ import annotations
 
@@ -86,13 +87,20 @@ class BoundaryLocator:
         return out
 
 
-def named_points(mesh) -> dict:
-    """Named points (vertex regions other than 'default': co-dimension 2 in 2D, 3 in 3D) of a
-    mesh: name -> (x, y) or (x, y, z)."""
+def point_sets(mesh) -> dict:
+    """Every named point (vertex regions other than 'default': co-dimension 2 in 2D, 3 in 3D)
+    of a mesh, grouped by name: name -> array (k, dim) of the k points of that name (a case
+    may name many points alike, e.g. the nodes of a clamped rim)."""
     from ngsolve import BBBND, BBND
 
     out = {}
     for el in mesh.Elements(BBBND if mesh.dim == 3 else BBND):
-        if el.mat != "default" and el.mat not in out:
-            out[el.mat] = tuple(mesh[el.vertices[0]].point)
-    return out
+        if el.mat != "default":
+            out.setdefault(el.mat, []).append(mesh[el.vertices[0]].point)
+    return {name: np.array(points, dtype=float) for name, points in out.items()}
+
+
+def named_points(mesh) -> dict:
+    """The first point of each name of :func:`point_sets`: name -> (x, y) or (x, y, z) (an
+    output port is one point)."""
+    return {name: tuple(points[0]) for name, points in point_sets(mesh).items()}

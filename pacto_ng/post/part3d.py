@@ -4,8 +4,8 @@
 elements around a vertex, over the elements outside the passive void regions ``exclude``),
 clips the tetrahedra at the threshold with pyvista's ``clip_scalar`` (linear along the element
 edges: the cut is the ρ̄ = threshold iso-surface of the nodal field, and the clipped cells fill
-{ρ̄ >= threshold} exactly), keeps the connected pieces that touch a ``clamp`` face (the others
-would float), and takes the boundary of the kept cells: a closed surface by construction, made
+{ρ̄ >= threshold} exactly), keeps the connected pieces that touch a ``clamp`` face or point
+(the others would float), and takes the boundary of the kept cells: a closed surface by construction, made
 of the iso-surface and the pieces of the domain's faces (outer faces, void regions' walls) that
 the solid reaches.  That surface is smoothed by Taubin's λ|μ scheme (Taubin 1995: a Laplacian
 step λ > 0 followed by a step μ < -λ, a low-pass filter that shrinks far less than Laplacian
@@ -83,12 +83,13 @@ def void_regions(mesh, setup) -> tuple[str, ...]:
 
 
 def boundary_vertices(mesh, names) -> np.ndarray:
-    """The vertex numbers (0-based) of the mesh's boundary faces named in ``names``."""
-    from ngsolve import BND
+    """The vertex numbers (0-based) of the mesh's boundary faces and named points (a pinned
+    support) named in ``names``."""
+    from ngsolve import BBBND, BND
 
     names = set(names)
-    return np.array(sorted({v.nr for el in mesh.Elements(BND) if el.mat in names
-                            for v in el.vertices}), dtype=int)
+    return np.array(sorted({v.nr for vb in (BND, BBBND) for el in mesh.Elements(vb)
+                            if el.mat in names for v in el.vertices}), dtype=int)
 
 
 def _original_ids(grid, n):

@@ -2,7 +2,10 @@
 
 design.png has two views side by side: the ρ̄ = 0.5 iso-surface of the design (the nodal,
 volume-weighted mean of the element densities) seen obliquely, and the cut at mid-depth (the
-plane z = the middle of the bounding box, through the chambers of a Box case) coloured by ρ̄.
+plane z = the middle of the bounding box, through the chambers of a Box case) coloured by each
+element's ρ̄ (what the optimiser holds: a crisp design shows black and white; the cut lies
+:data:`CUT_SHIFT` of the part's size above mid-depth, inside one layer of a structured mesh
+whose element faces meet there).
 pressure.png is p / P_in on the same cut with the ρ̄ = 0.5 line drawn on it.  Every view has
 its axes in metres, as the 2D pictures (:func:`show_axes`: the bounding box's edges labelled
 x (m), y (m), z (m); a view from above labels x and y only), and a cut's title gives its
@@ -26,6 +29,8 @@ from .grid import area_weighted_nodal, cell_volumes, mesh_to_pyvista
 WINDOW = (1200, 500)  #: pixels of design.png (two views) and pressure.png
 #: a coordinate within this fraction of the part's size of a round value is that value
 ROUND_RTOL = 1e-9
+#: the cut's shift above mid-depth, as a fraction of the part's size
+CUT_SHIFT = 1e-6
 
 
 def plotter(shape=(1, 1), window=WINDOW):
@@ -113,7 +118,7 @@ def _mid_depth(grid):
 def _cut(grid):
     """The plane z = mid-depth through ``grid`` (its point data interpolated)."""
     centre = np.array(grid.center, dtype=float)
-    centre[2] = _mid_depth(grid)
+    centre[2] = _mid_depth(grid) + CUT_SHIFT * size_of(grid.bounds)
     return grid.slice(normal="z", origin=centre)
 
 
@@ -133,11 +138,12 @@ def design_picture(path, mesh, rho, title: str = "") -> None:
     ρ̄ (module docstring); ``rho`` one value per element in NGSolve's order."""
     grid = mesh_to_pyvista(mesh)
     rho = np.clip(np.asarray(rho, dtype=float), 0.0, 1.0)
-    grid.point_data["rho_bar"] = nodal_field(grid, rho)
+    grid.point_data["rho_nodal"] = nodal_field(grid, rho)
+    grid.cell_data["rho_bar"] = rho
     p = plotter((1, 2))
     p.subplot(0, 0)
     p.add_mesh(grid.outline(), color="grey")
-    surface = grid.contour([0.5], scalars="rho_bar")
+    surface = grid.contour([0.5], scalars="rho_nodal")
     words = "rho_bar = 0.5 iso-surface"  # VTK's text font has no ρ̄
     if surface.n_points:
         p.add_mesh(surface, color="lightsteelblue", smooth_shading=True)
@@ -148,7 +154,7 @@ def design_picture(path, mesh, rho, title: str = "") -> None:
     oblique(p)
     p.subplot(0, 1)
     p.add_mesh(grid.outline(), color="grey")
-    p.add_mesh(_cut(grid), scalars="rho_bar", cmap="gray_r", clim=(0, 1),
+    p.add_mesh(_cut(grid), scalars="rho_bar", preference="cell", cmap="gray_r", clim=(0, 1),
                scalar_bar_args=bar("rho_bar"))
     p.add_text(cut_title(grid), font_size=9)
     show_axes(p, grid.bounds, top=True)

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .boundary import BoundaryLocator, named_points, outer_boundary
+from .boundary import BoundaryLocator, named_points, outer_boundary, point_sets
 from .domain_part import domain_shape
 from .materials import INTERFACE, assign_elementwise, split_part
 from .sampler import pressure_sampler
@@ -225,7 +225,7 @@ def _clamped_pieces(th: Thresholded, clamp) -> tuple[list, float]:
         raise ValueError("the thresholded design has no solid")
     if clamp:
         # a clamped point (a pin support) holds the piece it lies in
-        points = [q for name, q in named_points(th.source).items() if name in clamp]
+        points = [q for name, qs in point_sets(th.source).items() if name in clamp for q in qs]
         tol = 1e-6 * th.h
         kept = [c for c in comps if c.names & set(clamp) or any(c.holds(q, tol) for q in points)]
         if not kept:

@@ -16,7 +16,8 @@ unsmoothed one's) and names the new mesh's boundary faces by position:
   along its outward normal, is at least ``wet_fraction`` P_in, is named ``pressure``;
 * the other faces are ``free``;
 
-and the source's named points become the nearest vertices of the part.
+and the source's named points become the nearest vertices of the part; a clamped named point
+(a pin support) only where the part reaches it, within :data:`PIN_REACH` source element sizes.
 
 A two-material part (``stiff_at``, :mod:`.materials`): every tetrahedron of the remesh takes the
 material of the nodal ρ̄2 interpolated at its centroid, ``stiff`` (E2) where it reaches the
@@ -38,11 +39,16 @@ from pathlib import Path
 import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
-from .boundary import named_points
+from .boundary import point_sets
 from .materials import MATERIALS
 
 PRESSURE, FREE = "pressure", "free"
+#: a clamped named point pins the part's piece whose nearest vertex lies within this many
+#: source element sizes of it (the smoothed surface moves off the source's corners and edges
+#: by a fraction of an element)
+PIN_REACH = 0.5
 
 
 @dataclass
@@ -52,7 +58,7 @@ class Remeshed3D:
     mesh: object  # ngsolve.Mesh, material "solid" (or "soft" and "stiff"), boundaries named
     volume: float
     areas: dict  # boundary name -> area
-    dropped: int = 0  # tetrahedra of the pieces not joined to the clamp through faces
+    dropped: int = 0  # tetrahedra of the pieces not joined to the clamp (faces or pins)
     materials: str | None = None  # two materials: how they were assigned ("element-wise")
     ports: dict = field(default_factory=dict)  # named point -> (source position, new vertex)
     maxh: float = 0.0  # the element size Netgen meshed it with (MESH_RETRY)
@@ -121,6 +127,8 @@ _MESHER = ("import sys\n"
 #: the element sizes (fractions of the requested one) tried in turn when Netgen's mesher
 #: crashes on a part's surface: a finer size resolves a thin wall it could not close
 MESH_RETRY = (1.0, 0.7, 0.5)
+#: why a try of the mesher was stopped (its time limit)
+TOOK_LONGER = "it took longer than"
 
 
 def _netgen_mesh(surface, maxh: float, timeout: float, unsmoothed=None):
@@ -130,8 +138,9 @@ def _netgen_mesh(surface, maxh: float, timeout: float, unsmoothed=None):
     size fails (thin walls of one or two source elements, seen on pneunet-3d parts), the
     surface's own triangles kept and the volume filled at ``maxh`` (``"kept"``), and where
     the smoothing made the surface touch itself, the same with the ``unsmoothed`` surface
-    (the clipped cells' boundary: ``"unsmoothed"``).  ValueError when that fails too, or at
-    once when one try takes longer than ``timeout`` s."""
+    (the clipped cells' boundary: ``"unsmoothed"``).  A try that takes longer than
+    ``timeout`` s is stopped; after an STL try stopped so, the surface is filled at once (a
+    finer size would take longer still).  ValueError when every try fails."""
     with tempfile.TemporaryDirectory() as tmp:
         stl, vol = Path(tmp) / "part.stl", Path(tmp) / "part.vol"
         surf = surface.copy()
@@ -143,6 +152,8 @@ def _netgen_mesh(surface, maxh: float, timeout: float, unsmoothed=None):
             if not isinstance(why, str):
                 return why, h, "remeshed"
             tried.append(f"{h:.3g}: {why}")
+            if why.startswith(TOOK_LONGER):
+                break
         for how, surf in (("kept", surface), ("unsmoothed", unsmoothed)):
             if surf is None:
                 continue
@@ -159,7 +170,8 @@ def _netgen_mesh(surface, maxh: float, timeout: float, unsmoothed=None):
 
 def _mesh_child(kind: str, source: Path, maxh: float, vol: Path, timeout: float):
     """One try of the child-process mesher (``kind`` ``stl`` or ``fill``, :data:`_MESHER`):
-    the Netgen mesh, or why it failed (a string); ValueError after ``timeout`` s."""
+    the Netgen mesh, or why it failed (a string, :data:`TOOK_LONGER` ... after ``timeout``
+    s)."""
     from netgen.meshing import Mesh as NGMesh
 
     try:
@@ -167,8 +179,7 @@ def _mesh_child(kind: str, source: Path, maxh: float, vol: Path, timeout: float)
                                repr(float(maxh)), str(vol)], capture_output=True,
                               timeout=timeout)
     except subprocess.TimeoutExpired:
-        raise ValueError(f"Netgen could not mesh the part at maxh {maxh:g} within "
-                         f"{timeout:g} s") from None
+        return f"{TOOK_LONGER} {timeout:g} s"
     if proc.returncode != 0 or not vol.is_file():
         return ("no tetrahedra" if proc.returncode == 3 else
                 f"its mesher stopped with exit code {proc.returncode}")
@@ -189,9 +200,9 @@ def _face_keys(cells, n: int) -> np.ndarray:
     return ((f[..., 0] * n + f[..., 1]) * n + f[..., 2]).ravel()
 
 
-def _clamped_components(tets, clamp_tris, n: int) -> np.ndarray:
+def _clamped_components(tets, clamp_tris, n: int, pinned=()) -> np.ndarray:
     """Mask of the tetrahedra in a face-connected component that holds one of the boundary
-    triangles ``clamp_tris`` (``n`` points)."""
+    triangles ``clamp_tris`` or one of the point ids ``pinned`` (``n`` points)."""
     keys = _face_keys(tets, n)
     owner = np.repeat(np.arange(len(tets)), 4)
     order = np.argsort(keys, kind="stable")
@@ -201,7 +212,22 @@ def _clamped_components(tets, clamp_tris, n: int) -> np.ndarray:
                           shape=(len(tets), len(tets)))
     _, comp = connected_components(g, directed=False)
     at = np.searchsorted(k, _face_keys(clamp_tris, n))
-    return np.isin(comp, comp[o[at[at < len(k)]]])
+    held = comp[o[at[at < len(k)]]]
+    pins = np.isin(tets, np.asarray(pinned, dtype=np.int64)).any(axis=1)
+    return np.isin(comp, np.concatenate([held, comp[pins]]))
+
+
+def _pins(pts, source, clamp, reach: float) -> dict:
+    """The clamped named points of ``source`` the part reaches: name -> ids of the nearest
+    points of ``pts`` within ``reach`` (each once)."""
+    out, tree = {}, cKDTree(pts)
+    for name, points in point_sets(source).items():
+        if name in clamp:
+            d, near = tree.query(points)
+            ids = np.unique(near[d <= reach])
+            if ids.size:
+                out[name] = ids
+    return out
 
 
 def _face_names(pts, tris, tets, source, h_source, *, exclude, wet_boundaries, pressure,
@@ -260,10 +286,13 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
                               wet_boundaries=wet_boundaries, pressure=pressure, p_in=p_in,
                               wet_fraction=wet_fraction, probe=probe)
     # pieces joined to the clamp through faces only (a piece hanging on a vertex or an edge
-    # of another is a mechanism): the tetrahedra's face-connected components
-    keep_tet = _clamped_components(tets, tris[np.isin(label, list(clamp))], len(pts))
+    # of another is a mechanism), or pinned at a clamped point: the tetrahedra's
+    # face-connected components
+    pins = _pins(pts, source, clamp, PIN_REACH * h_source)
+    keep_tet = _clamped_components(tets, tris[np.isin(label, list(clamp))], len(pts),
+                                   np.concatenate([np.zeros(0, int), *pins.values()]))
     if not keep_tet.any():
-        raise ValueError(f"no face of the remeshed part lies on the clamp "
+        raise ValueError(f"no face or point of the remeshed part lies on the clamp "
                          f"({', '.join(clamp)})")
     used = np.isin(_face_keys(tris, len(pts)), _face_keys(tets[keep_tet], len(pts)))
     dropped = int(np.count_nonzero(~keep_tet))
@@ -271,6 +300,7 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
     ids, inverse = np.unique(tets, return_inverse=True)
     pts, tets = pts[ids], inverse.reshape(tets.shape)
     tris = np.searchsorted(ids, tris)
+    pins = {name: np.searchsorted(ids, k[np.isin(k, ids)]) for name, k in pins.items()}
     # the materials: one, or each tetrahedron's by stiff_at at its centroid
     region = np.zeros(len(tets), dtype=int)
     mats = ("solid",)
@@ -300,12 +330,19 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
             new.Add(FaceDescriptor(bc=fd, domin=int(k) + 1, domout=0, surfnr=fd))
             new.SetBCName(fd - 1, name)
             new.AddElements(dim=2, index=fd, data=tris[sel & (side == k)], base=0)
-    # the source's named points, each on the nearest vertex of the part
+    # the source's named points: a pin where the part reaches it, any other (a port) on the
+    # nearest vertex of the part
     ports = {}
-    for name, point in named_points(source).items():
-        k = int(np.argmin(np.linalg.norm(pts - np.asarray(point), axis=1)))
-        new.Add(Element0D(k + 1, index=new.AddRegion(name, dim=0)))
-        ports[name] = (tuple(map(float, point)), tuple(map(float, pts[k])))
+    for name, points in point_sets(source).items():
+        if name in clamp:
+            at = pins.get(name, np.zeros(0, int))
+        else:
+            at = np.array([np.argmin(np.linalg.norm(pts - points[0], axis=1))])
+        if at.size:
+            index = new.AddRegion(name, dim=0)
+            for k in at:
+                new.Add(Element0D(int(k) + 1, index=index))
+            ports[name] = (tuple(map(float, points[0])), tuple(map(float, pts[at[0]])))
     mesh = ngsolve.Mesh(new)
     return Remeshed3D(mesh, float(ngsolve.Integrate(1.0, mesh)), areas, dropped,
                       None if stiff_at is None else "element-wise", ports, meshed_at,

@@ -194,7 +194,8 @@ def test_a_3d_mesher_crash_is_retried_finer_then_with_the_surface_kept(monkeypat
     every size fails, the surface's own triangles are kept and the volume filled: the mesh
     then encloses exactly the surface's volume (a sphere's, whose flat triangles the STL
     mesher would have replaced) and its boundary is those triangles; when that fails too, the
-    unsmoothed surface's triangles."""
+    unsmoothed surface's triangles.  An STL try stopped at its time limit goes to the fill
+    at once."""
     import pyvista as pv
     from ngsolve import Integrate, Mesh
 
@@ -243,6 +244,17 @@ def test_a_3d_mesher_crash_is_retried_finer_then_with_the_surface_kept(monkeypat
                        r".*the kept surface filled, 0\.5: no tetrahedra"):
         remesh3d._netgen_mesh(cube, 0.5, 60.0)
 
+    # an STL try stopped at its time limit: no finer size (it would take longer), the fill
+    tries.clear()
+
+    def stl_hangs(kind, *args):
+        tries.append(kind)
+        return f"{remesh3d.TOOK_LONGER} 60 s" if kind == "stl" else real(kind, *args)
+
+    monkeypatch.setattr(remesh3d, "_mesh_child", stl_hangs)
+    gen, used, how = remesh3d._netgen_mesh(sphere, 0.4, 60.0)
+    assert tries == ["stl", "fill"] and how == "kept"
+
 
 def test_a_piece_pinned_at_a_clamped_point_is_kept():
     """topress is supported at its two bottom corners (named points, no clamped boundary): the
@@ -265,3 +277,36 @@ def test_a_piece_pinned_at_a_clamped_point_is_kept():
     inner = ((c[:, 1] < 4) & (np.abs(c[:, 0] - 15) < 10)).astype(float)
     with pytest.raises(ValueError, match="no solid touches the clamp support_left"):
         remesh(threshold(problem.mesh, inner), 1.0, clamp=clamp)
+
+
+def test_a_3d_piece_pinned_at_clamped_points_is_kept():
+    """topress-3d is held at the nodes of its top face's rim (points all named "rim", no
+    clamped face): a plate in the top layer reaches them and is the part, pinned at the rim
+    nodes it holds (each once); a block at the bottom floats and is dropped; a design
+    without solid near the rim has no part."""
+    from ngsolve import BBBND
+
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.parallel import element_centroids
+    from pacto_ng.post.part3d import part3d
+    from pacto_ng.post.remesh3d import remesh_part
+
+    case = get_case("topress-3d")
+    problem = build_problem(case, case.resolve(case.defaults.replace(nelx=6, nely=6, nelz=4)))
+    mesh, clamp = problem.mesh, problem.setup.supports.clamp
+    c = element_centroids(mesh)
+    plate = c[:, 2] > 3
+    block = (c[:, 2] < 1) & (np.abs(c[:, 0] - 3) < 1) & (np.abs(c[:, 1] - 3) < 1)
+    solid = part3d(mesh, (plate | block).astype(float), 0.5, clamp=clamp)
+    assert (solid.pieces, solid.dropped) == (2, 1)
+    assert solid.volume_kept == pytest.approx(36.0, rel=0.02)  # the plate, 6 x 6 x 1
+    rm = remesh_part(solid.surface, mesh, 1.0, problem.h, clamp=clamp)
+    assert rm.volume == pytest.approx(36.0, rel=0.02)
+    assert rm.dropped == 0  # part3d dropped the block already
+    pins = np.array([rm.mesh[el.vertices[0]].point for el in rm.mesh.Elements(BBBND)
+                     if el.mat == "rim"])
+    assert len(pins) == len({tuple(p) for p in pins}) > 4
+    on_rim = (np.isclose(pins[:, 0] % 6, 0, atol=0.5) | np.isclose(pins[:, 1] % 6, 0, atol=0.5))
+    assert on_rim.all() and np.all(pins[:, 2] > 3.5)
+    with pytest.raises(ValueError, match="no solid touches the clamp"):
+        part3d(mesh, block.astype(float), 0.5, clamp=clamp)
