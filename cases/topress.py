@@ -14,7 +14,10 @@ Read from TOPress.m (github.com/PrabhatIn/TOPress), not copied:
   constraint; the code's density filter is the usual normalised cone filter, as ours.
 
 The code's call line (volfrac, rmin, ηf, βf, ...) is not in the source file; the defaults
-here: volfrac 0.2, rmin 2.4, ηf 0.2, βf 10, p 3 (those of sorotop).
+here: volfrac 0.2, rmin 2.4, ηf 0.2, βf 10, p 3 (those of sorotop).  As sorotop, the
+optimisation adds the library's penalty and projection continuation (``--set beta=0 --set
+beta_max=0 --set penal_start=0``: without them, as the code; greyness 0.12 against 2e-5 with
+them, 2026-12-06).
 """
 from __future__ import annotations
 
@@ -40,9 +43,8 @@ CASE = Case(
     source="Kumar (2023), TOPress, Struct Multidisc Optim 66(4); github.com/PrabhatIn/TOPress",
     defaults=Parameters(model="linear", nelx=60, nely=40, maxh=1.0, unit_elements=True,
                         plane="stress", thickness=1.0, E1=1.0, E0=1e-6, nu=0.3, volfrac=0.2,
-                        filter="cone", filter_radius=2.4, penal=3.0, penal_start=0.0, beta=0.0,
-                        beta_max=0.0, load=1.0, Kv=1.0, Ks=1e-7, r=0.1, delta_s=2.0,
-                        eta_k=0.2, beta_k=10.0, eta_h=0.2, beta_h=10.0, iterations=200,
+                        filter="cone", filter_radius=2.4, load=1.0, Kv=1.0, Ks=1e-7,
+                        r=0.1, delta_s=2.0, eta_k=0.2, beta_k=10.0, eta_h=0.2, beta_h=10.0,
                         move=0.1, tol=0.01),
     geometry=_geometry,
     setup=_setup,
