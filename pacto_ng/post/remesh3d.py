@@ -230,6 +230,26 @@ def _pins(pts, source, clamp, reach: float) -> dict:
     return out
 
 
+def _add_points(new, pts, source, clamp, pins) -> dict:
+    """Add the source's named points to the Netgen mesh ``new`` (points ``pts``): a clamped
+    one where the part reaches it (``pins``, :func:`_pins`), any other (a port) on the
+    nearest vertex of the part; ``{name: (source position, vertex position)}``."""
+    from netgen.meshing import Element0D
+
+    ports = {}
+    for name, points in point_sets(source).items():
+        if name in clamp:
+            at = pins.get(name, np.zeros(0, int))
+        else:
+            at = np.array([np.argmin(np.linalg.norm(pts - points[0], axis=1))])
+        if at.size:
+            index = new.AddRegion(name, dim=0)
+            for k in at:
+                new.Add(Element0D(int(k) + 1, index=index))
+            ports[name] = (tuple(map(float, points[0])), tuple(map(float, pts[at[0]])))
+    return ports
+
+
 def _face_names(pts, tris, tets, source, h_source, *, exclude, wet_boundaries, pressure,
                 p_in, wet_fraction, probe):
     """``(label, area)`` of the boundary triangles ``tris`` of the tetrahedra ``tets``: each
@@ -276,7 +296,7 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
     (:func:`_netgen_mesh`).  ValueError when Netgen fails (or takes longer than ``timeout`` s) or
     no face lies on the clamp."""
     import ngsolve
-    from netgen.meshing import Element0D, FaceDescriptor, Mesh as NGMesh
+    from netgen.meshing import FaceDescriptor, Mesh as NGMesh
 
     gen, meshed_at, surface_kind = _netgen_mesh(surface, maxh, timeout, unsmoothed)
     pts = np.asarray(gen.Coordinates(), dtype=float)
@@ -330,19 +350,7 @@ def remesh_part(surface, source, maxh: float, h_source: float, *, clamp=(), excl
             new.Add(FaceDescriptor(bc=fd, domin=int(k) + 1, domout=0, surfnr=fd))
             new.SetBCName(fd - 1, name)
             new.AddElements(dim=2, index=fd, data=tris[sel & (side == k)], base=0)
-    # the source's named points: a pin where the part reaches it, any other (a port) on the
-    # nearest vertex of the part
-    ports = {}
-    for name, points in point_sets(source).items():
-        if name in clamp:
-            at = pins.get(name, np.zeros(0, int))
-        else:
-            at = np.array([np.argmin(np.linalg.norm(pts - points[0], axis=1))])
-        if at.size:
-            index = new.AddRegion(name, dim=0)
-            for k in at:
-                new.Add(Element0D(int(k) + 1, index=index))
-            ports[name] = (tuple(map(float, points[0])), tuple(map(float, pts[at[0]])))
+    ports = _add_points(new, pts, source, clamp, pins)
     mesh = ngsolve.Mesh(new)
     return Remeshed3D(mesh, float(ngsolve.Integrate(1.0, mesh)), areas, dropped,
                       None if stiff_at is None else "element-wise", ports, meshed_at,
