@@ -14,7 +14,8 @@ from .boundary import outer_boundary
 from .export import convert, deformation_fields, extrude_solid, write_stl, write_vtu
 from .grid import mesh_to_pyvista, nodal_density
 from .part import Part, make_part
-from .part_analysis import PartAnalysis, Sweep, SweepPoint
+from .part_analysis import PartAnalysis
+from .sweep_result import Sweep, SweepPoint
 from .pictures import plot_deformed, plot_sweeps
 from .remesh import Remeshed, remesh
 from .sampler import pressure_sampler

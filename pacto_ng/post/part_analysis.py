@@ -49,8 +49,8 @@ the displacement, not of the mixed formulation's modified gradient).
 """
 from __future__ import annotations
 
+import dataclasses
 import time
-from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -64,9 +64,11 @@ from ..physics.loads import Port, Spring
 from ..physics.materials import jacobian
 from ..physics.mechanics import Mechanics, Supports
 from ..physics.mixed import formulation_for, has_simplices
+from ..physics.path import PathFailure, PathPoint, load_maximum, trace
 from ..physics.walls import WallPressure, follower_terms, outward_normal
 from ..threads import compute
 from .materials import STIFF
+from .sweep_result import Sweep, SweepPoint
 
 KINDS = ("fixed", "follower", "darcy")
 #: self-contact: the penalty stiffness in units of E1 / h (an overlap of 5e-4 h at a contact
@@ -74,78 +76,12 @@ KINDS = ("fixed", "follower", "darcy")
 CONTACT_PENALTY, CONTACT_REACH = 1e3, 3.0
 #: ... and the most pairings per pressure (Newton with the pairs fixed between them)
 CONTACT_CYCLES = 20
-AXES = "xyz"
-
-
-@dataclass(frozen=True)
-class SweepPoint:
-    """The result at one pressure."""
-
-    pressure: float
-    delta: float  # output displacement Δ = Σ_k w_k d_k·u at the ports
-    max_u: float  # largest |u| over the mesh vertices
-    min_j: float  # smallest det(I + ∇u) over the quadrature points
-    iterations: int  # Newton iterations, summed over the load steps
-    converged: bool
-    load_reached: float = 1.0  # fraction of the pressure at which equilibrium was found
-    ports: tuple = ()  # d_k·u of every port, in the order of the analysis's ports
-    vectors: tuple = ()  # every port's displacement vector (its mean over an edge or a face)
-    contact_area: float | None = None  # with contact: where the walls touch (m², per wall)
-    contact_force: float | None = None  # ... and the normal force between them (N)
-
-
-@dataclass
-class Sweep:
-    """A sweep of one analysis kind; ``states[i]`` is the displacement vector at pressure i
-    (None where it did not converge); ``analysis`` has ``mech``, ``ports`` and
-    ``formulation``."""
-
-    kind: str
-    points: list
-    analysis: object
-    states: list = field(default_factory=list)
-
-    def _arr(self, name):
-        return np.array([getattr(p, name) for p in self.points])
-
-    @property
-    def pressures(self) -> np.ndarray:
-        return self._arr("pressure")
-
-    @property
-    def delta(self) -> np.ndarray:
-        return self._arr("delta")
-
-    @property
-    def converged(self) -> np.ndarray:
-        return self._arr("converged")
-
-    def displacement(self, i: int | None = None):
-        """The displacement GridFunction at sweep point ``i`` (default: the last converged)."""
-        from ngsolve import GridFunction
-
-        if i is None:
-            ok = [k for k, p in enumerate(self.points) if p.converged]
-            if not ok:
-                raise ValueError(f"the {self.kind} sweep has no converged point")
-            i = ok[-1]
-        if self.states[i] is None:
-            raise ValueError(f"the {self.kind} analysis did not converge at point {i}")
-        gf = GridFunction(self.analysis.mech.fes)
-        gf.vec.FV().NumPy()[:] = self.states[i]
-        return gf
-
-    def table(self) -> list[dict]:
-        """One dict per pressure (for CSV/JSON): every port's ``d·u`` as ``port_<region>`` and,
-        where recorded, its displacement vector as ``u_<region>_x``, ``_y`` (, ``_z``)."""
-        rows = []
-        for p in self.points:
-            row = {k: v for k, v in p.__dict__.items() if k not in ("ports", "vectors")}
-            row.update({f"port_{port.region}": v for port, v in zip(self.analysis.ports, p.ports)})
-            for port, vec in zip(self.analysis.ports, p.vectors):
-                row.update({f"u_{port.region}_{a}": float(c) for a, c in zip(AXES, vec)})
-            rows.append(dict(kind=self.kind, **row))
-        return rows
+#: past a pressure maximum: the path is followed in steps of this fraction of the output
+#: motion Newton reached, at most PEAK_STEPS of them (:meth:`PartAnalysis.sweep`)
+PEAK_STEP, PEAK_STEPS = 0.1, 30
+#: ... growing after easy steps to at most PEAK_GROWTH times the first; Newton's load ramp
+#: gives up once its increment falls below RAMP_FLOOR of the pressure (the path takes over)
+PEAK_GROWTH, RAMP_FLOOR = 2.0, 1.0 / 64
 
 
 def solid_fields(mesh) -> dict:
@@ -254,7 +190,7 @@ class PartAnalysis:
             springs=tuple(sp for p in self.ports for sp in p.springs()) + tuple(springs),
             thickness=self.thickness, guard=guard,
             linear=linear and kind != "follower" and not contact,
-            newton=params.newton.settings(), residual_terms=terms,
+            newton=self._newton(params, contact), residual_terms=terms,
             realcompile=params.realcompile, formulation=self.formulation)
         if contact and self.formulation != "displacement":
             raise ValueError(f"contact: the part is analysed with the {self.formulation} "
@@ -270,6 +206,26 @@ class PartAnalysis:
         self._qpoints = mesh.MapToAllElements(self.mech.rules, VOL)
         xyz = np.array([v.point for v in mesh.vertices], dtype=float)
         self._vertices = mesh(*(xyz[:, i].copy() for i in range(mesh.dim)))
+
+    @staticmethod
+    def _newton(params, contact):
+        """The run's Newton settings; without contact its load ramp gives up once the
+        increment falls below RAMP_FLOOR of the pressure (the path past a pressure maximum
+        takes over from the last equilibrium, :meth:`_past_peak`)."""
+        s = params.newton.settings()
+        if contact:
+            return s
+        return dataclasses.replace(s, min_increment=max(s.min_increment, RAMP_FLOOR))
+
+    @property
+    def output_form(self):
+        """Δ's functional as a vector on the block's space (``Δ = output_form · x``)."""
+        return self._forms[0]
+
+    def solid_values(self) -> tuple:
+        """The element fields of the part (all solid: :func:`solid_fields`), as the block's
+        ``forward`` takes them."""
+        return tuple(self._values.values())
 
     def energy_density(self, G):
         """The part's strain-energy density ``φ(G)`` per unit reference volume (its materials'
@@ -332,7 +288,7 @@ class PartAnalysis:
         try:
             # with contact: Newton with the pairs fixed, then paired anew, until they hold
             for _ in range(CONTACT_CYCLES if self.mech.contact is not None else 1):
-                self.mech.forward(*self._values.values())
+                self.mech.forward(*self.solid_values())
                 iterations += self.mech.result.iterations
                 if self.mech.contact is None or self.mech.contact_settled():
                     break
@@ -346,10 +302,13 @@ class PartAnalysis:
 
     def sweep(self, pressures, *, say: Callable[[str], None] | None = None) -> Sweep:
         """Solve at every pressure in turn, each from the last equilibrium; ``pressures`` in
-        increasing order of size.  After a failure the remaining pressures are recorded as not
-        converged without being attempted (a larger pressure starts from further away).
-        ``say(line)``, if given, gets one progress line per pressure: the pressure, Δ, Newton
-        iterations and seconds."""
+        increasing order of size.  Where Newton loses the equilibrium on its way to a pressure
+        (a chamber that balloons passes a pressure maximum), the path is followed on from the
+        last equilibrium with Δ prescribed until the pressure comes back up to it
+        (:meth:`_past_peak`; not with contact).  After a failure the remaining pressures are
+        recorded as not converged without being attempted (a larger pressure starts from
+        further away).  ``say(line)``, if given, gets one progress line per pressure: the
+        pressure, Δ, Newton iterations and seconds."""
         pressures = [float(P) for P in pressures]
         if np.any(np.diff(np.abs(pressures)) < 0):
             raise ValueError("pressures: give them in increasing order of size (each pressure "
@@ -361,6 +320,12 @@ class PartAnalysis:
                 t0 = time.perf_counter()
                 skipped = failed
                 pt = self._failed(P, 0, 0.0) if skipped else self.solve(P)
+                if not (pt.converged or skipped or self.mech.contact is not None):
+                    pt, peak = self._past_peak(pt, say)
+                    out.peak = peak or out.peak
+                    if peak and say is not None:
+                        say(f"  {self.kind} {self.model}: a pressure maximum "
+                            f"{peak['pressure']:.5g} at Δ = {peak['delta']:.5g} on the way")
                 failed = not pt.converged
                 out.points.append(pt)
                 out.states.append(self.mech.gfu.vec.FV().NumPy().copy() if not failed else None)
@@ -368,10 +333,41 @@ class PartAnalysis:
                     say(self._line(pt, time.perf_counter() - t0, skipped))
         return out
 
+    def _past_peak(self, failed: SweepPoint, say=None):
+        """``(point, peak)`` after Newton lost the equilibrium on its way to
+        ``failed.pressure``: the path from the last equilibrium it reached, followed with Δ
+        prescribed (:func:`~pacto_ng.physics.path.trace`, steps of PEAK_STEP of the Δ
+        reached) until the pressure is back up to the one asked, then Newton at that pressure
+        from there (``past_peak``); the pressure maximum passed on the way ({"pressure",
+        "delta"}, None if the pressure never fell); the failed point where the path does not
+        get there within PEAK_STEPS steps.  ``say(line)`` gets one line per point of the
+        path."""
+        mech, P = self.mech, abs(failed.pressure)
+        x, c = mech.gfx.vec, self.output_form
+        reached = c.InnerProduct(x)
+        if reached == 0.0:
+            return failed, None
+        try:
+            path = trace(mech, x, c, PEAK_STEP * reached, mech.settings,
+                         load=failed.load_reached * P, stop=lambda q: q.load >= P,
+                         max_points=PEAK_STEPS, max_step=PEAK_GROWTH * PEAK_STEP * reached,
+                         on_point=None if say is None else (
+                             lambda q: say(f"    on the path: Δ = {q.control:.5g} at P = "
+                                           f"{q.load:.5g}, {q.iterations} Newton iterations")))
+        except PathFailure as err:
+            path = err.points
+        peak = load_maximum([PathPoint(reached, failed.load_reached * P, 0, None)] + path)
+        if peak:
+            peak = {"pressure": float(np.sign(failed.pressure) * peak[1]), "delta": peak[0]}
+        if not path or path[-1].load < P:
+            return failed, peak
+        point = self.solve(failed.pressure)  # Newton at the pressure, from the path's state
+        return dataclasses.replace(point, past_peak=point.converged), peak
+
     def _line(self, pt: SweepPoint, seconds: float, skipped: bool) -> str:
         head = f"  {self.kind} {self.model} P = {pt.pressure:.4g}: "
         if pt.converged:
-            what = f"Δ = {pt.delta:.5g}"
+            what = f"Δ = {pt.delta:.5g}" + (" (past a pressure maximum)" if pt.past_peak else "")
             if pt.contact_area:
                 what += (f", walls in contact over {pt.contact_area:.3g} m² with "
                          f"{pt.contact_force:.3g} N")

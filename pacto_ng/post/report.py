@@ -78,6 +78,11 @@ DEFINITIONS = {
                  "boundary and the part's mesh under the same Darcy load; wall_pressure = "
                  "(kind - darcy), the pressure on the wetted walls instead of the Darcy body "
                  "force; they add up to total = (kind - expected)",
+    "pressure_maximum": "per kind, the largest pressure on the equilibrium path where Newton "
+                        "lost the equilibrium at a pressure of the sweep and the path, "
+                        "followed on with Delta prescribed, showed the pressure falling "
+                        "(a chamber that balloons), with Delta there; a point marked "
+                        "past_peak was reached along that path",
 }
 
 
@@ -122,7 +127,7 @@ def _point(pt, ports) -> dict:
             "vectors": {q.region: [num(c) for c in vec] for q, vec in zip(ports, pt.vectors)},
             "max_u": num(pt.max_u), "min_J": num(pt.min_j),
             "newton_iterations": int(pt.iterations), "converged": bool(pt.converged),
-            "load_reached": num(pt.load_reached),
+            "load_reached": num(pt.load_reached), "past_peak": bool(pt.past_peak),
             # --contact: where the walls touch (m²) and the force between them (N)
             "contact": None if pt.contact_area is None else
             {"area": num(pt.contact_area), "force": num(pt.contact_force)}}
@@ -161,6 +166,7 @@ def analysis_json(*, run: dict, settings: dict, part: dict, seal, materials, swe
             "gap_at_largest_pressure": _gaps(rows[-1], kinds) if expected else None,
             "gap_at_smallest_pressure": _gaps(rows[0], kinds) if expected else None,
             "gap_parts": gap_parts(rows[-1], kinds) if expected else None,
+            "pressure_maximum": {k: sweeps[k].peak for k in kinds},
             "deformed_state": deformed, "warnings": list(warnings), "wall_time_s": wall}
 
 

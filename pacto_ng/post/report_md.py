@@ -129,6 +129,14 @@ def _analyses_section(d) -> list[str]:
                  + f" | {fmt_value(r[ref]['max_u'])} | {fmt_value(r[ref]['min_J'])} | {its} |")
     L += ["", f"P in {d['run']['load_unit']}; max |u| and min J of the {ref} analysis; Newton "
               f"iterations {'/'.join(kinds)}; — : not converged.", ""]
+    for k, peak in (d.get("pressure_maximum") or {}).items():
+        if peak:
+            past = [f"{r['pressure']:.4g}" for r in d["pressures"] if r[k].get("past_peak")]
+            L += [f"**A pressure maximum** ({k}): {peak['pressure']:.5g} "
+                  f"{d['run']['load_unit']} at Δ = {peak['delta']:.5g} m; "
+                  + (f"reached past it: {', '.join(past)}." if past else
+                     "no equilibrium at the larger pressures asked.")
+                  + f"  {d['definitions']['pressure_maximum']}.", ""]
     regions = [q["region"] for q in s["output_ports"]]
     if len(regions) > 1:
         cols = [(k, r) for k in kinds for r in regions]

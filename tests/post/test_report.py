@@ -115,3 +115,25 @@ def test_warnings_name_what_the_figures_hide(chamber_remeshed, chamber_sweeps):
     along = Port("output", (vx, vy))  # along it: no warning (nor with a coarse design)
     assert not part_warnings(part, (along,), chamber_sweeps, "follower", h=0.1, unit="Pa")
     assert np.isfinite(chamber_sweeps["follower"].delta).all()
+
+
+def test_a_pressure_maximum_is_recorded_and_reported(chamber_remeshed, chamber_sweeps):
+    """A sweep that passed a pressure maximum (its ``peak``, a point reached past it): in
+    analysis.json's ``pressure_maximum`` and the point's ``past_peak``, and one line of
+    report.md with both; a sweep without one records None and says nothing."""
+    import dataclasses
+
+    follower = chamber_sweeps["follower"]
+    passed = dataclasses.replace(follower, peak={"pressure": 5e4, "delta": 2e-5},
+                                 points=follower.points[:2] + [dataclasses.replace(
+                                     follower.points[2], past_peak=True)])
+    data = json.loads(json.dumps(_data(chamber_remeshed, dict(chamber_sweeps,
+                                                              follower=passed))))
+    assert data["pressure_maximum"] == {"fixed": None,
+                                        "follower": {"pressure": 5e4, "delta": 2e-5}}
+    assert [r["follower"]["past_peak"] for r in data["pressures"]] == [False, False, True]
+    lines = [ln for ln in report_md(data).splitlines() if "pressure maximum" in ln]
+    assert len(lines) == 1 and "50000 Pa at Δ = 2e-05 m" in lines[0]
+    assert "reached past it: 1e+05." in lines[0]
+    plain = report_md(json.loads(json.dumps(_data(chamber_remeshed, chamber_sweeps))))
+    assert "A pressure maximum" not in plain
