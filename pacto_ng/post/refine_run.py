@@ -56,7 +56,6 @@ objective is neither a mechanism's nor an output's, are refused with one line.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
 
 import numpy as np
 
@@ -64,8 +63,11 @@ from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
 from ..shape import moved_field, refine, remesh_moved, volume
 from .finish import say
+from .part import part_ports, present_supports
+from .part_analysis import PartAnalysis
 from .refine_files import write_refinement, write_stl
 from .refine_setup import Job, Loading, part_size, refinement, shape_response
+from .report import num
 from .runs import load_run
 
 #: the refinement's steps when ``--steps`` is not given
@@ -115,7 +117,7 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
     settings = dict(threshold=part.threshold, threshold_note=part.choice.get("note"),
                     maxh=job.maxh, order=job.params.order, elements=part.mesh.ne,
                     part_size=part_size(part.mesh))
-    summary = _summary(run, result, bound, kind, load, settings)
+    summary = _summary(run, result, bound, (job.params.model, kind, load), settings)
     summary["ratio"] = _ratio(response, result) if job.hold_ratio else None
     summary["remeshes"] = remeshes
     start = float(np.max(_outside(np.array([v.point for v in part.mesh.vertices]),
@@ -127,8 +129,9 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
             "the part as made is not sealed (" + part.seal.message() + "): the refinement "
             "keeps its topology, so the refined part leaks too")
     checked, summary["check"] = _check(job, (space, response), result.delta, quiet)
-    summary["sweep"] = (_sweep(job, checked, pressures, quiet)
-                        if pressures and checked is not None else [])
+    summary["sweep"], summary["pressure_maximum"] = (
+        _sweep(job, checked, pressures, quiet) if pressures and checked is not None
+        else ([], None))
     for line in summary["warnings"]:
         say(quiet, f"  warning: {line}")
     summary["wall_time_s"] = time.perf_counter() - t0
@@ -260,27 +263,21 @@ def _check(job: Job, refined, delta: float, quiet: bool):
     return (mesh, response), entry
 
 
-def _sweep(job: Job, checked, pressures, quiet: bool) -> list[dict]:
-    """The refined part (``checked``: its independent remesh and the check's response there)
-    analysed at each of ``pressures`` with the refinement's model and load type, in
-    increasing order, each from the last equilibrium known (the last pressure's, else the
-    check's) and Newton's load ramp from zero should that fail:
-    ``[{"pressure", "converged", "delta", "newton_iterations"}]``, one line each."""
-    mesh, known = checked
-    out = []
-    for p in sorted(pressures):
-        response, _ = shape_response(mesh, replace(job, load=float(p)))
-        if known is not None:
-            response.start_from(known.u)
-        try:
-            delta, ok, known = response.solve(), True, response
-        except NewtonFailure:
-            delta, ok = None, False
-        out.append({"pressure": float(p), "converged": ok, "delta": delta,
-                    "newton_iterations": response.result.iterations})
-        say(quiet, f"  the refined part at {p:g}: " + (f"Δ {delta:.6g} m" if ok else
-                                                        "no equilibrium"))
-    return out
+def _sweep(job: Job, checked, pressures, quiet: bool) -> tuple[list[dict], dict | None]:
+    """The refined part (``checked``: its independent remesh) analysed as ``pacto analyse``
+    analyses a part (:class:`~.part_analysis.PartAnalysis`, the refinement's model and load
+    type) at each of ``pressures`` in increasing order, loaded from zero and each from the
+    last equilibrium, past a pressure maximum where there is one: ``([{"pressure",
+    "converged", "delta", "newton_iterations", "past_peak"}], the pressure maximum or
+    None)``, one line each."""
+    mesh = checked[0]
+    ana = PartAnalysis(mesh, job.kind, params=job.params,
+                       supports=present_supports(job.setup.supports, mesh),
+                       ports=part_ports(job.setup))
+    sweep = ana.sweep(sorted(pressures), say=None if quiet else (lambda line: say(False, line)))
+    return [{"pressure": p.pressure, "converged": bool(p.converged), "delta": num(p.delta),
+             "newton_iterations": p.iterations, "past_peak": p.past_peak}
+            for p in sweep.points], sweep.peak
 
 
 def _remeshed(space, maxh: float):
@@ -316,8 +313,9 @@ def _leaves(space, domain, start: float) -> list[str]:
             f"({where}) m)"]
 
 
-def _summary(run, result, bound: float, kind: str, load: float, settings: dict) -> dict:
-    """summary.json's content."""
+def _summary(run, result, bound: float, loading: tuple, settings: dict) -> dict:
+    """summary.json's content; ``loading``: the refinement's (model, load type, load)."""
+    model, kind, load = loading
     first = result.history[0]
     d0, d1 = float(first["delta"]), float(result.delta)
     return {"run": str(run.path), "case": run.case.name, "status": result.status,
@@ -326,6 +324,6 @@ def _summary(run, result, bound: float, kind: str, load: float, settings: dict) 
             "volume_bound": bound, "volume_vs_bound": result.volume / bound - 1.0,
             "lowest_det": float(min(h["det"] for h in result.history)),
             "steps": int(result.history[-1]["step"]), "multipliers": result.multipliers,
-            "model": run.params.model, "load_type": kind, "load": load,
+            "model": model, "load_type": kind, "load": load,
             "load_unit": run.case.load_unit, "units": {"delta": "m", "volume": "m³"},
             "part": settings}

@@ -100,7 +100,7 @@ def test_the_refined_part_is_checked_on_an_independent_remesh(refined):
 
 def test_the_refined_part_is_swept_over_the_pressures_asked(refined):
     """``--pressures 5e4,1e5``: the refined part analysed afresh at each pressure on its
-    independent remesh; at the run's load (1e5 Pa) that is the check's own analysis (the
+    independent remesh, as ``pacto analyse`` analyses a part; at the run's load (1e5 Pa) that is the check's own analysis (the
     same Δ), and the run's model is linear with a fixed pressure, so Δ is proportional to
     the pressure (half at 5e4 Pa)."""
     run, _, lines = refined
@@ -109,7 +109,7 @@ def test_the_refined_part_is_swept_over_the_pressures_asked(refined):
     assert sorted(sweep) == [5e4, 1e5] and all(e["converged"] for e in sweep.values())
     assert sweep[1e5]["delta"] == pytest.approx(s["check"]["delta"], rel=1e-10)
     assert sweep[5e4]["delta"] == pytest.approx(0.5 * sweep[1e5]["delta"], rel=1e-9)
-    assert sum(line.strip().startswith("the refined part at ") for line in lines) == 2
+    assert sum(line.strip().startswith("fixed linear P = ") for line in lines) == 2
 
 
 def test_the_refined_stl_is_the_whole_part_closed_in_mm(refined):
@@ -270,3 +270,17 @@ def test_resume_with_refine_ends_with_the_refined_part(solid_member, tmp_path, c
     assert s["gap"] == pytest.approx((s["delta_after"] - s["design_delta"])
                                      / abs(s["design_delta"]), rel=1e-12)
     assert "the design promised" in lines[-1]
+
+
+def test_another_loading_is_the_one_reported(solid_member, tmp_path):
+    """``--model neohookean --load-type follower --load 5e4``: summary.json (whose loading
+    refined.png's title states) names the refinement's own loading, not the run's (linear,
+    fixed)."""
+    import shutil
+
+    run = tmp_path / "pn"
+    shutil.copytree(solid_member, run)
+    assert main(["refine", str(run), "--steps", "1", "--model", "neohookean",
+                 "--load-type", "follower", "--load", "5e4", "--quiet", "--overwrite"]) == 0
+    s = json.loads((run / "refine" / "summary.json").read_text())
+    assert (s["model"], s["load_type"], s["load"]) == ("neohookean", "follower", 5e4)
