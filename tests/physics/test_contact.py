@@ -1,4 +1,4 @@
-"""Frictionless self-contact in a part's analysis (pacto_ng/physics/contact.py), in 2D.
+"""Frictionless self-contact in a part's analysis (pacto_ng/physics/contact.py), in 2D and 3D.
 
 A block 1 x 1 m with a slot open at one end (0.02 m high, from x = 0.3 to the end), clamped
 on the side the slot does not reach, is squeezed by a pressure of 3 kPa on its top and bottom
@@ -72,45 +72,66 @@ def test_slot_walls_pass_through_each_other_without_contact_and_not_with_it(mode
 
 
 
-def test_two_blocks_pressed_together_against_a_spring_move_as_the_closed_form_says():
-    """Two unit blocks, one above the other with a gap g0 = 0.1 mm (plane strain, E = 1 MPa,
-    ν = 0.3, linear): the lower stands on its bottom, both are held in x on their left edges,
-    and the upper's top carries a pressure P = 1 kPa against a spring ks = 1 MN/m on its mean
-    displacement Δ.  Without contact the upper block passes through the lower: Δ = P / ks.
-    With contact a force F = P - ks Δ passes through both blocks in uniaxial stress, each
-    shortened by F (1 - ν²) / E, and the walls overlap by F / (2k): Δ = (a P + g0) / (1 + ks a)
-    with a = 2 (1 - ν²) / E + 1 / (2k).  The analysis reports the walls in contact over the
-    whole width, with the force F."""
-    from netgen.occ import Compound
+def two_blocks(dim: int, g0: float):
+    """Two unit squares (2D) or cubes (3D), one above the other in y with a gap ``g0``:
+    ``bottom`` the lower's bottom, ``lo_top`` and ``up_bottom`` the facing walls,
+    ``pressure`` the upper's top, ``lo_left``/``up_left`` their faces x = 0, and in 3D
+    ``lo_back``/``up_back`` their faces z = 0."""
+    from netgen.occ import Compound, Z
+
+    if dim == 2:
+        lo, up = MoveTo(0, 0).Rectangle(1, 1).Face(), MoveTo(0, 1 + g0).Rectangle(1, 1).Face()
+        walls = lambda body: body.edges  # noqa: E731
+    else:
+        lo, up = Box((0, 0, 0), (1, 1, 1)), Box((0, 1 + g0, 0), (1, 2 + g0, 1))
+        walls = lambda body: body.faces  # noqa: E731
+    for body, tag in ((lo, "lo"), (up, "up")):
+        walls(body).name = "free"
+        walls(body).Min(X).name = f"{tag}_left"
+        if dim == 3:
+            walls(body).Min(Z).name = f"{tag}_back"
+    walls(lo).Min(Y).name, walls(lo).Max(Y).name = "bottom", "lo_top"
+    walls(up).Max(Y).name, walls(up).Min(Y).name = "pressure", "up_bottom"
+    return Mesh(OCCGeometry(Compound([lo, up]), dim=dim).GenerateMesh(maxh=0.25 if dim == 2
+                                                                       else 0.5))
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_two_blocks_pressed_together_against_a_spring_move_as_the_closed_form_says(dim):
+    """Two unit blocks, one above the other with a gap g0 = 0.1 mm (E = 1 MPa, ν = 0.3,
+    linear; 2D in plane strain): the lower stands on its bottom, both are held in x on their
+    faces x = 0 (and in z on their faces z = 0), and the upper's top carries a pressure
+    P = 1 kPa against a spring ks = 1 MN/m on its mean displacement Δ.  Without contact the
+    upper block passes through the lower: Δ = P / ks.  With contact a force F = P - ks Δ
+    passes through both blocks in uniaxial stress, each shortened by F c / E (c = 1 - ν² in
+    plane strain, 1 in 3D, where the sides are free), and the walls overlap by F / (2k):
+    Δ = (a P + g0) / (1 + ks a) with a = 2 c / E + 1 / (2k).  The analysis reports the walls
+    in contact over the whole face, with the force F."""
     from ngsolve import Integrate
 
     g0, E, nu, P, ks = 1e-4, 1e6, 0.3, 1e3, 1e6
-    lo, up = MoveTo(0, 0).Rectangle(1, 1).Face(), MoveTo(0, 1 + g0).Rectangle(1, 1).Face()
-    for face, tag in ((lo, "lo"), (up, "up")):
-        face.edges.name = "free"
-        face.edges.Min(X).name = f"{tag}_left"
-        face.faces.name = "solid"
-    lo.edges.Min(Y).name, lo.edges.Max(Y).name = "bottom", "lo_top"
-    up.edges.Max(Y).name, up.edges.Min(Y).name = "pressure", "up_bottom"
-    mesh = Mesh(OCCGeometry(Compound([lo, up]), dim=2).GenerateMesh(maxh=0.25))
+    mesh = two_blocks(dim, g0)
     params = Parameters(model="linear", E1=E, E0=1.0, nu=nu, plane="strain", thickness=1.0,
                         order=2)
+    down = (0.0, -1.0, 0.0)[:dim]
+    held = dict(fix_y=("bottom",), fix_x=("lo_left", "up_left"))
+    if dim == 3:
+        held["fix_z"] = ("lo_back", "up_back")
     got, points = [], []
     for contact in ((), ("lo_top", "up_bottom")):
-        an = PartAnalysis(mesh, "fixed", params=params,
-                          supports=Supports(fix_y=("bottom",), fix_x=("lo_left", "up_left")),
-                          ports=Port("pressure", (0.0, -1.0), spring=ks), contact=contact)
+        an = PartAnalysis(mesh, "fixed", params=params, supports=Supports(**held),
+                          ports=Port("pressure", down, spring=ks), contact=contact)
         point = an.solve(P)
         assert point.converged
         got.append(point.delta)
         points.append(point)
-    k = 1e3 * E / (Integrate(1.0, mesh) / mesh.ne) ** 0.5
-    a = 2 * (1 - nu ** 2) / E + 1 / (2 * k)
+    k = 1e3 * E / (Integrate(1.0, mesh) / mesh.ne) ** (1.0 / dim)
+    a = 2 * (1 - nu ** 2 if dim == 2 else 1.0) / E + 1 / (2 * k)
     assert got[0] == pytest.approx(P / ks, rel=1e-12)
     assert got[1] == pytest.approx((a * P + g0) / (1 + ks * a), rel=1e-12)
-    force = P - ks * got[1]  # through the blocks, per unit thickness and width
+    force = P - ks * got[1]  # through the blocks, per unit area (2D: thickness and width)
     assert force > 0 and points[0].contact_area is None
-    # the contact's measures: the whole unit width, and the force the blocks carry
+    # the contact's measures: the whole unit face, and the force the blocks carry
     assert points[1].contact_area == pytest.approx(1.0, rel=1e-9)
     assert points[1].contact_force == pytest.approx(force, rel=1e-9)
 
