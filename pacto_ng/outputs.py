@@ -38,7 +38,35 @@ HISTORY_COLUMNS = ("iteration", "objective", "volume", "constraint", "change", "
                    "load", "newton", "load_steps", "design_cuts", "time")
 
 
+def run_summary(problem: Problem, history: list, result, wall: float) -> dict:
+    """The figures of summary.json that every run has, serial or on a distributed mesh
+    (:mod:`pacto_ng.parallel_outputs`; on a distributed mesh every rank computes them
+    together): the case, the parameters, the objective and its history, the volume
+    fraction, the greyness, how the run stopped, the wall time and the automatic choices."""
+    vals = problem.values
+    return {
+        "case": problem.case.name,
+        "model": problem.params.model,
+        "parameters": problem.params.to_dict(),
+        "load": problem.params.load,
+        "load_unit": problem.case.load_unit,
+        "iterations": len(history),
+        "objective": float(vals[problem.objective]) if problem.objective in vals else None,
+        "objective_name": problem.objective,
+        "objective_history": [h["objective"] for h in history],
+        "volume_fraction": problem.volume_fraction(),
+        "greyness": problem.greyness(),
+        "converged": result.converged,
+        "stopped": result.stopped,
+        "message": result.message,
+        "wall_time_s": wall,
+        "model_choice": problem.model_choice,
+        "load_ramp_choice": problem.load_ramp_choice,
+    }
+
+
 def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
+    """summary.json of a serial run: :func:`run_summary` and the figures of the analysis."""
     p = problem.params
     vals = problem.values
     mech_res = problem.mech.result
@@ -49,41 +77,25 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
     # an optimisation's Newton iterations per iteration; a single analysis (evaluate): its own
     newton_counts = [h["newton"] for h in history] if history else \
         ([int(mech_res.iterations)] if mech_res else [])
-    out = {
-        "case": problem.case.name,
-        "model": p.model,
-        "parameters": p.to_dict(),
-        "load": p.load,
-        "load_unit": problem.case.load_unit,
-        "iterations": len(history),
-        "objective": val(problem.objective),
-        "objective_name": problem.objective,
-        "objective_history": [h["objective"] for h in history],
-        "volume_fraction": problem.volume_fraction(),
-        "greyness": problem.greyness(),
+    out = run_summary(problem, history, result, wall)
+    out.update({
         "output_displacement": val("delta") if "delta" in vals else output_displacement(problem),
         "output_displacement_at": output_displacement_at(problem),
         "compliance": val("compliance") if "compliance" in vals else compliance(problem),
         "strain_energy": val("se") if "se" in vals else strain_energy(problem),
         "load_reached": (mech_res.load_reached * p.load) if mech_res else None,
         "load_factor_reached": mech_res.load_reached if mech_res else None,
-        "converged": result.converged,
-        "stopped": result.stopped,
-        "message": result.message,
         # the lowest objective of an iterate of the final problem, where it beats the reported
         # design's: {"iteration", "objective"} (null: the reported design is the best seen)
         "best_iterate": result.best,
         "newton_iterations": newton_counts,
         "newton_iterations_total": int(sum(newton_counts)),
-        "wall_time_s": wall,
         "mesh": {"elements": problem.mesh.ne, "h": problem.h, "order": p.order,
                  "displacement_dofs": problem.mech.fes.ndof,
                  "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely, "nelz": p.nelz,
                  "dim": problem.mesh.dim},
         "element_order": p.order,
         "formulation": problem.mech.formulation,
-        "model_choice": problem.model_choice,
-        "load_ramp_choice": problem.load_ramp_choice,
         "darcy_solve": problem.pressure_block is not None,
         "symmetric_half_domain": any(n == "symmetry" for n in problem.mesh.GetBoundaries()),
         # the mechanics adjoints of this process: solved, and skipped because the adjoint was
@@ -91,7 +103,7 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "adjoint_solves": {"solved": problem.mech.adjoint_solves,
                            "skipped_self_adjoint": problem.mech.adjoint_solves_skipped},
         "solvers": solvers_used(problem),
-    }
+    })
     out.update(lowest_jacobian(problem))
     out.update(pressure_and_material_summary(problem))
     return out

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .files import atomic_path, atomic_write_text
-from .outputs import write_history
+from .outputs import run_summary, write_history
 
 
 def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list, result,
@@ -23,29 +23,11 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
     """The summary of the run (every rank: collective), and on the rank that ``write``s its
     files; returns the summary."""
     numbering, vals = problem.numbering, problem.values
-    summ = {
-        "case": problem.case.name,
-        "model": problem.params.model,
-        "parameters": problem.params.to_dict(),
-        "load": problem.params.load,
-        "load_unit": problem.case.load_unit,
-        "iterations": len(history),
-        "objective": float(vals[problem.objective]),
-        "objective_name": problem.objective,
-        "objective_history": [h["objective"] for h in history],
-        "volume_fraction": problem.volume_fraction(),
-        "greyness": problem.greyness(),
-        "converged": bool(result.converged),
-        "stopped": result.stopped,
-        "message": result.message,
-        "wall_time_s": wall,
-        "model_choice": problem.model_choice,
-        "load_ramp_choice": problem.load_ramp_choice,
-        "mpi": {"ranks": numbering.comm.size, "elements_per_rank": numbering.counts},
-        "mesh": {"elements": numbering.ne, "h": problem.h, "order": problem.params.order,
-                 "dim": problem.mesh.dim,
-                 "displacement_dofs": int(problem.mech.fes.ndofglobal)},
-    }
+    summ = run_summary(problem, history, result, wall)
+    summ["mpi"] = {"ranks": numbering.comm.size, "elements_per_rank": numbering.counts}
+    summ["mesh"] = {"elements": numbering.ne, "h": problem.h, "order": problem.params.order,
+                    "dim": problem.mesh.dim,
+                    "displacement_dofs": int(problem.mech.fes.ndofglobal)}
     rho = numbering.gather(np.asarray(vals.get("rho_bar", vals.get("rho_bar1")), dtype=float))
     xs = None
     if problem.n_design_fields == 1:
