@@ -208,6 +208,10 @@ def _refine_parser(sub):
                    "fixed or following the deformation (default: the run's load_type)")
     f.add_argument("--pressures", help="comma-separated inlet pressures at which the refined "
                    "part is analysed afterwards (summary.json 'sweep'), e.g. 1e5,3e5,1e6")
+    f.add_argument("--min-wall", type=float, help="2D: no wall of the refined part thinner "
+                   "than this (m); a step that would thin a wall below it is refused, so the "
+                   "refinement stops there (default: no floor; summary.json reports the "
+                   "thinnest wall either way)")
     f.add_argument("--check-gradients", action="store_true", help="instead of refining, "
                    "check the refinement's shape gradients (Δ, volume, and Δ/SE for a "
                    "mechanism) against central differences on the run's part; writes nothing; "

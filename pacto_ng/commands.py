@@ -41,7 +41,8 @@ def post_command(args) -> int:
                                           quiet=args.quiet, loading=loading)
         return refine_run(args.dir, steps=args.steps, quiet=args.quiet,
                           overwrite=args.overwrite, loading=loading,
-                          pressures=parse_pressures(args.pressures) if args.pressures else ())
+                          pressures=parse_pressures(args.pressures) if args.pressures else (),
+                          min_wall=args.min_wall)
     if args.command == "export":
         return export_run(args.dir, args.format, out=args.out, threshold_value=args.threshold,
                           maxh=args.maxh, quiet=args.quiet, threshold2=args.threshold2,

@@ -19,7 +19,7 @@ from .part3d import write_part_stl as write_surface_stl
 from .plots3d import plotter as offscreen_plotter
 
 #: the columns of history.csv
-COLUMNS = ("step", "mesh", "delta", "ratio", "volume", "det", "length", "merit")
+COLUMNS = ("step", "mesh", "delta", "ratio", "volume", "det", "length", "wall", "merit")
 #: a coordinate within this share of the part's size of zero is drawn as zero
 SNAP = 1e-9
 FILES = ("history.csv", "summary.json", "refined.vtu", "refined.png", "refined.stl")

@@ -9,8 +9,9 @@ springs), and its boundary is then moved to make the output displacement Δ larg
 adding material (:func:`~pacto_ng.shape.refine.refine`: the volume bounded by the part's own
 starting volume, which is what the design promised; every vertex kept in the bounding box of
 the run's design domain, so that the part is no larger than the domain the user gave; the
-elements kept from folding).  When the moved mesh cannot move further without folding, the
-part is remeshed as it stands (:func:`~pacto_ng.shape.remesh.remesh_moved`: the same
+elements kept from folding; in 2D, with ``--min-wall T``, no wall thinner than T,
+:class:`~pacto_ng.shape.thickness.WallThickness`).  When the moved mesh cannot move further
+without folding, the part is remeshed as it stands (:func:`~pacto_ng.shape.remesh.remesh_moved`: the same
 polygon, names and ports on fresh triangles) and the refinement goes on, at most
 :data:`REMESHES` times.  The clamp, the output ports and the case's symmetry lines do not
 move (a symmetry line slides along itself).  Body-fitted motion keeps the part's topology:
@@ -30,8 +31,9 @@ these files and nothing else):
                    with its Δ on the new mesh), delta (m), ratio (Δ/SE, 1/J: held for a
                    mechanism run; NaN otherwise), volume (m³: area times thickness),
                    det (the lowest Jacobian of the mesh's motion since the last remesh),
-                   length (the step, m), merit
-``summary.json``   status, Δ before and after, ``design_delta`` and ``gap`` (the refined Δ
+                   length (the step, m), wall (the thinnest wall, m: 2D), merit
+``summary.json``   status, Δ before and after, ``thinnest_wall`` (2D: as made, refined,
+                   the ``--min-wall`` floor), ``design_delta`` and ``gap`` (the refined Δ
                    against the design's, as the run's part line gives it; at the run's own
                    loading only), ``ratio`` (Δ/SE before and after, a mechanism run), volume
                    before, after and its bound, the lowest Jacobian, steps, remeshes,
@@ -98,28 +100,39 @@ OUTSIDE_TOL = 1e-9
 
 
 def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bool = False,
-               loading: Loading = Loading(), pressures=()) -> int:
+               loading: Loading = Loading(), pressures=(), min_wall: float | None = None
+               ) -> int:
     """``pacto refine RUN``: the run's part made, its shape refined for a larger Δ at no more
-    volume, the results written into ``RUN/refine/`` (the module docstring).  Returns the exit
-    code (0); bad input is an InputError (one line, exit 2)."""
+    volume (in 2D no wall thinner than ``min_wall`` m, if given), the results written into
+    ``RUN/refine/`` (the module docstring).  Returns the exit code (0); bad input is an
+    InputError (one line, exit 2)."""
     t0 = time.perf_counter()
     if steps < 0:
         raise InputError(f"--steps: must be 0 or more, got {steps}")
+    if min_wall is not None and not (np.isfinite(min_wall) and min_wall > 0):
+        raise InputError(f"--min-wall: must be a positive length in m, got {min_wall:g}")
     run = load_run(folder, "refine")
     out = run.path / "refine"
     if out.exists() and not overwrite:
         raise InputError(f"refine: '{out}' exists (an earlier refinement): add --overwrite to "
                          f"replace its files")
     part, job = refinement(run, quiet, f"{steps} steps", loading)
+    if min_wall is not None and part.mesh.dim != 2:
+        raise InputError("--min-wall: the walls' thickness is measured on 2D parts only")
     setup, kind, load = job.setup, job.kind, job.load
     bound = volume(part.mesh, job.thickness(part.mesh.dim))
-    space, response, result, remeshes = _refine_remeshing(job, part.mesh, bound, steps, quiet)
+    space, response, result, remeshes = _refine_remeshing(job, part.mesh, bound, steps, quiet,
+                                                          min_wall)
     settings = dict(threshold=part.threshold, threshold_note=part.choice.get("note"),
                     maxh=job.maxh, order=job.params.order, elements=part.mesh.ne,
                     part_size=part_size(part.mesh))
     summary = _summary(run, result, bound, (job.params.model, kind, load), settings)
     summary["ratio"] = _ratio(response, result) if job.hold_ratio else None
     summary["remeshes"] = remeshes
+    # the thinnest wall as made and refined (2D), and the floor asked
+    walls = [row.get("wall", np.nan) for row in result.history]
+    summary["thinnest_wall"] = ({"part_as_made": walls[0], "refined": walls[-1],
+                                 "floor": min_wall} if np.isfinite(walls[0]) else None)
     start = float(np.max(_outside(np.array([v.point for v in part.mesh.vertices]),
                                   job.domain)))
     summary["warnings"] = _leaves(space, job.domain, start)
@@ -175,7 +188,8 @@ def _check_text(check: dict) -> str:
             f"({100 * check['difference']:+.2f} %)")
 
 
-def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
+def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool,
+                      min_wall: float | None = None):
     """``(ShapeSpace, PartResponse, RefineResult, remeshes)``: the refinement of the part on
     ``mesh``; when the mesh would fold (status ``mesh_quality``) the moved part is remeshed
     (:func:`~pacto_ng.shape.remesh.remesh_moved`, at the part's ``maxh``) and the refinement
@@ -198,7 +212,7 @@ def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool):
                             step=STEP_SHARE * job.maxh, penalty=penalty,
                             alpha=1.0 / part_size(mesh) ** 2, bounds=job.domain, scale=scale,
                             multipliers=multipliers, quality_step=QUALITY_STEP * job.maxh,
-                            ratio_min=floor, say=report)
+                            ratio_min=floor, min_wall=min_wall, say=report)
         except NewtonFailure as err:
             if previous is None:
                 raise InputError(f"refine: the part has no equilibrium at the run's load on "

@@ -37,7 +37,8 @@ too dear):
    decrease), else ``s`` is halved (a trial whose Newton solve fails is rejected too, and,
    in 2D, one where two walls cross each other across a void: no element folds there, but
    the walls of a chamber or a slot have no element between them,
-   :func:`~pacto_ng.shape.remesh.crossing_walls`); below
+   :func:`~pacto_ng.shape.remesh.crossing_walls`, or, with ``min_wall``, one with a wall
+   thinner than that, :class:`~pacto_ng.shape.thickness.WallThickness`); below
    ``min_step`` the status is ``no_descent``.  The trial step of the next iteration is twice
    the accepted one, at most ``step_max``;
    with a box ``bounds`` (the run's design domain), every trial shape is projected into it
@@ -78,6 +79,7 @@ import numpy as np
 from ..physics.equilibrium import NewtonFailure
 from .deformation import ShapeSpace, volume, volume_integrals
 from .remesh import crossing_walls
+from .thickness import WallThickness
 from .gradient import PartResponse
 from .riesz import Quality, RieszMap, step_length
 
@@ -117,8 +119,13 @@ class _Loop:
 
     def __init__(self, response: PartResponse, space: ShapeSpace, riesz: RieszMap, *,
                  bounds=None, limits: dict, penalty, multipliers=None,
-                 scale: float | None = None, objective: str = "delta"):
+                 scale: float | None = None, objective: str = "delta",
+                 min_wall: float | None = None):
         self.response, self.space, self.riesz = response, space, riesz
+        # the walls' thickness (2D, an order-1 space: WallThickness) and its floor, if any
+        self.walls = (WallThickness(space.mesh) if space.vertex_dofs and space.mesh.dim == 2
+                      else None)
+        self.min_wall = min_wall or 0.0
         self.objective, self.limits = objective, dict(limits)
         self.box = None if bounds is None else _Box(space, bounds)
         self.quality = Quality(space)
@@ -212,6 +219,13 @@ class _Loop:
             return False
         return crossing_walls(self.space.mesh, self.space.points_at(values)) > 0
 
+    def thinnest(self, values) -> float:
+        """The thinnest wall of the shape ``values`` (NaN where not measured: 3D, or a
+        higher-order shape space)."""
+        if self.walls is None:
+            return math.nan
+        return float(self.walls(self.space.points_at(values)).min())
+
     def project(self, values) -> np.ndarray:
         """``values`` projected into the box (unchanged without one)."""
         return values if self.box is None else self.box.project(values)
@@ -231,7 +245,8 @@ class _Loop:
         while s >= min_step:
             trial = self.project(self.shape + s * theta)
             q = self.quality(trial)
-            if q >= q_min and not self.crossing(trial):
+            if (q >= q_min and not self.crossing(trial)
+                    and not (self.min_wall and self.thinnest(trial) < self.min_wall)):
                 trials += 1
                 try:
                     measures = self.evaluate(trial, ramp=False)
@@ -252,6 +267,7 @@ class _Loop:
         return {"step": step, "delta": self.measures["delta"], "value": self.value,
                 "ratio": self.measures.get("ratio", math.nan),
                 "volume": self.measures["volume"], "det": det, "length": length,
+                "wall": self.thinnest(self.shape),
                 "merit_before": merits[0], "merit": merits[1],
                 "multipliers": dict(self.multipliers), "penalties": dict(self.penalties),
                 "trials": trials}
@@ -263,8 +279,8 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
            penalty=1000.0, rtol: float = 1e-5, vtol: float = 1e-3,
            alpha: float = 1.0, kind: str = "elasticity", bounds=None, multipliers=None,
            scale: float | None = None, quality_step: float | None = None,
-           objective: str = "delta", say: Callable[[str], None] | None = None
-           ) -> RefineResult:
+           objective: str = "delta", min_wall: float | None = None,
+           say: Callable[[str], None] | None = None) -> RefineResult:
     """Maximise ``J`` (``objective``: ``"delta"`` for ``Δ``, ``"ratio"`` for ``Δ/SE``) with
     ``t|Ω| ≤ volume_max`` (and ``Δ/SE ≥ ratio_min``, if given) by descent on the shape (see
     the module).
@@ -283,7 +299,11 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
     ``quality_step`` (default ``min_step``) the step below which a step bounded by the
     mesh's quality stops the loop with the status ``mesh_quality`` (a caller that remeshes
     then gives a larger one: small steps that the quality bound allows make little
-    progress); ``say`` receives one line per step."""
+    progress); ``min_wall`` the thinnest wall a trial shape may have (2D, an order-1
+    ``space``: :class:`~pacto_ng.shape.thickness.WallThickness`; a trial with a thinner one
+    is rejected as one whose walls cross, so the loop stops at the floor where the descent
+    would thin a wall on it, it does not steer around it); ``say`` receives one line per
+    step."""
     if space.mesh is not response.mesh:
         raise ValueError("the shape space and the response must be on the same mesh")
     mus = penalty.values() if isinstance(penalty, dict) else (penalty,)
@@ -298,7 +318,7 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
                                               else {"ratio": float(ratio_min)})
     loop = _Loop(response, space, RieszMap(space, alpha=alpha, kind=kind), bounds=bounds,
                  limits=limits, penalty=penalty, multipliers=multipliers, scale=scale,
-                 objective=objective)
+                 objective=objective, min_wall=min_wall)
     start = loop.merit(loop.measures)
     history = [loop.record(0, 0.0, loop.quality(loop.shape), (start, start), 0)]
     status, length = "steps", float(step)
@@ -362,6 +382,13 @@ class _Box:
         mask = np.zeros(len(values), dtype=bool)
         mask[self.dofs[out]] = True
         return mask
+
+    def thinnest(self, values) -> float:
+        """The thinnest wall of the shape ``values`` (NaN where not measured: 3D, or a
+        higher-order shape space)."""
+        if self.walls is None:
+            return math.nan
+        return float(self.walls(self.space.points_at(values)).min())
 
     def project(self, values) -> np.ndarray:
         """The coefficients with every free vertex coordinate clipped into the box."""

@@ -284,3 +284,29 @@ def test_another_loading_is_the_one_reported(solid_member, tmp_path):
                  "--load-type", "follower", "--load", "5e4", "--quiet", "--overwrite"]) == 0
     s = json.loads((run / "refine" / "summary.json").read_text())
     assert (s["model"], s["load_type"], s["load"]) == ("neohookean", "follower", 5e4)
+
+
+def test_a_wall_floor_is_kept_and_the_thinnest_wall_reported(solid_member, tmp_path, capsys):
+    """``--min-wall``: summary.json reports the thinnest wall as made and refined and the
+    floor, the refined one not below it, and history.csv the thinnest wall of every shape; a
+    floor that is no length is refused in one line (exit 2)."""
+    import shutil
+
+    run = tmp_path / "pn"
+    shutil.copytree(solid_member, run)
+    assert main(["refine", str(run), "--steps", "3", "--quiet", "--overwrite"]) == 0
+    free = json.loads((run / "refine" / "summary.json").read_text())["thinnest_wall"]
+    assert free["floor"] is None and free["refined"] > 0 and free["part_as_made"] > 0
+    floor = 0.999 * free["part_as_made"]
+    assert main(["refine", str(run), "--steps", "3", "--quiet", "--overwrite",
+                 "--min-wall", str(floor)]) == 0
+    s = json.loads((run / "refine" / "summary.json").read_text())
+    assert s["thinnest_wall"]["floor"] == floor and s["thinnest_wall"]["refined"] >= floor
+    with open(run / "refine" / "history.csv") as f:
+        walls = [float(row["wall"]) for row in csv.DictReader(f)]
+    assert walls[0] == pytest.approx(s["thinnest_wall"]["part_as_made"], rel=1e-12)
+    assert min(walls) >= floor
+    capsys.readouterr()
+    assert main(["refine", str(run), "--min-wall", "-1", "--overwrite"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--min-wall" in err[0]
