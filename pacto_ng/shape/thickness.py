@@ -1,8 +1,8 @@
 """The thickness of a 2D part's walls, as the refinement keeps it from falling.
 
-For each boundary segment of the part, the ray from its midpoint along its inward normal
-runs through the solid until it leaves it through another boundary segment: the length of
-that ray is the wall's thickness there (a wall between a chamber and the outside, a hinge,
+For each segment of the part's outer boundary (not an interface between two materials), the
+ray from its midpoint along its inward normal runs through the solid until it leaves it
+through another boundary segment: the length of that ray is the wall's thickness there (a wall between a chamber and the outside, a hinge,
 the web between two chambers).  The inward side of each segment is taken once, on the
 reference mesh, from the element it bounds; a motion that folds no element keeps it (the
 refinement's step control).  The rays are cast against every segment at once (numpy: the
@@ -25,13 +25,17 @@ class WallThickness:
     def __init__(self, mesh):
         if mesh.dim != 2:
             raise ValueError("wall thickness: 2D meshes only")
-        self.ends = np.array([[v.nr for v in el.vertices] for el in mesh.Elements(BND)])
+        # the outer boundary's segments (an interface between two materials bounds two
+        # elements: inside the part) and the element each one bounds
+        outer = [(e, owners[0]) for e in mesh.Elements(BND)
+                 for owners in [mesh[NodeId(EDGE, e.edges[0].nr)].elements]
+                 if len(owners) == 1]
+        self.ends = np.array([[v.nr for v in e.vertices] for e, _ in outer])
         pts = np.array([v.point for v in mesh.vertices], dtype=float)
         a, b = pts[self.ends[:, 0]], pts[self.ends[:, 1]]
         # the inward side: towards the centroid of the element each segment bounds
         inside = np.array([np.mean([mesh[v].point for v in mesh[el].vertices], axis=0)
-                           for el in (mesh[NodeId(EDGE, e.edges[0].nr)].elements[0]
-                                      for e in mesh.Elements(BND))])
+                           for _, el in outer])
         left = np.c_[-(b - a)[:, 1], (b - a)[:, 0]]
         self.sign = np.where(np.einsum("ij,ij->i", left, inside - 0.5 * (a + b)) > 0,
                              1.0, -1.0)

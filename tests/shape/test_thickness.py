@@ -32,6 +32,22 @@ def test_the_walls_of_a_square_frame():
     assert walls(squeezed).min() == pytest.approx(0.15, rel=1e-12)
 
 
+def test_an_interface_between_two_materials_is_no_wall():
+    """A unit square of two materials (soft and stiff halves glued along x = 0.5, the
+    interface a named boundary inside): its walls are 1 thick, the interface does not halve
+    them."""
+    from netgen.occ import Glue
+
+    soft, stiff = MoveTo(0, 0).Rectangle(0.5, 1).Face(), MoveTo(0.5, 0).Rectangle(0.5, 1).Face()
+    soft.faces.name, stiff.faces.name = "soft", "stiff"
+    square = Glue([soft, stiff])
+    square.edges.name = "interface"
+    mesh = Mesh(OCCGeometry(square, dim=2).GenerateMesh(maxh=0.1))
+    assert "interface" in mesh.GetBoundaries()
+    walls = WallThickness(mesh)(np.array([v.point for v in mesh.vertices]))
+    assert walls.min() == pytest.approx(1.0, rel=1e-12)
+
+
 def test_the_refinement_keeps_its_walls_above_the_floor():
     """Five steps at 95 % of the volume: without a floor the plate's thinnest wall thins from
     0.141 to 0.094 (measured); with the floor at 0.12 no accepted shape has a thinner wall,
