@@ -141,7 +141,7 @@ def main(argv=None):
             rows.append(one(h))
             print(rows[-1], flush=True)
     body = ("## A pressure maximum followed: the inflated thick sphere\n\n"
-            "`python3 -m benchmarks limit_point` (" + mach + ").  " + __doc__.split("\n\n")[1]
+            "`python3 -m benchmarks limit_point` (" + mach + ").  " + __doc__.split("\n\n")[2]
             .replace("\n", " ") + "\n\n" + report(rows))
     replace_block(args.out, "benchmarks-limit-point", body)
     print(body)
