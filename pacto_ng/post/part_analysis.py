@@ -54,7 +54,7 @@ import time
 from typing import Callable
 
 import numpy as np
-from ngsolve import Integrate
+from ngsolve import VOL, Grad, InnerProduct, Integrate, LinearForm, Parameter
 
 from ..errors import InputError
 from ..physics.contact import SelfContact
@@ -82,6 +82,8 @@ PEAK_STEP, PEAK_STEPS = 0.1, 30
 #: ... growing after easy steps to at most PEAK_GROWTH times the first; Newton's load ramp
 #: gives up once its increment falls below RAMP_FLOOR of the pressure (the path takes over)
 PEAK_GROWTH, RAMP_FLOOR = 2.0, 1.0 / 64
+#: ... and a step of the path is halved down to this fraction of the first
+PATH_FLOOR = 1.0 / 1024
 
 
 def solid_fields(mesh) -> dict:
@@ -89,8 +91,6 @@ def solid_fields(mesh) -> dict:
     ``{"rho_bar": 1}``, or for a part with an element material named ``stiff``
     ``{"rho_bar1": 1, "rho_bar2": 1 on stiff, 0 on every other material}`` (see the module:
     E2 on ``stiff``, E1 elsewhere)."""
-    from ngsolve import VOL
-
     mats = [el.mat for el in mesh.Elements(VOL)]
     ones = np.ones(len(mats))
     if STIFF not in mats:
@@ -139,8 +139,6 @@ class PartAnalysis:
                  springs: tuple = (), order: int | None = None, boundary: str = "pressure",
                  body: Callable | None = None, body_pressure: float | None = None,
                  contact: tuple = (), contact_penalty: float = CONTACT_PENALTY):
-        from ngsolve import VOL, Grad, InnerProduct, Parameter
-
         if kind not in KINDS:
             raise ValueError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
         if kind == "darcy":
@@ -238,8 +236,6 @@ class PartAnalysis:
         :meth:`Port.functional`: Δ the sum of the ports' functionals, and per port and axis
         the functional of the unit direction (the value at a point, the mean over an edge or
         a face)."""
-        from ngsolve import LinearForm
-
         mech, mesh = self.mech, self.mesh
         v = mech.displacement(mech.space.TestFunction())
 
@@ -336,29 +332,41 @@ class PartAnalysis:
     def _past_peak(self, failed: SweepPoint, say=None):
         """``(point, peak)`` after Newton lost the equilibrium on its way to
         ``failed.pressure``: the path from the last equilibrium it reached, followed with Δ
-        prescribed (:func:`~pacto_ng.physics.path.trace`, steps of PEAK_STEP of the Δ
-        reached) until the pressure is back up to the one asked, then Newton at that pressure
-        from there (``past_peak``); the pressure maximum passed on the way ({"pressure",
-        "delta"}, None if the pressure never fell); the failed point where the path does not
-        get there within PEAK_STEPS steps.  ``say(line)`` gets one line per point of the
-        path."""
+        prescribed (:func:`~pacto_ng.physics.path.trace`, steps of PEAK_STEP of the Δ reached;
+        it stops where Δ turns back) until the pressure is back up to the one asked, then
+        Newton at that pressure from there (``past_peak``); the pressure maximum passed on the
+        way ({"pressure", "delta"}: Δ there, None if the pressure never fell); the failed
+        point where the path does not get there within PEAK_STEPS steps.  ``say(line)`` gets
+        one line per point of the path."""
         mech, P = self.mech, abs(failed.pressure)
         x, c = mech.gfx.vec, self.output_form
         reached = c.InnerProduct(x)
         if reached == 0.0:
             return failed, None
+        delta = self.output_form.FV().NumPy()
+
+        def line(q):
+            say(f"    on the path: Δ = {np.dot(delta, q.state):.5g} at P = {q.load:.5g}, "
+                f"{q.iterations} Newton iterations")
+
+        start = PathPoint(reached, failed.load_reached * P, 0, x.FV().NumPy().copy())
         try:
-            path = trace(mech, x, c, PEAK_STEP * reached, mech.settings,
-                         load=failed.load_reached * P, stop=lambda q: q.load >= P,
-                         max_points=PEAK_STEPS, max_step=PEAK_GROWTH * PEAK_STEP * reached,
-                         on_point=None if say is None else (
-                             lambda q: say(f"    on the path: Δ = {q.control:.5g} at P = "
-                                           f"{q.load:.5g}, {q.iterations} Newton iterations")))
+            path = trace(mech, x, c, PEAK_STEP * reached,
+                         dataclasses.replace(mech.settings, min_increment=PATH_FLOOR),
+                         load=start.load, stop=lambda q: q.load >= P, max_points=PEAK_STEPS,
+                         max_step=PEAK_GROWTH * PEAK_STEP * reached,
+                         on_point=None if say is None else line)
         except PathFailure as err:
             path = err.points
-        peak = load_maximum([PathPoint(reached, failed.load_reached * P, 0, None)] + path)
+            if say is not None:
+                say(f"    the path stops: {err}")
+        peak = load_maximum([start] + path)
         if peak:
-            peak = {"pressure": float(np.sign(failed.pressure) * peak[1]), "delta": peak[0]}
+            # Δ at the maximum: between the path's points on either side of it
+            points = sorted([start] + path, key=lambda q: q.control)
+            at = np.interp(peak[0], [q.control for q in points],
+                           [float(np.dot(delta, q.state)) for q in points])
+            peak = {"pressure": float(np.sign(failed.pressure) * peak[1]), "delta": float(at)}
         if not path or path[-1].load < P:
             return failed, peak
         point = self.solve(failed.pressure)  # Newton at the pressure, from the path's state
