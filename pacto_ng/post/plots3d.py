@@ -2,10 +2,11 @@
 
 design.png has two views side by side: the ρ̄ = 0.5 iso-surface of the design (the nodal,
 volume-weighted mean of the element densities) seen obliquely, and the cut at mid-depth (the
-plane z = the middle of the bounding box, through the chambers of a Box case) coloured by each
-element's ρ̄ (what the optimiser holds: a crisp design shows black and white; the cut lies
-:data:`CUT_SHIFT` of the part's size above mid-depth, inside one layer of a structured mesh
-whose element faces meet there).
+plane z = the middle of the bounding box, through the chambers of a Box case) coloured by ρ̄:
+on a structured mesh of hexahedra each element's own (its voxels, as the optimiser holds them;
+the cut lies :data:`CUT_SHIFT` of the part's size above mid-depth, inside one layer of
+elements whose faces meet there), on tetrahedra the nodal field (the elements cut by a plane
+are slivers of every shape: their own values read as noise).
 pressure.png is p / P_in on the same cut with the ρ̄ = 0.5 line drawn on it.  Every view has
 its axes in metres, as the 2D pictures (:func:`show_axes`: the bounding box's edges labelled
 x (m), y (m), z (m); a view from above labels x and y only), and a cut's title gives its
@@ -31,6 +32,8 @@ WINDOW = (1200, 500)  #: pixels of design.png (two views) and pressure.png
 ROUND_RTOL = 1e-9
 #: the cut's shift above mid-depth, as a fraction of the part's size
 CUT_SHIFT = 1e-6
+#: VTK's cell type of a hexahedron (a structured mesh's voxels)
+HEXAHEDRON = 12
 
 
 def plotter(shape=(1, 1), window=WINDOW):
@@ -140,6 +143,7 @@ def design_picture(path, mesh, rho, title: str = "") -> None:
     rho = np.clip(np.asarray(rho, dtype=float), 0.0, 1.0)
     grid.point_data["rho_nodal"] = nodal_field(grid, rho)
     grid.cell_data["rho_bar"] = rho
+    voxels = bool(np.all(np.asarray(grid.celltypes) == HEXAHEDRON))
     p = plotter((1, 2))
     p.subplot(0, 0)
     p.add_mesh(grid.outline(), color="grey")
@@ -154,7 +158,8 @@ def design_picture(path, mesh, rho, title: str = "") -> None:
     oblique(p)
     p.subplot(0, 1)
     p.add_mesh(grid.outline(), color="grey")
-    p.add_mesh(_cut(grid), scalars="rho_bar", preference="cell", cmap="gray_r", clim=(0, 1),
+    p.add_mesh(_cut(grid), scalars="rho_bar" if voxels else "rho_nodal",
+               preference="cell" if voxels else "point", cmap="gray_r", clim=(0, 1),
                scalar_bar_args=bar("rho_bar"))
     p.add_text(cut_title(grid), font_size=9)
     show_axes(p, grid.bounds, top=True)

@@ -74,7 +74,7 @@ def test_refine_writes_its_files_and_raises_the_output(refined):
         rows = list(csv.DictReader(f))
     assert [int(r["step"]) for r in rows] == [0, 1, 2, 3]
     assert set(rows[0]) == {"step", "mesh", "delta", "ratio", "volume", "det", "length",
-                            "merit"}
+                            "wall", "merit"}
     assert float(rows[-1]["delta"]) == pytest.approx(s["delta_after"], rel=1e-9)
     assert all(float(b["merit"]) < float(a["merit"]) for a, b in zip(rows, rows[1:]))
     # one progress line per step, and the last line
