@@ -41,6 +41,11 @@ class PathPoint:
     state: np.ndarray = field(repr=False)
 
 
+#: the control is held when ``|c·x - target| <= CONTROL_RTOL |target|`` (a full step meets
+#: it to round-off; a shortened one leaves the rest to the next iteration)
+CONTROL_RTOL = 1e-10
+
+
 class PathFailure(RuntimeError):
     """No equilibrium at a control value, even after cutting the control increment."""
 
@@ -59,7 +64,8 @@ def solve_controlled(problem, x, load: float, c, target: float, s: NewtonSetting
         ref = problem.load_norm(load) if load else problem.load_norm(1.0)
         if not np.isfinite(res):
             return False, load, it, "non-finite residual"
-        if res <= s.rtol * ref and abs(c.InnerProduct(x) - target) <= 1e-12 * max(1.0, abs(target)):
+        held = abs(c.InnerProduct(x) - target) <= CONTROL_RTOL * abs(target)
+        if res <= s.rtol * ref and held:
             return True, load, it, ""
         if it == s.max_iter:
             break

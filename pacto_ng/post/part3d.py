@@ -5,13 +5,14 @@ elements around a vertex, over the elements outside the passive void regions ``e
 clips the tetrahedra at the threshold with pyvista's ``clip_scalar`` (linear along the element
 edges: the cut is the ρ̄ = threshold iso-surface of the nodal field, and the clipped cells fill
 {ρ̄ >= threshold} exactly), keeps the connected pieces that touch a ``clamp`` face or point
-(the others would float), and takes the boundary of the kept cells: a closed surface by construction, made
-of the iso-surface and the pieces of the domain's faces (outer faces, void regions' walls) that
-the solid reaches.  That surface is smoothed by Taubin's λ|μ scheme (Taubin 1995: a Laplacian
-step λ > 0 followed by a step μ < -λ, a low-pass filter that shrinks far less than Laplacian
-smoothing), with the points on the domain's faces constrained: a point on one flat face slides
-in that face's plane, a point on a face's edge or corner stays put, so the part's faces on the
-domain's boundary stay exactly on it (the remesh names them by position, :mod:`.reanalysis3d`).
+(the others would float), and takes the boundary of the kept cells: a closed surface by
+construction, made of the iso-surface and the pieces of the domain's faces (outer faces, void
+regions' walls) that the solid reaches.  That surface is smoothed by Taubin's λ|μ scheme
+(Taubin 1995: a Laplacian step λ > 0 followed by a step μ < -λ, a low-pass filter that shrinks
+far less than Laplacian smoothing), with the points on the domain's faces constrained: a point
+on one flat face slides in that face's plane, a point on a face's edge or corner stays put, so
+the part's faces on the domain's boundary stay exactly on it (the remesh names them by
+position, :mod:`.reanalysis3d`).
 
 Smoothing shrinks a surface a little; :func:`keep_volume` then moves the free points along
 their normals by one common offset until the surface holds the clipped solid's volume again.

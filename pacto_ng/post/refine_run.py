@@ -3,20 +3,20 @@
 What it does for a user: the run's part is made exactly as ``pacto analyse RUN`` makes it
 (:func:`~.part.make_part` at threshold 0.5, lowered until the part reaches every output; half
 the design's element size; displacement order 2), loaded as the run's own part is (the run's
-model, the wall pressure at the load the run reached on the wetted walls ``pressure``, fixed
-or following the deformation as the run's ``load_type``, the run's output ports and their
+model, the wall pressure at the load the run reached on the wetted walls ``pressure``, fixed or
+following the deformation as the run's ``load_type``, the run's output ports and their
 springs), and its boundary is then moved to make the output displacement Δ larger without
 adding material (:func:`~pacto_ng.shape.refine.refine`: the volume bounded by the part's own
 starting volume, which is what the design promised; every vertex kept in the bounding box of
 the run's design domain, so that the part is no larger than the domain the user gave; the
 elements kept from folding; in 2D, with ``--min-wall T``, no wall thinner than T,
-:class:`~pacto_ng.shape.thickness.WallThickness`).  When the moved mesh cannot move further
-without folding, the part is remeshed as it stands (:func:`~pacto_ng.shape.remesh.remesh_moved`: the same
-polygon, names and ports on fresh triangles) and the refinement goes on, at most
-:data:`REMESHES` times.  The clamp, the output ports and the case's symmetry lines do not
-move (a symmetry line slides along itself).  Body-fitted motion keeps the part's topology:
-no element folds and a remesh keeps the polygon, so a chamber sealed in the part as made
-stays sealed.
+:class:`~pacto_ng.shape.thickness.WallThickness`). When the moved mesh cannot move further
+without folding, the part is remeshed as it stands
+(:func:`~pacto_ng.shape.remesh.remesh_moved`: the same polygon, names and ports on fresh
+triangles) and the refinement goes on, at most :data:`REMESHES` times.  The clamp, the output
+ports and the case's symmetry lines do not move (a symmetry line slides along itself).
+Body-fitted motion keeps the part's topology: no element folds and a remesh keeps the polygon,
+so a chamber sealed in the part as made stays sealed.
 
 The refined part is then checked: meshed again independently (finer, :data:`CHECK_MAXH`
 times the part's element size) and analysed afresh; its Δ there is reported beside the

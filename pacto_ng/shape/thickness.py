@@ -1,12 +1,13 @@
 """The thickness of a 2D part's walls, as the refinement keeps it from falling.
 
-For each segment of the part's outer boundary (not an interface between two materials), the
-ray from its midpoint along its inward normal runs through the solid until it leaves it
-through another boundary segment: the length of that ray is the wall's thickness there (a wall between a chamber and the outside, a hinge,
-the web between two chambers).  The inward side of each segment is taken once, on the
-reference mesh, from the element it bounds; a motion that folds no element keeps it (the
-refinement's step control).  The rays are cast against every segment at once (numpy: the
-intersection of two lines, ``m + t n = a + u (b - a)`` with ``0 <= u <= 1`` and ``t > 0``).
+For each segment of the part's outer boundary (not an interface between two materials), the ray
+from its midpoint along its inward normal runs through the solid until it leaves it through
+another boundary segment: the length of that ray is the wall's thickness there (a wall between
+a chamber and the outside, a hinge, the web between two chambers). The inward side of each
+segment is taken once, on the reference mesh, from the element it bounds; a motion that folds
+no element keeps it (the refinement's step control). The rays are cast against every segment at
+once (numpy: the intersection of two lines, ``m + t n = a + u (b - a)`` with ``0 <= u <= 1``
+and ``t > 0``).
 """
 from __future__ import annotations
 
