@@ -208,7 +208,7 @@ def _refine_parser(sub):
                    "fixed or following the deformation (default: the run's load_type)")
     f.add_argument("--pressures", help="comma-separated inlet pressures at which the refined "
                    "part is analysed afterwards (summary.json 'sweep'), e.g. 1e5,3e5,1e6")
-    f.add_argument("--min-wall", type=float, help="2D: no wall of the refined part thinner "
+    f.add_argument("--min-wall", type=float, help="no wall of the refined part thinner "
                    "than this (m); a step that would thin a wall below it is refused, so the "
                    "refinement stops there (default: no floor; summary.json reports the "
                    "thinnest wall either way)")

@@ -1,4 +1,4 @@
-"""``pacto refine RUN``: the part of a finished 2D pressure run, its shape refined.
+"""``pacto refine RUN``: the part of a finished pressure run (2D or 3D), its shape refined.
 
 What it does for a user: the run's part is made exactly as ``pacto analyse RUN`` makes it
 (:func:`~.part.make_part` at threshold 0.5, lowered until the part reaches every output; half
@@ -9,7 +9,7 @@ springs), and its boundary is then moved to make the output displacement Δ larg
 adding material (:func:`~pacto_ng.shape.refine.refine`: the volume bounded by the part's own
 starting volume, which is what the design promised; every vertex kept in the bounding box of
 the run's design domain, so that the part is no larger than the domain the user gave; the
-elements kept from folding; in 2D, with ``--min-wall T``, no wall thinner than T,
+elements kept from folding; with ``--min-wall T``, no wall thinner than T,
 :class:`~pacto_ng.shape.thickness.WallThickness`). When the moved mesh cannot move further
 without folding, the part is remeshed as it stands
 (:func:`~pacto_ng.shape.remesh.remesh_moved`: the same polygon, names and ports on fresh
@@ -31,9 +31,9 @@ these files and nothing else):
                    with its Δ on the new mesh), delta (m), ratio (Δ/SE, 1/J: held for a
                    mechanism run; NaN otherwise), volume (m³: area times thickness),
                    det (the lowest Jacobian of the mesh's motion since the last remesh),
-                   length (the step, m), wall (the thinnest wall, m: 2D), merit
-``summary.json``   status, Δ before and after, ``thinnest_wall`` (2D: as made, refined,
-                   the ``--min-wall`` floor), ``design_delta`` and ``gap`` (the refined Δ
+                   length (the step, m), wall (the thinnest wall, m), merit
+``summary.json``   status, Δ before and after, ``thinnest_wall`` (as made, refined, the
+                   ``--min-wall`` floor), ``design_delta`` and ``gap`` (the refined Δ
                    against the design's, as the run's part line gives it; at the run's own
                    loading only), ``ratio`` (Δ/SE before and after, a mechanism run), volume
                    before, after and its bound, the lowest Jacobian, steps, remeshes,
@@ -103,7 +103,7 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
                loading: Loading = Loading(), pressures=(), min_wall: float | None = None
                ) -> int:
     """``pacto refine RUN``: the run's part made, its shape refined for a larger Δ at no more
-    volume (in 2D no wall thinner than ``min_wall`` m, if given), the results written into
+    volume (no wall thinner than ``min_wall`` m, if given), the results written into
     ``RUN/refine/`` (the module docstring).  Returns the exit code (0); bad input is an
     InputError (one line, exit 2)."""
     t0 = time.perf_counter()
@@ -117,8 +117,6 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
         raise InputError(f"refine: '{out}' exists (an earlier refinement): add --overwrite to "
                          f"replace its files")
     part, job = refinement(run, quiet, f"{steps} steps", loading)
-    if min_wall is not None and part.mesh.dim != 2:
-        raise InputError("--min-wall: the walls' thickness is measured on 2D parts only")
     setup, kind, load = job.setup, job.kind, job.load
     bound = volume(part.mesh, job.thickness(part.mesh.dim))
     space, response, result, remeshes = _refine_remeshing(job, part.mesh, bound, steps, quiet,
@@ -129,7 +127,7 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
     summary = _summary(run, result, bound, (job.params.model, kind, load), settings)
     summary["ratio"] = _ratio(response, result) if job.hold_ratio else None
     summary["remeshes"] = remeshes
-    # the thinnest wall as made and refined (2D), and the floor asked
+    # the thinnest wall as made and refined, and the floor asked
     walls = [row.get("wall", np.nan) for row in result.history]
     summary["thinnest_wall"] = ({"part_as_made": walls[0], "refined": walls[-1],
                                  "floor": min_wall} if np.isfinite(walls[0]) else None)

@@ -122,9 +122,8 @@ class _Loop:
                  scale: float | None = None, objective: str = "delta",
                  min_wall: float | None = None):
         self.response, self.space, self.riesz = response, space, riesz
-        # the walls' thickness (2D, an order-1 space: WallThickness) and its floor, if any
-        self.walls = (WallThickness(space.mesh) if space.vertex_dofs and space.mesh.dim == 2
-                      else None)
+        # the walls' thickness (an order-1 space: WallThickness) and its floor, if any
+        self.walls = WallThickness(space.mesh) if space.vertex_dofs else None
         self.min_wall = min_wall or 0.0
         self.objective, self.limits = objective, dict(limits)
         self.box = None if bounds is None else _Box(space, bounds)
@@ -220,8 +219,8 @@ class _Loop:
         return crossing_walls(self.space.mesh, self.space.points_at(values)) > 0
 
     def thinnest(self, values) -> float:
-        """The thinnest wall of the shape ``values`` (NaN where not measured: 3D, or a
-        higher-order shape space)."""
+        """The thinnest wall of the shape ``values`` (NaN where not measured: a higher-order
+        shape space)."""
         if self.walls is None:
             return math.nan
         return float(self.walls(self.space.points_at(values)).min())
@@ -299,7 +298,7 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
     ``quality_step`` (default ``min_step``) the step below which a step bounded by the
     mesh's quality stops the loop with the status ``mesh_quality`` (a caller that remeshes
     then gives a larger one: small steps that the quality bound allows make little
-    progress); ``min_wall`` the thinnest wall a trial shape may have (2D, an order-1
+    progress); ``min_wall`` the thinnest wall a trial shape may have (an order-1
     ``space``: :class:`~pacto_ng.shape.thickness.WallThickness`; a trial with a thinner one
     is rejected as one whose walls cross, so the loop stops at the floor where the descent
     would thin a wall on it, it does not steer around it); ``say`` receives one line per
@@ -384,8 +383,8 @@ class _Box:
         return mask
 
     def thinnest(self, values) -> float:
-        """The thinnest wall of the shape ``values`` (NaN where not measured: 3D, or a
-        higher-order shape space)."""
+        """The thinnest wall of the shape ``values`` (NaN where not measured: a higher-order
+        shape space)."""
         if self.walls is None:
             return math.nan
         return float(self.walls(self.space.points_at(values)).min())

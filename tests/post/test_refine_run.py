@@ -188,6 +188,9 @@ def test_a_3d_part_is_refined_checked_and_written(tmp_path_factory, capsys):
     assert s["steps"] == 2 and s["delta_after"] > s["delta_before"] > 0.0
     assert abs(s["check"]["difference"]) <= 0.02
     assert s["warnings"] == []
+    # the thinnest wall, measured in 3D too: no thicker than the half's depth (15 mm)
+    walls = s["thinnest_wall"]
+    assert 0 < walls["part_as_made"] < 0.015 and 0 < walls["refined"] < 0.015
     assert list(meshio.read(folder / "refined.vtu").cells_dict) == ["tetra"]
     surface = pv.read(folder / "refined.stl")
     assert surface.n_open_edges == 0

@@ -1,5 +1,5 @@
-"""The thickness of a 2D part's walls (pacto_ng/shape/thickness.py) and the refinement that
-keeps it from falling (pacto_ng/shape/refine.py, ``min_wall``).
+"""The thickness of a part's walls in 2D and 3D (pacto_ng/shape/thickness.py) and the
+refinement that keeps it from falling (pacto_ng/shape/refine.py, ``min_wall``).
 
 Independent references: a unit square with a centred square hole 0.4 wide has walls 0.3
 thick on all four sides, and squeezing the square to half its height halves the walls across
@@ -30,6 +30,21 @@ def test_the_walls_of_a_square_frame():
     assert t.max() == pytest.approx(1.0, rel=1e-12)
     squeezed = points * np.array([1.0, 0.5])
     assert walls(squeezed).min() == pytest.approx(0.15, rel=1e-12)
+
+
+def test_the_walls_of_a_hollow_cube():
+    """A unit cube with a centred cubic hole 0.4 wide (tetrahedra): walls 0.3 thick on all six
+    sides; the cube squeezed to half its depth has walls 0.15 thick across z."""
+    from netgen.occ import Box
+
+    body = Box((0, 0, 0), (1, 1, 1)) - Box((0.3, 0.3, 0.3), (0.7, 0.7, 0.7))
+    mesh = Mesh(OCCGeometry(body).GenerateMesh(maxh=0.15))
+    walls = WallThickness(mesh)
+    points = np.array([v.point for v in mesh.vertices])
+    t = walls(points)
+    assert t.min() == pytest.approx(0.3, rel=1e-12) and np.all(np.isfinite(t))
+    assert t.max() == pytest.approx(1.0, rel=1e-12)
+    assert walls(points * np.array([1.0, 1.0, 0.5])).min() == pytest.approx(0.15, rel=1e-12)
 
 
 def test_an_interface_between_two_materials_is_no_wall():
