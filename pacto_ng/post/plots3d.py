@@ -142,8 +142,9 @@ def design_picture(path, mesh, rho, title: str = "") -> None:
     grid = mesh_to_pyvista(mesh)
     rho = np.clip(np.asarray(rho, dtype=float), 0.0, 1.0)
     grid.point_data["rho_nodal"] = nodal_field(grid, rho)
-    grid.cell_data["rho_bar"] = rho
     voxels = bool(np.all(np.asarray(grid.celltypes) == HEXAHEDRON))
+    if voxels:
+        grid.cell_data["rho_bar"] = rho
     p = plotter((1, 2))
     p.subplot(0, 0)
     p.add_mesh(grid.outline(), color="grey")

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.path import Path
 
-from .boundary import BoundaryLocator, outer_boundary
+from .boundary import BoundaryLocator, outer_boundary, segment_distance
 from .grid import (area_weighted_nodal, cell_areas, element_size, grid_and_densities,
                    included_elements)
 
@@ -97,7 +97,8 @@ class Component:
         """Whether ``point`` (x, y) lies in the piece: inside its outer loop and outside its
         holes, or within ``tol`` of one of its loops (a support point on its boundary)."""
         q = np.asarray(point, dtype=float)[:2]
-        if any(_distance_to_loop(loop.points, q) <= tol for loop in self.loops):
+        if any(segment_distance(q, lp.points, np.roll(lp.points, -1, axis=0)).min() <= tol
+               for lp in self.loops):
             return True
         return Path(self.outer.points).contains_point(q) and not any(
             Path(h.points).contains_point(q) for h in self.holes)
@@ -146,14 +147,6 @@ class Thresholded:
     @property
     def loops(self) -> tuple[Loop, ...]:
         return tuple(lp for c in self.components for lp in c.loops)
-
-
-def _distance_to_loop(P, q) -> float:
-    """The distance from ``q`` to the closed polygon ``P`` (n, 2)."""
-    a, d = P, np.roll(P, -1, axis=0) - P
-    t = np.clip(np.einsum("ij,ij->i", q - a, d) / np.maximum(np.einsum("ij,ij->i", d, d),
-                                                              1e-300), 0.0, 1.0)
-    return float(np.min(np.linalg.norm(a + t[:, None] * d - q, axis=1)))
 
 
 def _signed_area(p) -> float:
