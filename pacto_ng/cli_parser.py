@@ -72,8 +72,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "run: remove that run's files first (by default such a folder is refused)")
     r.add_argument("--no-part", action="store_true", help="end without making and analysing "
                    "the part (pacto analyse DIR makes it later)")
-    r.add_argument("--refine", action="store_true", help="after the part, refine its shape "
-                   "as 'pacto refine DIR' does (pressure cases; writes DIR/refine/)")
+    r.add_argument("--no-refine", action="store_true", help="end with the part as made: do "
+                   "not refine its shape (by default a pressure case's sealed part is refined "
+                   "as 'pacto refine DIR' does, into DIR/refine/)")
     e = sub.add_parser("evaluate", help="analyse a given design (no optimisation)")
     _case_options(e)
     e.add_argument("--density", required=True, help="element densities ρ̄ (.npy, .csv, .txt: "
@@ -95,8 +96,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="raise the run's iteration cap (e.g. a run that stopped at the cap)")
     s.add_argument("--quiet", action="store_true")
     s.add_argument("--no-part", action="store_true", help="as for run")
-    s.add_argument("--refine", action="store_true", help="as for run (replaces an earlier "
-                   "DIR/refine/)")
+    s.add_argument("--no-refine", action="store_true", help="as for run (without it, the "
+                   "refinement replaces an earlier DIR/refine/)")
     w = sub.add_parser("sweep", help="run a case over a grid of loads and models (Dask)")
     w.add_argument("case", help="a built-in case's name or a case file's path")
     w.add_argument("--loads", required=True, help="comma-separated loads, e.g. 1e5,1e6,1e7")
@@ -209,9 +210,9 @@ def _refine_parser(sub):
     f.add_argument("--pressures", help="comma-separated inlet pressures at which the refined "
                    "part is analysed afterwards (summary.json 'sweep'), e.g. 1e5,3e5,1e6")
     f.add_argument("--min-wall", type=float, help="no wall of the refined part thinner "
-                   "than this (m); a step that would thin a wall below it is refused, so the "
-                   "refinement stops there (default: no floor; summary.json reports the "
-                   "thinnest wall either way)")
+                   "than this (m): the descent is steered to keep the walls above it and a "
+                   "step below it is refused (default: the thinnest wall of the part as made; "
+                   "0: no floor; summary.json reports the thinnest wall either way)")
     f.add_argument("--check-gradients", action="store_true", help="instead of refining, "
                    "check the refinement's shape gradients (Δ, volume, and Δ/SE for a "
                    "mechanism) against central differences on the run's part; writes nothing; "

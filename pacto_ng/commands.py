@@ -24,7 +24,8 @@ from .post.compare import compare_runs
 from .post.part_stage import finish_run
 from .post.refine_check import check_refine_gradients
 from .post.refine_run import refine_run
-from .post.refine_setup import Loading
+from .post.refine_setup import Loading, refuses
+from .post.runs import load_run
 from .runner import optimise_case, resume_run
 from .sweep import run_sweep
 from .sweep_plan import parse_loads, parse_models
@@ -90,11 +91,16 @@ def resume_with_part(args) -> int:
 
 def _with_part(done, out, args) -> int:
     """A finished optimisation's part made, checked and analysed (unless ``--no-part``), and
-    with ``--refine`` its shape refined (a refinement that cannot be made is said in one
-    line; the run's result stands); the run's exit code."""
+    then, for a run the refinement applies to (:func:`~pacto_ng.post.refine_setup.refuses`:
+    a pressure case with an output port) whose part is sealed, and unless ``--no-refine``,
+    its shape refined as ``pacto refine DIR`` does (the refinement keeps the part's topology:
+    an open chamber stays open, and the part line has said so; a refinement that cannot be
+    made is said in one line; the run's result stands); the run's exit code."""
     if leads() and not args.no_part:
         summary = finish_run(out, done.problem, done.summary, quiet=args.quiet)
-        if args.refine and summary["part"].get("made"):
+        if (not args.no_refine and summary["part"].get("made")
+                and summary.get("sealed") is not False
+                and refuses(load_run(out, "refine")) is None):
             try:
                 refine_run(out, quiet=args.quiet, overwrite=args.command == "resume"
                            or args.overwrite)

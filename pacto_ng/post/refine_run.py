@@ -9,7 +9,8 @@ springs), and its boundary is then moved to make the output displacement Δ larg
 adding material (:func:`~pacto_ng.shape.refine.refine`: the volume bounded by the part's own
 starting volume, which is what the design promised; every vertex kept in the bounding box of
 the run's design domain, so that the part is no larger than the domain the user gave; the
-elements kept from folding; with ``--min-wall T``, no wall thinner than T,
+elements kept from folding; no wall thinner than the thinnest wall of the part as made, or
+than T with ``--min-wall T`` (0: no floor), the descent steered off the floor,
 :class:`~pacto_ng.shape.thickness.WallThickness`). When the moved mesh cannot move further
 without folding, the part is remeshed as it stands
 (:func:`~pacto_ng.shape.remesh.remesh_moved`: the same polygon, names and ports on fresh
@@ -33,7 +34,7 @@ these files and nothing else):
                    det (the lowest Jacobian of the mesh's motion since the last remesh),
                    length (the step, m), wall (the thinnest wall, m), merit
 ``summary.json``   status, Δ before and after, ``thinnest_wall`` (as made, refined, the
-                   ``--min-wall`` floor), ``design_delta`` and ``gap`` (the refined Δ
+                   floor kept and where it came from), ``design_delta`` and ``gap`` (the refined Δ
                    against the design's, as the run's part line gives it; at the run's own
                    loading only), ``ratio`` (Δ/SE before and after, a mechanism run), volume
                    before, after and its bound, the lowest Jacobian, steps, remeshes,
@@ -64,6 +65,7 @@ import numpy as np
 from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
 from ..shape import moved_field, refine, remesh_moved, volume
+from ..shape.thickness import WallThickness
 from .finish import say
 from .part import part_ports, present_supports
 from .part_analysis import PartAnalysis
@@ -103,14 +105,16 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
                loading: Loading = Loading(), pressures=(), min_wall: float | None = None
                ) -> int:
     """``pacto refine RUN``: the run's part made, its shape refined for a larger Δ at no more
-    volume (no wall thinner than ``min_wall`` m, if given), the results written into
+    volume (no wall thinner than ``min_wall`` m; by default, None, than the part's thinnest
+    wall as made; 0 for no floor), the results written into
     ``RUN/refine/`` (the module docstring).  Returns the exit code (0); bad input is an
     InputError (one line, exit 2)."""
     t0 = time.perf_counter()
     if steps < 0:
         raise InputError(f"--steps: must be 0 or more, got {steps}")
-    if min_wall is not None and not (np.isfinite(min_wall) and min_wall > 0):
-        raise InputError(f"--min-wall: must be a positive length in m, got {min_wall:g}")
+    if min_wall is not None and not (np.isfinite(min_wall) and min_wall >= 0):
+        raise InputError(f"--min-wall: must be a length in m (0 for no floor), got "
+                         f"{min_wall:g}")
     run = load_run(folder, "refine")
     out = run.path / "refine"
     if out.exists() and not overwrite:
@@ -119,18 +123,19 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
     part, job = refinement(run, quiet, f"{steps} steps", loading)
     setup, kind, load = job.setup, job.kind, job.load
     bound = volume(part.mesh, job.thickness(part.mesh.dim))
+    floor = wall_floor(part.mesh, min_wall)
     space, response, result, remeshes = _refine_remeshing(job, part.mesh, bound, steps, quiet,
-                                                          min_wall)
+                                                          floor["floor"])
     settings = dict(threshold=part.threshold, threshold_note=part.choice.get("note"),
                     maxh=job.maxh, order=job.params.order, elements=part.mesh.ne,
                     part_size=part_size(part.mesh))
     summary = _summary(run, result, bound, (job.params.model, kind, load), settings)
     summary["ratio"] = _ratio(response, result) if job.hold_ratio else None
     summary["remeshes"] = remeshes
-    # the thinnest wall as made and refined, and the floor asked
+    # the thinnest wall as made and refined, and the floor kept
     walls = [row.get("wall", np.nan) for row in result.history]
-    summary["thinnest_wall"] = ({"part_as_made": walls[0], "refined": walls[-1],
-                                 "floor": min_wall} if np.isfinite(walls[0]) else None)
+    summary["thinnest_wall"] = ({"part_as_made": walls[0], "refined": walls[-1]} | floor
+                                if np.isfinite(walls[0]) else None)
     start = float(np.max(_outside(np.array([v.point for v in part.mesh.vertices]),
                                   job.domain)))
     summary["warnings"] = _leaves(space, job.domain, start)
@@ -156,6 +161,18 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
                   run.case.name)
     print(_last_line(summary, result, bound, out), flush=True)
     return 0
+
+
+def wall_floor(mesh, min_wall: float | None) -> dict:
+    """The wall floor of a refinement and where it comes from: ``--min-wall`` (0: none), or
+    by default the thinnest wall of the part as made (the refinement makes no wall thinner
+    than the part already has); ``{"floor": m or None, "floor_from": text}``."""
+    if min_wall is not None:
+        return {"floor": min_wall or None,
+                "floor_from": "--min-wall" if min_wall else "none (--min-wall 0)"}
+    points = np.array([v.point for v in mesh.vertices], dtype=float)
+    return {"floor": float(WallThickness(mesh)(points).min()),
+            "floor_from": "the part as made (its thinnest wall)"}
 
 
 def _promise(summary: dict) -> float | None:

@@ -105,16 +105,28 @@ def _checked(run, kind: str | None):
     if kind is not None and kind not in ("fixed", "follower"):
         raise InputError(f"--load-type: must be fixed or follower, got '{kind}'")
     kind = kind or run.params.load_type
+    reason = refuses(run, setup, kind)
+    if reason:
+        raise InputError(f"refine: {reason}")
+    return setup, kind, run.params.objective or setup.objective
+
+
+def refuses(run, setup=None, kind: str | None = None) -> str | None:
+    """Why the refinement does not apply to the finished run ``run`` (its case's ``setup``,
+    the load type ``kind``; both the run's by default), or None when it does: it refines a
+    pressure case (fixed or follower) with an output port for Δ or Δ/SE."""
+    setup = setup or run.case.make_setup(run.params)
+    kind = kind or run.params.load_type
     if setup.pressure is None or kind not in ("fixed", "follower"):
-        raise InputError(f"refine: case '{run.case.name}' has no wall pressure to refine for "
-                         f"(the refinement applies to pressure cases, fixed or follower)")
+        return (f"case '{run.case.name}' has no wall pressure to refine for (the refinement "
+                f"applies to pressure cases, fixed or follower)")
     if not setup.ports:
-        raise InputError(f"refine: case '{run.case.name}' has no output port")
+        return f"case '{run.case.name}' has no output port"
     objective = run.params.objective or setup.objective
     if objective not in REFINED:
-        raise InputError(f"refine: the run's objective '{objective}' is not refined (the "
-                         f"refinement takes {' and '.join(REFINED)})")
-    return setup, kind, objective
+        return (f"the run's objective '{objective}' is not refined (the refinement takes "
+                f"{' and '.join(REFINED)})")
+    return None
 
 
 def _part(run, problem, setup):

@@ -1,9 +1,14 @@
 """Body-fitted refinement of a part's shape: a descent loop on the mesh deformation that
 maximises the part's output ``Δ`` (or its mechanism ratio ``Δ/SE``) with its volume bounded
-(and, if asked, ``Δ/SE`` kept from falling), on one mesh (a caller remeshes between loops).
+(and, if asked, ``Δ/SE`` kept from falling and the walls from thinning below a floor), on one
+mesh (a caller remeshes between loops).
 
 Problem.  ``min_d f(d) = -J(d)/|J(0)|`` subject to ``c_V(d) = V(d)/V_max - 1 ≤ 0`` and,
-with a floor ``r_min``, ``c_r(d) = 1 - (Δ/SE)(d)/r_min ≤ 0``; ``d`` the deformation of
+with a floor ``r_min``, ``c_r(d) = 1 - (Δ/SE)(d)/r_min ≤ 0`` and, with a wall floor ``T``,
+``c_w(d) ≤ 0``, the walls' shortfall below ``(1 + WALL_MARGIN) T``
+(:meth:`~pacto_ng.shape.thickness.WallThickness.shortfall`: the squared relative deficit of
+the thickness integrated over the boundary, zero where no wall is thinner, with its exact
+derivative in the vertices; an order-1 shape space); ``d`` the deformation of
 :class:`~pacto_ng.shape.deformation.ShapeSpace`, ``J`` the objective of
 :class:`~pacto_ng.shape.gradient.PartResponse`: its output ``Δ`` (``objective="delta"``) or
 the runs' mechanism ratio ``Δ/SE`` (``"ratio"``), ``V`` the part's volume (the thickness times
@@ -34,12 +39,15 @@ too dear):
    ``min_step``) the loop stops with the status ``mesh_quality``: the mesh needs remeshing
    (:func:`~pacto_ng.shape.remesh.remesh_moved`), which a caller does and then goes on;
 4. the trial shape ``d + sθ`` is accepted if the merit at the same ``λ`` decreases (a plain
-   decrease), else ``s`` is halved (a trial whose Newton solve fails is rejected too, and,
-   in 2D, one where two walls cross each other across a void: no element folds there, but
+   decrease), else ``s`` is halved (a trial whose Newton solve fails is rejected too, and
+   one where two walls cross each other across a void: no element folds there, but
    the walls of a chamber or a slot have no element between them,
    :func:`~pacto_ng.shape.remesh.crossing_walls`, or, with ``min_wall``, one with a wall
-   thinner than that, :class:`~pacto_ng.shape.thickness.WallThickness`); below
-   ``min_step`` the status is ``no_descent``.  The trial step of the next iteration is twice
+   thinner than that, :class:`~pacto_ng.shape.thickness.WallThickness`: the shortfall
+   constraint steers the descent away from the floor, this refusal keeps it); below
+   ``min_step`` the status is ``no_descent`` (when the wall floor refused a trial, the
+   walls' penalty is first made ten times stiffer, up to :data:`PENALTY_MAX`, and the step
+   taken again from a new direction).  The trial step of the next iteration is twice
    the accepted one, at most ``step_max``;
    with a box ``bounds`` (the run's design domain), every trial shape is projected into it
    before anything is measured: each vertex's moved position ``x0 + d + sθ`` is clipped
@@ -90,6 +98,9 @@ VIOLATION = 1e-3
 PENALTY_MAX = 1e4
 #: a vertex coordinate within this share of the box's size of one of its sides is on it
 ACTIVE_TOL = 1e-9
+#: with a wall floor ``T``, the descent is steered to keep every wall above ``(1 +
+#: WALL_MARGIN) T`` (the shortfall constraint), and a trial with a wall below ``T`` is refused
+WALL_MARGIN = 0.1
 
 
 @dataclass
@@ -126,6 +137,10 @@ class _Loop:
         self.walls = WallThickness(space.mesh) if space.vertex_dofs else None
         self.min_wall = min_wall or 0.0
         self.objective, self.limits = objective, dict(limits)
+        if self.min_wall:
+            if self.walls is None:
+                raise ValueError("refine: a wall floor needs an order-1 shape space")
+            self.limits["wall"] = (1.0 + WALL_MARGIN) * self.min_wall
         self.box = None if bounds is None else _Box(space, bounds)
         self.quality = Quality(space)
         # μ per constraint: a number for all, or a dict (an earlier refinement's)
@@ -156,12 +171,20 @@ class _Loop:
                "volume": volume(self.space.mesh, self.thickness)}
         if "ratio" in (self.objective, *self.limits):
             out["ratio"] = self.response.value("ratio")
+        if "wall" in self.limits:
+            out["wall"] = self.walls.shortfall(self.space.points_at(shape),
+                                               self.limits["wall"])[0]
         return out
 
     def constraints(self, measures: dict) -> dict:
-        """``c_i ≤ 0`` of each limit: ``V/V_max - 1`` and ``1 - (Δ/SE)/r_min``."""
+        """``c_i ≤ 0`` of each limit: ``V/V_max - 1``, ``1 - (Δ/SE)/r_min`` and the walls'
+        shortfall (:meth:`~pacto_ng.shape.thickness.WallThickness.shortfall`, never
+        negative: the constraint is met when it is zero)."""
         out = {}
         for name, bound in self.limits.items():
+            if name == "wall":
+                out[name] = measures[name]
+                continue
             ratio = measures[name] / bound
             out[name] = ratio - 1.0 if name == "volume" else 1.0 - ratio
         return out
@@ -197,6 +220,8 @@ class _Loop:
             if name == "volume":  # dc = dV / V_max
                 g = g - weight * self.space.derivative(
                     volume_integrals(self.thickness)) / self.limits[name]
+            elif name == "wall":
+                g = g - weight * self.wall_derivative()
             else:  # dc = -d(Δ/SE) / r_min
                 weights[name] = weights.get(name, 0.0) + weight / self.limits[name]
         g = g + self.response.gradient(self.space, weights)
@@ -210,9 +235,17 @@ class _Loop:
             raise ValueError("refine: the shape derivative vanishes on the free dofs")
         return theta / largest
 
+    def wall_derivative(self) -> np.ndarray:
+        """The shape derivative of the walls' shortfall at the current shape, on the dofs
+        (component ``k`` of vertex ``i`` is dof ``k·nv + i``), held dofs zeroed."""
+        _, grad = self.walls.shortfall(self.space.points_at(self.shape), self.limits["wall"])
+        out = grad.T.reshape(-1).copy()
+        out[self.space.held] = 0.0
+        return out
+
     def crossing(self, values) -> bool:
-        """Whether two walls of the shape ``values`` cross each other (2D, an order-1 space:
-        :func:`~pacto_ng.shape.remesh.crossing_walls`; no element folds, but walls facing
+        """Whether two walls of the shape ``values`` cross each other (2D and 3D, an order-1
+        space: :func:`~pacto_ng.shape.remesh.crossing_walls`; no element folds, but walls facing
         each other across a void can pass through each other)."""
         if not self.space.vertex_dofs:
             return False
@@ -240,12 +273,15 @@ class _Loop:
                            theta, length, q_min=q_min)
         if s < quality_step and s < length:  # the quality bounds the step, not the trial
             return "mesh_quality", s, q, 0
-        before, trials = self.merit(self.measures), 0
+        before, trials, walled = self.merit(self.measures), 0, False
+        # a shape thinner than the floor (a part made so) may not thin further
+        floor = min(self.min_wall, self.thinnest(self.shape)) if self.min_wall else 0.0
         while s >= min_step:
             trial = self.project(self.shape + s * theta)
             q = self.quality(trial)
-            if (q >= q_min and not self.crossing(trial)
-                    and not (self.min_wall and self.thinnest(trial) < self.min_wall)):
+            thin = bool(floor) and self.thinnest(trial) < floor
+            walled |= thin
+            if q >= q_min and not self.crossing(trial) and not thin:
                 trials += 1
                 try:
                     measures = self.evaluate(trial, ramp=False)
@@ -258,7 +294,16 @@ class _Loop:
                 self.response.u.vec.data = self.state  # the next solve starts from the last
             s *= 0.5
         self.evaluate(self.shape)
-        return "no_descent", s, q, trials
+        return "wall_floor" if walled else "no_descent", s, q, trials
+
+    def stiffen_wall(self) -> bool:
+        """The walls' penalty μ ten times stiffer (at most :data:`PENALTY_MAX`), so that the
+        next direction thickens the thinnest walls; False when it is at its largest."""
+        mu = self.penalties.get("wall", PENALTY_MAX)
+        if mu >= PENALTY_MAX:
+            return False
+        self.penalties["wall"] = min(PENALTY_MAX, 10.0 * mu)
+        return True
 
     def record(self, step: int, length: float, det: float, merits: tuple[float, float],
                trials: int) -> dict:
@@ -299,10 +344,11 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
     mesh's quality stops the loop with the status ``mesh_quality`` (a caller that remeshes
     then gives a larger one: small steps that the quality bound allows make little
     progress); ``min_wall`` the thinnest wall a trial shape may have (an order-1
-    ``space``: :class:`~pacto_ng.shape.thickness.WallThickness`; a trial with a thinner one
-    is rejected as one whose walls cross, so the loop stops at the floor where the descent
-    would thin a wall on it, it does not steer around it); ``say`` receives one line per
-    step."""
+    ``space``: :class:`~pacto_ng.shape.thickness.WallThickness`): the descent is steered to
+    keep the walls above ``(1 + WALL_MARGIN) min_wall`` (the constraint ``c_w``, its
+    multiplier ``"wall"``) and a trial with a wall below ``min_wall`` (or, a shape already
+    thinner, below its thinnest wall) is refused; ``say``
+    receives one line per step."""
     if space.mesh is not response.mesh:
         raise ValueError("the shape space and the response must be on the same mesh")
     mus = penalty.values() if isinstance(penalty, dict) else (penalty,)
@@ -322,9 +368,16 @@ def refine(response: PartResponse, space: ShapeSpace, *, volume_max: float,
     history = [loop.record(0, 0.0, loop.quality(loop.shape), (start, start), 0)]
     status, length = "steps", float(step)
     for k in range(1, steps + 1):
-        theta = loop.direction()
-        before = loop.merit(loop.measures)
-        stop, s, q, trials = loop.search(theta, length, min_step, q_min, quality_step)
+        while True:
+            theta = loop.direction()
+            before = loop.merit(loop.measures)
+            stop, s, q, trials = loop.search(theta, length, min_step, q_min, quality_step)
+            if stop != "wall_floor":
+                break
+            if not loop.stiffen_wall():
+                stop = "no_descent"
+                break
+            _say(say, f"the wall floor refused step {k}: its penalty {loop.penalties['wall']:g}")
         if stop is not None:
             status = stop
             _say(say, f"step {k}: stopped ({stop}; step {s:.3g}, lowest det {q:.3f})")
@@ -347,8 +400,9 @@ def _line(k: int, loop: _Loop, figures) -> str:
     """The progress line of step ``k``; ``figures`` ``(merit, lowest det, step, trials)``."""
     m, (merit, q, s, trials) = loop.measures, figures
     ratio = f", Δ/SE {m['ratio']:.6g}" if "ratio" in m else ""
+    wall = f", thinnest wall {loop.thinnest(loop.shape):.4g}" if loop.min_wall else ""
     return (f"step {k}: Δ {m['delta']:.6g}{ratio}, volume {m['volume']:.6g} (bound "
-            f"{loop.limits['volume']:.6g}), merit {merit:.6g}, lowest det {q:.3f}, step "
+            f"{loop.limits['volume']:.6g}){wall}, merit {merit:.6g}, lowest det {q:.3f}, step "
             f"{s:.3g} ({trials} trial{'s' if trials > 1 else ''})")
 
 
@@ -381,13 +435,6 @@ class _Box:
         mask = np.zeros(len(values), dtype=bool)
         mask[self.dofs[out]] = True
         return mask
-
-    def thinnest(self, values) -> float:
-        """The thinnest wall of the shape ``values`` (NaN where not measured: a higher-order
-        shape space)."""
-        if self.walls is None:
-            return math.nan
-        return float(self.walls(self.space.points_at(values)).min())
 
     def project(self, values) -> np.ndarray:
         """The coefficients with every free vertex coordinate clipped into the box."""

@@ -219,17 +219,18 @@ def _name_points(ngm, mesh, points) -> None:
 
 
 def crossing_walls(mesh, points) -> int:
-    """How many pairs of boundary segments of the 2D ``mesh`` cross each other with its
-    vertices at ``points`` (segments sharing a vertex are not counted): 0 for a valid part.
-    Moving the mesh keeps each element unfolded, but two walls facing each other across a
-    void (a chamber, a slot) have no element between them and can pass through each other;
-    such a shape is no part (and Netgen cannot mesh it).  3D meshes: 0 (not checked).  The
-    candidates are the pairs whose midpoints lie within the longest segment's length of each
-    other (two crossing segments always do: scipy's ``cKDTree.query_pairs``), each tested by
-    orientation (each one's ends on opposite sides of the other's line)."""
-    if mesh.dim != 2:
-        return 0
+    """How many pairs of boundary facets of ``mesh`` (segments in 2D, triangles in 3D) cross
+    each other with its vertices at ``points`` (facets sharing a vertex are not counted): 0
+    for a valid part.  Moving the mesh keeps each element unfolded, but two walls facing each
+    other across a void (a chamber, a slot) have no element between them and can pass through
+    each other; such a shape is no part (and Netgen cannot mesh it).  The candidates are the
+    pairs whose centres lie within twice the largest distance from a facet's centre to its
+    vertices (two crossing facets always do: scipy's ``cKDTree.query_pairs``); in 2D each is
+    tested by orientation (each one's ends on opposite sides of the other's line), in 3D by
+    whether an edge of one passes through the other (:func:`_edges_through`)."""
     ends = np.array([[v.nr for v in el.vertices] for el in mesh.Elements(BND)])
+    if mesh.dim == 3:
+        return _crossing_triangles(ends, np.asarray(points, dtype=float)[:, :3])
     p = np.asarray(points, dtype=float)[:, :2]
     a, b = p[ends[:, 0]], p[ends[:, 1]]
     reach = float(np.max(np.linalg.norm(b - a, axis=1)))
@@ -241,6 +242,41 @@ def crossing_walls(mesh, points) -> int:
     cross = ((_side(a[i], b[i], a[j]) * _side(a[i], b[i], b[j]) < 0)
              & (_side(a[j], b[j], a[i]) * _side(a[j], b[j], b[i]) < 0) & ~share)
     return int(np.count_nonzero(cross))
+
+
+def _crossing_triangles(triangles, p) -> int:
+    """:func:`crossing_walls` of the boundary ``triangles`` (vertex numbers) at the points
+    ``p``: two triangles that share no vertex cross when an edge of one passes through the
+    other."""
+    v = p[triangles]
+    centre = v.mean(axis=1)
+    reach = 2.0 * float(np.max(np.linalg.norm(v - centre[:, None, :], axis=2)))
+    pairs = cKDTree(centre).query_pairs(reach, output_type="ndarray")
+    if len(pairs) == 0:
+        return 0
+    share = (triangles[pairs[:, 0], :, None] == triangles[pairs[:, 1], None, :]).any(axis=(1, 2))
+    i, j = pairs[~share, 0], pairs[~share, 1]
+    cross = np.zeros(len(i), dtype=bool)
+    for a, b in ((i, j), (j, i)):
+        for k in range(3):
+            cross |= _edges_through(v[a, k], v[a, (k + 1) % 3], v[b])
+    return int(np.count_nonzero(cross))
+
+
+def _edges_through(p0, p1, tri) -> np.ndarray:
+    """Whether each segment ``p0 → p1`` passes through its triangle ``tri`` (``(n, 3, 3)``):
+    Möller and Trumbore's ray-triangle test (1997, *J. Graphics Tools* 2(1)) with the ray's
+    parameter in ``[0, 1]``; a segment in the triangle's plane does not."""
+    d, e1, e2 = p1 - p0, tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    q = np.cross(d, e2)
+    det = np.einsum("ij,ij->i", e1, q)
+    s = p0 - tri[:, 0]
+    r = np.cross(s, e1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.einsum("ij,ij->i", s, q) / det
+        w = np.einsum("ij,ij->i", d, r) / det
+        t = np.einsum("ij,ij->i", e2, r) / det
+        return (det != 0) & (u >= 0) & (w >= 0) & (u + w <= 1) & (t >= 0) & (t <= 1)
 
 
 def _side(a, b, c):

@@ -130,7 +130,7 @@ def test_export_of_a_short_optimisation(tmp_path):
 
     out = tmp_path / "opt"
     assert main(["run", "pneunet-3d", "--maxh", "0.006", "--iterations", "15", "--out",
-                 str(out), "--quiet"]) == 0
+                 str(out), "--quiet", "--no-refine"]) == 0
     assert main(["export", str(out), "--format", "stl", "--quiet", "--no-mirror"]) == 0
     stl = pv.read(str(out / "export" / "design.stl"))
     assert stl.n_open_edges == 0 and stl.is_manifold

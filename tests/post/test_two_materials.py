@@ -228,7 +228,7 @@ def mm_run(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("PACTO_THREADS", "1")
         assert main(["run", "mm-gripper", "--maxh", "0.008", "--iterations", "20",
-                     "--out", str(out), "--quiet"]) == 0
+                     "--out", str(out), "--quiet", "--no-refine"]) == 0
         assert main(["analyse", str(out), "--pressures", ",".join(map(str, MM_PRESSURES)),
                      "--quiet"]) == 0
         for fmt in ("stl", "vtk", "msh"):

@@ -9,10 +9,11 @@ to round-off, and a named point sits at its moved position.
 import numpy as np
 import ngsolve
 import pytest
-from netgen.occ import X, Y, Z, Box, Circle, Glue, OCCGeometry, Rectangle
+from netgen.occ import X, Y, Z, Box, Circle, Glue, MoveTo, OCCGeometry, Rectangle
 from ngsolve import BBBND, BBND, BND, CF, Integrate, ds, dx, x, y, z
 
 from pacto_ng.shape import ShapeSpace, remesh_moved
+from pacto_ng.shape.remesh import crossing_walls
 
 
 def _plate():
@@ -113,11 +114,7 @@ def test_crossing_walls_counts_walls_that_pass_through_each_other():
     """A square with a slot 0.1 wide: no crossing as made; the slot's left wall above
     y = 0.5 moved 0.15 to the right (past the right wall, 0.1 away) crosses it: the upper
     left wall and the segment joining it to the rest cross the right wall (2 pairs, counted
-    by hand); moved 0.05 (half the slot) it crosses nothing.  3D meshes are not checked."""
-    from netgen.occ import MoveTo
-
-    from pacto_ng.shape.remesh import crossing_walls
-
+    by hand); moved 0.05 (half the slot) it crosses nothing."""
     face = Rectangle(1, 1).Face() - MoveTo(0.45, 0.3).Rectangle(0.1, 0.8).Face()
     mesh = ngsolve.Mesh(OCCGeometry(face, dim=2).GenerateMesh(maxh=0.05))
     points = np.array([v.point for v in mesh.vertices])
@@ -127,8 +124,23 @@ def test_crossing_walls_counts_walls_that_pass_through_each_other():
         moved = points.copy()
         moved[left, 0] += shift
         assert crossing_walls(mesh, moved) == expected
-    cube = ngsolve.Mesh(OCCGeometry(Box((0, 0, 0), (1, 1, 1))).GenerateMesh(maxh=0.5))
-    assert crossing_walls(cube, np.zeros((cube.nv, 3))) == 0
+
+
+def test_crossing_walls_in_3d():
+    """A unit cube with a centred cubic hole 0.4 wide (walls 0.3 thick): no crossing as made;
+    the hole's face at x = 0.7 moved to x = 0.9 (inside the wall) crosses nothing, moved to
+    x = 1.2 (through the outer face at x = 1) the hole's side walls cross the outer face."""
+    body = Box((0, 0, 0), (1, 1, 1)) - Box((0.3, 0.3, 0.3), (0.7, 0.7, 0.7))
+    mesh = ngsolve.Mesh(OCCGeometry(body).GenerateMesh(maxh=0.15))
+    points = np.array([v.point for v in mesh.vertices])
+    assert crossing_walls(mesh, points) == 0
+    face = (np.isclose(points[:, 0], 0.7)
+            & np.all((points[:, 1:] > 0.29) & (points[:, 1:] < 0.71), axis=1))
+    moved = points.copy()
+    moved[face, 0] = 0.9
+    assert crossing_walls(mesh, moved) == 0
+    moved[face, 0] = 1.2
+    assert crossing_walls(mesh, moved) > 0
 
 
 def test_a_field_moves_with_the_part_onto_its_new_mesh():
