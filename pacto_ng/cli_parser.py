@@ -211,8 +211,8 @@ def _refine_parser(sub):
                    "part is analysed afterwards (summary.json 'sweep'), e.g. 1e5,3e5,1e6")
     f.add_argument("--min-wall", type=float, help="no wall of the refined part thinner "
                    "than this (m): the descent is steered to keep the walls above it and a "
-                   "step below it is refused (default: the thinnest wall of the part as made; "
-                   "0: no floor; summary.json reports the thinnest wall either way)")
+                   "step below it is refused (default: no floor; summary.json and the last "
+                   "line report the thinnest wall either way)")
     f.add_argument("--check-gradients", action="store_true", help="instead of refining, "
                    "check the refinement's shape gradients (Δ, volume, and Δ/SE for a "
                    "mechanism) against central differences on the run's part; writes nothing; "

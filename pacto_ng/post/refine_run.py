@@ -9,10 +9,9 @@ springs), and its boundary is then moved to make the output displacement Δ larg
 adding material (:func:`~pacto_ng.shape.refine.refine`: the volume bounded by the part's own
 starting volume, which is what the design promised; every vertex kept in the bounding box of
 the run's design domain, so that the part is no larger than the domain the user gave; the
-elements kept from folding; no wall thinner than the thinnest wall of the part as made, or
-than T with ``--min-wall T`` (0: no floor), the descent steered off the floor,
-:class:`~pacto_ng.shape.thickness.WallThickness`). When the moved mesh cannot move further
-without folding, the part is remeshed as it stands
+elements kept from folding; with ``--min-wall T``, no wall thinner than T, the descent
+steered off that floor, :class:`~pacto_ng.shape.thickness.WallThickness`).  When the moved
+mesh cannot move further without folding, the part is remeshed as it stands
 (:func:`~pacto_ng.shape.remesh.remesh_moved`: the same polygon, names and ports on fresh
 triangles) and the refinement goes on, at most :data:`REMESHES` times.  The clamp, the output
 ports and the case's symmetry lines do not move (a symmetry line slides along itself).
@@ -65,7 +64,6 @@ import numpy as np
 from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
 from ..shape import moved_field, refine, remesh_moved, volume
-from ..shape.thickness import WallThickness
 from .finish import say
 from .part import part_ports, present_supports
 from .part_analysis import PartAnalysis
@@ -105,8 +103,7 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
                loading: Loading = Loading(), pressures=(), min_wall: float | None = None
                ) -> int:
     """``pacto refine RUN``: the run's part made, its shape refined for a larger Δ at no more
-    volume (no wall thinner than ``min_wall`` m; by default, None, than the part's thinnest
-    wall as made; 0 for no floor), the results written into
+    volume (no wall thinner than ``min_wall`` m, if given), the results written into
     ``RUN/refine/`` (the module docstring).  Returns the exit code (0); bad input is an
     InputError (one line, exit 2)."""
     t0 = time.perf_counter()
@@ -123,7 +120,7 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
     part, job = refinement(run, quiet, f"{steps} steps", loading)
     setup, kind, load = job.setup, job.kind, job.load
     bound = volume(part.mesh, job.thickness(part.mesh.dim))
-    floor = wall_floor(part.mesh, min_wall)
+    floor = wall_floor(min_wall)
     space, response, result, remeshes = _refine_remeshing(job, part.mesh, bound, steps, quiet,
                                                           floor["floor"])
     settings = dict(threshold=part.threshold, threshold_note=part.choice.get("note"),
@@ -163,16 +160,10 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
     return 0
 
 
-def wall_floor(mesh, min_wall: float | None) -> dict:
-    """The wall floor of a refinement and where it comes from: ``--min-wall`` (0: none), or
-    by default the thinnest wall of the part as made (the refinement makes no wall thinner
-    than the part already has); ``{"floor": m or None, "floor_from": text}``."""
-    if min_wall is not None:
-        return {"floor": min_wall or None,
-                "floor_from": "--min-wall" if min_wall else "none (--min-wall 0)"}
-    points = np.array([v.point for v in mesh.vertices], dtype=float)
-    return {"floor": float(WallThickness(mesh)(points).min()),
-            "floor_from": "the part as made (its thinnest wall)"}
+def wall_floor(min_wall: float | None) -> dict:
+    """The wall floor of a refinement and where it comes from: ``--min-wall T`` (0 or None:
+    none); ``{"floor": m or None, "floor_from": text}``."""
+    return {"floor": min_wall or None, "floor_from": "--min-wall" if min_wall else "none"}
 
 
 def _promise(summary: dict) -> float | None:
@@ -190,8 +181,11 @@ def _last_line(summary: dict, result, bound: float, out) -> str:
     gap = ("" if summary["gap"] is None else
            f" (the design promised {summary['design_delta']:.4g} m: gap "
            f"{100 * summary['gap']:+.1f} %)")
+    walls = summary["thinnest_wall"]
+    wall = ("" if not walls else f", thinnest wall {1e3 * walls['part_as_made']:.3g} → "
+            f"{1e3 * walls['refined']:.3g} mm")
     return (f"refined: Δ {d0:.4g} → {d1:.4g} m ({100 * summary['gain']:+.1f} %){gap} at volume "
-            f"{result.volume:.4g} m³ (bound {bound:.4g} m³), status {result.status}, {n} "
+            f"{result.volume:.4g} m³ (bound {bound:.4g} m³){wall}, status {result.status}, {n} "
             f"remesh{'es' if n != 1 else ''}; {_check_text(summary['check'])} — {out}")
 
 

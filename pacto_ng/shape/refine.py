@@ -107,12 +107,11 @@ WALL_MARGIN = 0.1
 class RefineResult:
     """The outcome of :func:`refine`: ``status`` (one of :data:`STATUSES`), the final
     deformation's coefficients ``shape`` (the space is left at it), its ``delta``, ``value``
-    (the objective ``J``) and ``volume``, the last ``multipliers`` (by constraint:
-    ``volume``, ``ratio``) and the ``history``: one dict per accepted shape (step 0 the
-    start) with ``step``, ``delta``, ``value``, ``ratio`` (``Δ/SE``, NaN unless the
-    objective or a floor needs it), ``volume``, ``det`` (the lowest
-    ``det(I + ∇₀d)``), ``length`` (the step ``s``), ``merit`` and ``merit_before`` (both at
-    the multipliers the step used), ``multipliers`` (after the update), ``trials``."""
+    (the objective ``J``) and ``volume``, the last ``multipliers`` (by constraint: ``volume``,
+    ``ratio``, ``wall``) and the ``history``: one dict per accepted shape (step 0 the start)
+    with ``step``, ``delta``, ``value``, ``ratio`` (``Δ/SE``, NaN unless needed), ``volume``,
+    ``det`` (the lowest ``det(I + ∇₀d)``), ``length`` (the step ``s``), ``wall`` (the thinnest),
+    ``merit`` and ``merit_before`` (at the step's multipliers), ``multipliers``, ``trials``."""
 
     status: str
     shape: np.ndarray
@@ -252,11 +251,12 @@ class _Loop:
         return crossing_walls(self.space.mesh, self.space.points_at(values)) > 0
 
     def thinnest(self, values) -> float:
-        """The thinnest wall of the shape ``values`` (NaN where not measured: a higher-order
-        shape space)."""
+        """The thinnest wall of the shape ``values``, along the facets' normals or across a 2D
+        neck (:meth:`~pacto_ng.shape.thickness.WallThickness.neck`); NaN for order > 1."""
         if self.walls is None:
             return math.nan
-        return float(self.walls(self.space.points_at(values)).min())
+        ray = float(self.walls(points := self.space.points_at(values)).min())
+        return min(ray, self.walls.neck(points, ray))
 
     def project(self, values) -> np.ndarray:
         """``values`` projected into the box (unchanged without one)."""

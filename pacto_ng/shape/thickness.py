@@ -4,31 +4,38 @@ For each facet of the part's outer boundary (a segment in 2D, a triangle in 3D; 
 interface between two materials), the ray from its centre along its inward normal runs through
 the solid until it leaves it through another boundary facet: the length of that ray is the
 wall's thickness there (a wall between a chamber and the outside, a hinge, the web between
-two chambers) if that facet faces the ray (the angle between the ray and its outward normal
-at most 45°, :data:`FACING`); a ray that leaves at a glancing angle, across the facet beside
-it at a blunt edge or corner, measures no wall.  The inward side of each facet is taken
-once, on the reference mesh, from the element it bounds; a motion that folds no element
-keeps it (the refinement's step control).  :meth:`WallThickness.shortfall` measures how far
-the walls fall below a floor, with its exact derivative in the vertices (the refinement's
-wall constraint).
+two chambers).  A ray that leaves across a facet beside its own (sharing a vertex with it) at
+a glancing angle (more than 45° between the ray and that facet's outward normal,
+:data:`FACING`) measures no wall: that is an edge of the surface, not a wall.  The inward
+side of each facet is taken once, on the reference mesh, from the element it bounds; a motion
+that folds no element keeps it (the refinement's step control).  Along normals, a hinge whose
+narrowest chord is oblique to both its walls reads thicker than it is: in 2D
+:meth:`WallThickness.neck` measures that chord.  :meth:`WallThickness.shortfall` measures
+how far the walls (along normals) fall below a floor, with its exact derivative in the
+vertices (the refinement's wall constraint).
 The rays are cast against every facet at once (numpy; in 2D the intersection of two lines,
 ``m + t n = a + u (b - a)`` with ``0 <= u <= 1``, in 3D Möller and Trumbore's ray-triangle
 test, 1997, *J. Graphics Tools* 2(1), in chunks of :data:`CHUNK` rays), ``t > 0``.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from ngsolve import BND, EDGE, FACE, NodeId
+from scipy.spatial import cKDTree
 
 #: hits closer than this fraction of the facet's own size are its neighbours at a corner, not
 #: the other side of the wall
 NEAR = 1e-9
 #: rays cast at once in 3D (memory: CHUNK x facets x 3 numbers per array)
 CHUNK = 64
-#: a ray measures a wall only where it leaves through a facet that faces it: the cosine of
-#: the angle between the ray and that facet's outward normal at least this (45°); a ray from
-#: near a blunt edge or corner of the surface leaves across the facet beside it at a
-#: glancing angle, a short way that is no wall (a wedge sharper than 45° is thin, and counts)
+#: a ray that leaves across a facet beside its own (one sharing a vertex with it) measures a
+#: wall only where that facet faces it: the cosine of the angle between the ray and the
+#: facet's outward normal at least this (45°); a ray from near an edge of a triangulated
+#: surface crosses the large triangle beside it at a glancing angle, a short way that is no
+#: wall.  A facet further away counts at any angle: a wall whose surface is ragged is as thin
+#: as it is
 FACING = 0.5 ** 0.5
 
 
@@ -50,7 +57,65 @@ class WallThickness:
         inside = np.array([np.mean([mesh[v].point for v in mesh[el].vertices], axis=0)
                            for _, el in outer])
         normal, centre, _ = self._geometry(pts)
+        self._last = None  # the last points measured, and their hits
+        self._loop_order = None  # 2D: the boundary's loops (neck)
         self.sign = np.where(np.einsum("ij,ij->i", normal, inside - centre) > 0, 1.0, -1.0)
+
+    def neck(self, points, reach: float) -> float:
+        """The narrowest neck of a 2D part below ``reach`` (``inf`` if none): the shortest
+        distance between two vertices of the outer boundary that face each other across the
+        solid (the chord from each one goes inward of its boundary, :meth:`_loops`' inward
+        normals) and lie at least twice that distance apart along the boundary (so that a
+        corner blunter than 60° is no neck).  A measure by distance, not along normals: a
+        hinge narrowest across a chord oblique to its walls' normals, which their rays cross
+        longer, is as thin as it is.  3D: ``inf`` (not measured)."""
+        if self.dim != 2:
+            return math.inf
+        order, loop = self._loops()
+        p = np.asarray(points, dtype=float)[order, :2]
+        nxt = np.roll(np.arange(len(order)), -1)
+        for ends in np.split(np.arange(len(order)), np.flatnonzero(np.diff(loop)) + 1):
+            nxt[ends[-1]] = ends[0]
+        prv = np.empty_like(nxt)
+        prv[nxt] = np.arange(len(nxt))
+        step = np.linalg.norm(p[nxt] - p, axis=1)
+        arc = np.cumsum(step) - step  # the arc length from its loop's start, per loop below
+        for ends in np.split(np.arange(len(order)), np.flatnonzero(np.diff(loop)) + 1):
+            arc[ends] -= arc[ends[0]]
+        total = np.bincount(loop, weights=step)
+        tangent = p[nxt] - p[prv]
+        inward = np.c_[-tangent[:, 1], tangent[:, 0]]  # left of the loop: the solid
+        pairs = cKDTree(p).query_pairs(reach, output_type="ndarray")
+        if len(pairs) == 0:
+            return math.inf
+        a, b = pairs[:, 0], pairs[:, 1]
+        chord = p[b] - p[a]
+        d = np.linalg.norm(chord, axis=1)
+        along = np.abs(arc[a] - arc[b])
+        path = np.where(loop[a] == loop[b], np.minimum(along, total[loop[a]] - along), np.inf)
+        facing = ((np.einsum("ij,ij->i", chord, inward[a]) > 0)
+                  & (np.einsum("ij,ij->i", -chord, inward[b]) > 0))
+        valid = facing & (path >= 2.0 * d)
+        return float(d[valid].min()) if np.any(valid) else math.inf
+
+    def _loops(self):
+        """``(order, loop)``: the outer boundary's vertices in the order of its loops, each
+        run with the solid on its left, and the loop of each (computed once)."""
+        if self._loop_order is None:
+            ends = np.where(self.sign[:, None] > 0, self.facets, self.facets[:, ::-1])
+            following = dict(zip(ends[:, 0].tolist(), ends[:, 1].tolist()))
+            order, loop, seen = [], [], set()
+            for start in following:
+                if start in seen:
+                    continue
+                k, v = (loop[-1] + 1) if loop else 0, start
+                while v not in seen:
+                    seen.add(v)
+                    order.append(v)
+                    loop.append(k)
+                    v = following[v]
+            self._loop_order = (np.array(order), np.array(loop))
+        return self._loop_order
 
     def _geometry(self, p):
         """``(normal, centre, size)`` of every facet at the points ``p``: a normal (not unit,
@@ -63,12 +128,20 @@ class WallThickness:
         return n, (v[0] + v[1] + v[2]) / 3.0, np.sqrt(np.linalg.norm(n, axis=1))
 
     def __call__(self, points) -> np.ndarray:
-        return self.hits(points)[0]
+        return self.hits(points)[0].copy()
 
     def hits(self, points) -> tuple[np.ndarray, np.ndarray]:
         """``(t, facet)``: the thickness at every facet and the facet its ray leaves the
-        solid through (``-1`` and ``inf`` where it leaves through none)."""
+        solid through (``-1`` and ``inf`` where it leaves through none).  The last points'
+        are kept: a refinement measures each shape more than once."""
         p = np.asarray(points, dtype=float)[:, :self.dim]
+        if self._last is not None and np.array_equal(p, self._last[0]):
+            return self._last[1]
+        self._last = (p.copy(), self._cast(p))
+        return self._last[1]
+
+    def _cast(self, p) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`hits` at the points ``p``, cast."""
         normal, centre, size = self._geometry(p)
         n = self.sign[:, None] * normal / np.linalg.norm(normal, axis=1)[:, None]
         if self.dim == 2:
@@ -79,8 +152,11 @@ class WallThickness:
                                 for k in range(0, len(n), CHUNK)])
         facet = np.argmin(t, axis=1)
         t = t[np.arange(len(t)), facet]
-        # a wall only where the exit facet faces the ray (its outward normal -n_j)
-        t = np.where(np.einsum("ij,ij->i", n, n[facet]) <= -FACING, t, np.inf)
+        # no wall where the ray leaves across a facet beside its own (a shared vertex) that
+        # does not face it (its outward normal -n_j): an edge or corner of the surface
+        beside = (self.facets[:, :, None] == self.facets[facet][:, None, :]).any(axis=(1, 2))
+        glancing = np.einsum("ij,ij->i", n, n[facet]) > -FACING
+        t = np.where(beside & glancing, np.inf, t)
         return t, np.where(np.isfinite(t), facet, -1)
 
     def shortfall(self, points, floor: float) -> tuple[float, np.ndarray]:
