@@ -21,6 +21,7 @@ from .post.analysis_options import parse_pressures
 from .post.as_built import analyse_as_built
 from .post.cli_commands import export_run
 from .post.compare import compare_runs
+from .post.finish import say
 from .post.part_stage import finish_run
 from .post.refine_check import check_refine_gradients
 from .post.refine_run import refine_run
@@ -91,16 +92,23 @@ def resume_with_part(args) -> int:
 
 def _with_part(done, out, args) -> int:
     """A finished optimisation's part made, checked and analysed (unless ``--no-part``), and
-    then, for a run the refinement applies to (:func:`~pacto_ng.post.refine_setup.refuses`:
-    a pressure case with an output port) whose part is sealed, and unless ``--no-refine``,
-    its shape refined as ``pacto refine DIR`` does (the refinement keeps the part's topology:
-    an open chamber stays open, and the part line has said so; a refinement that cannot be
-    made is said in one line; the run's result stands); the run's exit code."""
+    then, for a linear run the refinement applies to
+    (:func:`~pacto_ng.post.refine_setup.refuses`: a pressure case with an output port) whose
+    part is sealed, and unless ``--no-refine``, its shape refined as ``pacto refine DIR``
+    does (the refinement keeps the part's topology: an open chamber stays open, and the part
+    line has said so; under a nonlinear model a line says how to refine it, as that takes
+    many times the run: gripper-silicone's over 25 minutes; a refinement that cannot be made
+    is said in one line; the run's result stands); the run's exit code."""
     if leads() and not args.no_part:
         summary = finish_run(out, done.problem, done.summary, quiet=args.quiet)
-        if (not args.no_refine and summary["part"].get("made")
-                and summary.get("sealed") is not False
-                and refuses(load_run(out, "refine")) is None):
+        if (args.no_refine or not summary["part"].get("made")
+                or summary.get("sealed") is False or refuses(run := load_run(out, "refine"))):
+            return done.exit_code
+        if run.params.model != "linear":
+            say(args.quiet, f"the part is not refined by default under the {run.params.model} "
+                            f"model (its refinement takes many times the run): pacto refine "
+                            f"{out} refines it")
+        else:
             try:
                 refine_run(out, quiet=args.quiet, overwrite=args.command == "resume"
                            or args.overwrite)

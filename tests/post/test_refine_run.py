@@ -326,3 +326,19 @@ def test_a_wall_floor_is_kept_and_the_thinnest_wall_reported(solid_member, tmp_p
     assert main(["refine", str(run), "--min-wall", "-1", "--overwrite"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--min-wall" in err[0]
+
+
+def test_a_nonlinear_run_says_how_to_refine_its_part(tmp_path, capsys):
+    """``pacto resume`` (as ``pacto run``) under a nonlinear model, from the solid member:
+    it ends with the part and a line naming ``pacto refine DIR`` (the refinement is not run
+    by default: it takes many times the run), and writes no DIR/refine/."""
+    from small_cases import run_with_design
+
+    run = run_with_design(tmp_path / "nh", ["pneunet", "--maxh", "0.004", "--iterations", "1",
+                                            "--no-part", "--model", "neohookean"],
+                          lambda c: np.ones(len(c), dtype=bool))
+    capsys.readouterr()
+    assert main(["resume", str(run), "--iterations", "2"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert f"pacto refine {run} refines it" in lines[-1] and "neohookean" in lines[-1]
+    assert lines[-2].startswith("part: ") and not (run / "refine").exists()
