@@ -218,6 +218,11 @@ def _name_points(ngm, mesh, points) -> None:
         ngm.Add(Element0D(k + 1, index=regions[el.mat]))
 
 
+#: 3D: a segment within this share of the lengths of a triangle's edges, or this close to its
+#: plane in angle, touches it rather than passing through it (:func:`_edges_through`)
+TOUCH = 1e-6
+
+
 def crossing_walls(mesh, points) -> int:
     """How many pairs of boundary facets of ``mesh`` (segments in 2D, triangles in 3D) cross
     each other with its vertices at ``points`` (facets sharing a vertex are not counted): 0
@@ -266,17 +271,22 @@ def _crossing_triangles(triangles, p) -> int:
 def _edges_through(p0, p1, tri) -> np.ndarray:
     """Whether each segment ``p0 → p1`` passes through its triangle ``tri`` (``(n, 3, 3)``):
     Möller and Trumbore's ray-triangle test (1997, *J. Graphics Tools* 2(1)) with the ray's
-    parameter in ``[0, 1]``; a segment in the triangle's plane does not."""
+    parameter and the barycentric coordinates strictly inside, to :data:`TOUCH` (a segment
+    that only touches the triangle, at its edge or in its plane, as two faces meeting at an
+    edge of the part do, does not pass through it)."""
     d, e1, e2 = p1 - p0, tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
     q = np.cross(d, e2)
     det = np.einsum("ij,ij->i", e1, q)
+    scale = (np.linalg.norm(d, axis=1) * np.linalg.norm(e1, axis=1)
+             * np.linalg.norm(e2, axis=1))
     s = p0 - tri[:, 0]
     r = np.cross(s, e1)
     with np.errstate(divide="ignore", invalid="ignore"):
         u = np.einsum("ij,ij->i", s, q) / det
         w = np.einsum("ij,ij->i", d, r) / det
         t = np.einsum("ij,ij->i", e2, r) / det
-        return (det != 0) & (u >= 0) & (w >= 0) & (u + w <= 1) & (t >= 0) & (t <= 1)
+        return ((np.abs(det) > TOUCH * scale) & (u > TOUCH) & (w > TOUCH)
+                & (u + w < 1 - TOUCH) & (t > TOUCH) & (t < 1 - TOUCH))
 
 
 def _side(a, b, c):
