@@ -73,15 +73,16 @@ class WallThickness:
             return math.inf
         order, loop = self._loops()
         p = np.asarray(points, dtype=float)[order, :2]
+        runs = np.split(np.arange(len(order)), np.flatnonzero(np.diff(loop)) + 1)
         nxt = np.roll(np.arange(len(order)), -1)
-        for ends in np.split(np.arange(len(order)), np.flatnonzero(np.diff(loop)) + 1):
-            nxt[ends[-1]] = ends[0]
+        for run in runs:  # each loop closes on itself
+            nxt[run[-1]] = run[0]
         prv = np.empty_like(nxt)
         prv[nxt] = np.arange(len(nxt))
         step = np.linalg.norm(p[nxt] - p, axis=1)
-        arc = np.cumsum(step) - step  # the arc length from its loop's start, per loop below
-        for ends in np.split(np.arange(len(order)), np.flatnonzero(np.diff(loop)) + 1):
-            arc[ends] -= arc[ends[0]]
+        arc = np.cumsum(step) - step
+        for run in runs:  # the arc length from its loop's start
+            arc[run] -= arc[run[0]]
         total = np.bincount(loop, weights=step)
         tangent = p[nxt] - p[prv]
         inward = np.c_[-tangent[:, 1], tangent[:, 0]]  # left of the loop: the solid
