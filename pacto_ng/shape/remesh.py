@@ -35,6 +35,8 @@ from netgen.meshing import Element0D, Element2D, Element3D, FaceDescriptor, Mesh
 from netgen.meshing import Mesh as NgMesh
 from ngsolve import BBBND, BBND, BND, VOL
 
+from .thickness import ray_triangle
+
 #: the name Netgen gives a geometry's points that have none
 UNNAMED = "default"
 #: a boundary segment of a moved 2D part shorter than this share of ``maxh`` is joined to
@@ -270,21 +272,15 @@ def _crossing_triangles(triangles, p) -> int:
 
 def _edges_through(p0, p1, tri) -> np.ndarray:
     """Whether each segment ``p0 → p1`` passes through its triangle ``tri`` (``(n, 3, 3)``):
-    Möller and Trumbore's ray-triangle test (1997, *J. Graphics Tools* 2(1)) with the ray's
-    parameter and the barycentric coordinates strictly inside, to :data:`TOUCH` (a segment
-    that only touches the triangle, at its edge or in its plane, as two faces meeting at an
-    edge of the part do, does not pass through it)."""
+    :func:`~pacto_ng.shape.thickness.ray_triangle` with the ray's parameter and the
+    barycentric coordinates strictly inside, to :data:`TOUCH` (a segment that only touches
+    the triangle, at its edge or in its plane, as two faces meeting at an edge of the part
+    do, does not pass through it)."""
     d, e1, e2 = p1 - p0, tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    q = np.cross(d, e2)
-    det = np.einsum("ij,ij->i", e1, q)
+    t, u, w, det = ray_triangle(p0, d, tri[:, 0], e1, e2)
     scale = (np.linalg.norm(d, axis=1) * np.linalg.norm(e1, axis=1)
              * np.linalg.norm(e2, axis=1))
-    s = p0 - tri[:, 0]
-    r = np.cross(s, e1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u = np.einsum("ij,ij->i", s, q) / det
-        w = np.einsum("ij,ij->i", d, r) / det
-        t = np.einsum("ij,ij->i", e2, r) / det
+    with np.errstate(invalid="ignore"):
         return ((np.abs(det) > TOUCH * scale) & (u > TOUCH) & (w > TOUCH)
                 & (u + w < 1 - TOUCH) & (t > TOUCH) & (t < 1 - TOUCH))
 

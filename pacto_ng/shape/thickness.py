@@ -237,14 +237,22 @@ class WallThickness:
     def _triangles(self, p, n, o, size):
         v0 = p[self.facets[:, 0]]
         e1, e2 = p[self.facets[:, 1]] - v0, p[self.facets[:, 2]] - v0
-        q = np.cross(n[:, None, :], e2[None, :, :])  # (rays, triangles, 3)
-        det = np.einsum("jk,ijk->ij", e1, q)
-        s = o[:, None, :] - v0[None, :, :]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            u = np.einsum("ijk,ijk->ij", s, q) / det
-            r = np.cross(s, e1[None, :, :])
-            w = np.einsum("ik,ijk->ij", n, r) / det
-            t = np.einsum("jk,ijk->ij", e2, r) / det
-            hit = ((u >= 0.0) & (w >= 0.0) & (u + w <= 1.0) & (t > NEAR * size[:, None])
-                   & np.isfinite(t))
+        t, u, w, _ = ray_triangle(o[:, None, :], n[:, None, :], v0[None], e1[None], e2[None])
+        hit = ((u >= 0.0) & (w >= 0.0) & (u + w <= 1.0) & (t > NEAR * size[:, None])
+               & np.isfinite(t))
         return np.where(hit, t, np.inf)
+
+
+def ray_triangle(o, d, v0, e1, e2):
+    """``(t, u, w, det)`` of the rays ``o + t d`` against the triangles ``v0 + u e1 + w e2``
+    (arrays of 3-vectors that broadcast against each other), by Möller and Trumbore's test
+    (1997, *J. Graphics Tools* 2(1)): the ray meets the triangle's plane at ``t`` in the
+    point of barycentric coordinates ``(u, w)``; ``det`` 0 (and the others not finite) for a
+    ray parallel to the plane."""
+    q = np.cross(d, e2)
+    det = np.einsum("...k,...k->...", e1, q)
+    s = o - v0
+    r = np.cross(s, e1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return (np.einsum("...k,...k->...", e2, r) / det, np.einsum("...k,...k->...", s, q) / det,
+                np.einsum("...k,...k->...", d, r) / det, det)
