@@ -21,6 +21,22 @@ Without these two conditions the walls meeting at a chamber's corner, and the tw
 wall thinner than the pairing distance, overlapped at u = 0 (measured on the pneunet part: a
 residual of 1.5e6 N/m at zero load, and no equilibrium).
 
+The contact pressure at a vertex of Γc (:meth:`SelfContact.pressures`) is the force the
+contact energy puts on the vertex's degrees of freedom, ``f_v = ∂E/∂u_v`` (the energy's
+gradient: ``BilinearForm.Apply`` of a form holding the contact energy alone), over the
+vertex's share of Γc, ``t ∫_Γc φ_v dA`` with ``φ_v`` the vertex's hat function (NGSolve's H1
+basis is hierarchical: a vertex's basis function is the P1 hat at any order).  Each overlap
+counts once from either wall's side, and both land on the vertex, so that
+``|f_v| / (t ∫ φ_v dA) = ∫ φ_v p dA / ∫ φ_v dA``, the mean of the contact pressure
+``p = 2 k g`` around the vertex weighted by its hat (over all of Γc: at a corner where a wall
+out of contact meets one in contact the mean counts both, and a contact zone narrower than
+the vertex's elements is averaged with the wall beside it: the figure can then fall below
+the mean pressure, force / area).  The largest over the vertices is the largest contact
+pressure; it tends to the peak as the elements shrink (measured,
+tests/physics/test_contact.py and test_hertz.py: a uniform pressure to 2e-10 in 2D and 3e-6
+in 3D, where the two walls' meshes differ; Hertz's peak within -2.6e-2, -4.7e-3 and +5.4e-4
+as the elements at the contact are halved once, twice and three times).
+
 NGSolve pairs the points once per :meth:`SelfContact.update` (within ``maxdist`` of the
 surface, at ``intorder`` quadrature points per face), at the state given; the pairs then stay
 until the next update: the caller solves with them fixed and pairs again until they hold
@@ -29,8 +45,9 @@ simplifies to zero (k = 0) crashes NGSolve, so the stiffness must be positive.
 """
 from __future__ import annotations
 
-from ngsolve import (BilinearForm, CoefficientFunction, ContactBoundary, GridFunction, IfPos,
-                     specialcf, x, y, z)
+import numpy as np
+from ngsolve import (H1, VERTEX, BilinearForm, CoefficientFunction, ContactBoundary,
+                     GridFunction, IfPos, LinearForm, NodeId, ds, specialcf, x, y, z)
 
 #: the cosine of the least angle between two walls' normals for them to be in contact (120°)
 FACING = 0.5
@@ -98,20 +115,66 @@ class SelfContact:
             g = (X + u - X.Other() - u.Other()) * cb.normal
             cb.AddEnergy(facing * density(g))
             self._probes.append((cb, BilinearForm(fes)))
+        # the nodal forces: the contact energy alone, on its own ContactBoundary and form
+        self._forces = ContactBoundary(region, region)
+        g = (X + u - X.Other() - u.Other()) * self._forces.normal
+        self._forces.AddEnergy(facing * IfPos(g, (0.5 * thickness * self.stiffness) * g * g, 0))
+        self._force_form = BilinearForm(fes)
+        self._thickness = float(thickness)
+        self._vertices, self._dofs, self._shares = _vertex_shares(fes, region)
 
-    def measure(self, vec) -> tuple[float, float]:
-        """``(area, force)`` of the contact at the state ``vec``: the area of either wall
-        where they overlap (in 2D the length times the thickness) and the normal force
-        between them, ``2 k ∫ max(g, 0)`` over one wall (times the thickness in 2D)."""
+    def measure(self, vec) -> tuple[float, float, float]:
+        """``(area, force, pressure)`` of the contact at the state ``vec``: the area of either
+        wall where they overlap (in 2D the length times the thickness), the normal force
+        between them, ``2 k ∫ max(g, 0)`` over one wall (times the thickness in 2D), and the
+        largest contact pressure, the largest of :meth:`pressures` (0 without contact)."""
         self._state.vec.data = vec
         out = []
         for cb, form in self._probes:
             cb.Update(self._state, form, intorder=self.intorder, maxdist=self.maxdist)
             out.append(float(form.Energy(self._state.vec)))
-        return out[0], out[1]
+        return out[0], out[1], float(self._pressures().max(initial=0.0))
+
+    def pressures(self, vec) -> tuple[np.ndarray, np.ndarray]:
+        """``(points, p)`` at the state ``vec``: the reference positions of Γc's vertices
+        (an array ``(n, dim)``) and the contact pressure at each, the hat-weighted mean of
+        ``2 k max(g, 0)`` around it (see the module; 0 where the walls do not touch)."""
+        self._state.vec.data = vec
+        return self._vertices.copy(), self._pressures()
+
+    def _pressures(self) -> np.ndarray:
+        """The contact pressure at Γc's vertices at the state ``self._state``."""
+        self._forces.Update(self._state, self._force_form, intorder=self.intorder,
+                            maxdist=self.maxdist)
+        f = self._state.vec.CreateVector()
+        self._force_form.Apply(self._state.vec, f)
+        nodal = f.FV().NumPy()[self._dofs]  # (vertices, dim): the force on each vertex
+        return np.linalg.norm(nodal, axis=1) / (self._thickness * self._shares)
 
     def update(self, form, vec) -> None:
         """Pair the candidate surface with itself at the state ``vec`` (a vector of ``fes``)
         and register the contact energy with the BilinearForm ``form``."""
         self._state.vec.data = vec
         self.cb.Update(self._state, form, intorder=self.intorder, maxdist=self.maxdist)
+
+
+def _vertex_shares(fes, region) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(points, dofs, shares)`` of the vertices of the boundary ``region`` of ``fes``'s mesh:
+    their positions ``(n, dim)``, the displacement's degrees of freedom at each ``(n, dim)``
+    (the vertex's hat function in every component of the VectorH1) and ``∫_region φ_v dA``,
+    the integral of the vertex's hat function over the region."""
+    mesh = fes.mesh
+    hats = H1(mesh, order=1)
+    share = LinearForm(hats)
+    share += hats.TestFunction() * ds(definedon=region)
+    share.Assemble()
+    weights = share.vec.FV().NumPy()
+    points, dofs, shares = [], [], []
+    for v in mesh.vertices:
+        w = weights[hats.GetDofNrs(NodeId(VERTEX, v.nr))[0]]
+        if w > 0:
+            points.append(v.point)
+            dofs.append(fes.GetDofNrs(NodeId(VERTEX, v.nr)))
+            shares.append(w)
+    return (np.array(points, dtype=float).reshape(-1, mesh.dim),
+            np.array(dofs, dtype=int).reshape(-1, mesh.dim), np.array(shares, dtype=float))

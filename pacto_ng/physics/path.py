@@ -20,6 +20,14 @@ and steps to ``(x - α dx, s - α ds)`` (``α`` halved until the state is admiss
 linearisation ``R - K dx - f ds = 0`` with ``c · (x - dx) = target``.  The constraint is linear,
 so it holds after every full step; the iteration stops when ``|R|`` on the free dofs is below
 Newton's ``rtol`` times the load norm at ``s``.
+
+Where the prescribed functional turns back along the path (a snap-back: Δ falls while the part
+goes on deforming), no equilibrium lies beyond the largest ``c · x`` and displacement control
+stalls.  The path is then followed by arc length (Riks' normal plane, Crisfield 1991, §9.3.2,
+with the load's weight ψ = 0, the "cylindrical" choice of §9.4.4): each step prescribes the
+state's advance ``t · (x - x₂) = l`` along the unit secant ``t`` through the last two
+equilibria ``x₁``, ``x₂``; the same bordered iteration with ``c = t``.  The secant follows the
+path through a maximum of the load and through a turning point of any one functional alike.
 """
 from __future__ import annotations
 
@@ -39,6 +47,7 @@ class PathPoint:
     load: float
     iterations: int
     state: np.ndarray = field(repr=False)
+    by_arc: bool = False  # reached by arc length (the control may have turned back)
 
 
 #: the control is held when ``|c·x - target| <= CONTROL_RTOL |target|`` (a full step meets
@@ -46,13 +55,24 @@ class PathPoint:
 CONTROL_RTOL = 1e-10
 
 
+#: a step is taken for a jump to another branch of the path, and cut, where the state moves
+#: more than JUMP times as far per unit control as on the last step (by arc length: more than
+#: JUMP times the arc length, a correction more than 60° off the secant).  As the control
+#: approaches a turning point its rate grows without bound, so displacement control cuts its
+#: steps there down to the floor and hands over to arc length.
+JUMP = 2.0
+
+
 class PathFailure(RuntimeError):
     """No equilibrium at a control value, even after cutting the control increment."""
 
 
-def solve_controlled(problem, x, load: float, c, target: float, s: NewtonSettings):
+def solve_controlled(problem, x, load: float, c, target: float, s: NewtonSettings, *,
+                     tol: float | None = None):
     """Newton for ``(x, s)`` with ``c · x = target`` from the state ``x`` (updated in place)
-    and load factor ``load``: ``(converged, load factor, iterations, why)``."""
+    and load factor ``load``: ``(converged, load factor, iterations, why)``.  The constraint
+    holds within ``tol`` (default CONTROL_RTOL ``|target|``)."""
+    tol = CONTROL_RTOL * abs(target) if tol is None else tol
     r, f, a, b, trial = (x.CreateVector() for _ in range(5))
 
     def res_at(vec, lam):
@@ -64,7 +84,7 @@ def solve_controlled(problem, x, load: float, c, target: float, s: NewtonSetting
         ref = problem.load_norm(load) if load else problem.load_norm(1.0)
         if not np.isfinite(res):
             return False, load, it, "non-finite residual"
-        held = abs(c.InnerProduct(x) - target) <= CONTROL_RTOL * abs(target)
+        held = abs(c.InnerProduct(x) - target) <= tol
         if res <= s.rtol * ref and held:
             return True, load, it, ""
         if it == s.max_iter:
@@ -96,34 +116,43 @@ def solve_controlled(problem, x, load: float, c, target: float, s: NewtonSetting
 
 
 def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, stop,
-          max_points: int = 100, max_step: float | None = None,
-          on_point=None) -> list[PathPoint]:
+          max_points: int = 100, max_step: float | None = None, on_point=None,
+          arc: bool = True) -> list[PathPoint]:
     """Equilibria along the path from the state ``x`` at load factor ``load`` (``x`` updated
     in place to the last equilibrium), the control ``c · x`` raised by ``step`` at first, until
     ``stop(point)`` is true or ``max_points`` are found.  The increment grows by ``s.grow``
     after a step that took at most ``s.easy`` iterations (up to ``max_step``, default
     8 ``step``) and is halved after a failed one (down to ``s.min_increment`` of ``step``);
     each step starts from the secant through the last two equilibria where that state is
-    admissible.  Returns the :class:`PathPoint` of every step; ``on_point(point)`` gets each
-    as it is found.  PathFailure when a step cannot be cut further (the points found so far
-    in ``.points``)."""
+    admissible.  Where the control cannot be raised further (it turns back along the path)
+    and ``arc``, the path goes on by arc length (:func:`_by_arc_length`).  Returns the
+    :class:`PathPoint` of every step; ``on_point(point)`` gets each as it is found.
+    PathFailure when a step cannot be cut further (the points found so far in ``.points``)."""
     max_step = 8.0 * step if max_step is None else max_step
     points, history = [], [(c.InnerProduct(x), float(load), x.FV().NumPy().copy())]
-    inc = step
+    inc, rate = step, None  # the increment; the last step's state change per unit control
+    longest = 0.0  # the longest step of the state
     while len(points) < max_points:
         here = history[-1]
         goal = here[0] + inc
         lam = _predict(problem, history, goal, x)
         ok, lam, it, why = solve_controlled(problem, x, lam, c, goal, s)
+        moved = float(np.linalg.norm(x.FV().NumPy() - here[2])) / abs(inc)
+        if ok and rate is not None and moved > JUMP * rate:
+            ok, why = False, "the state jumped (to another branch of the path)"
         if not ok:
             x.FV().NumPy()[:] = here[2]
             inc *= 0.5
-            if abs(inc) < s.min_increment * abs(step):
-                failure = PathFailure(f"no equilibrium beyond the control {here[0]:.6g} "
-                                      f"(load factor {here[1]:.6g}): {why}")
-                failure.points = points
-                raise failure
-            continue
+            if abs(inc) >= s.min_increment * abs(step):
+                continue
+            if arc and len(history) > 1:
+                return _by_arc_length(problem, x, c, history, s, stop=stop, points=points,
+                                      max_points=max_points, on_point=on_point, longest=longest)
+            failure = PathFailure(f"no equilibrium beyond the control {here[0]:.6g} "
+                                  f"(load factor {here[1]:.6g}): {why}")
+            failure.points = points
+            raise failure
+        rate, longest = moved, max(longest, moved * abs(inc))
         history.append((goal, lam, x.FV().NumPy().copy()))
         del history[:-2]
         point = PathPoint(goal, lam, it, history[-1][2].copy())
@@ -134,6 +163,53 @@ def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, s
             break
         if it <= s.easy:
             inc = min(abs(inc) * s.grow, abs(max_step)) * np.sign(step)
+    return points
+
+
+def _by_arc_length(problem, x, c, history, s: NewtonSettings, *, stop, points, max_points,
+                   on_point, longest: float = 0.0) -> list[PathPoint]:
+    """Go on along the path from the last two equilibria of ``history`` ((control, load,
+    state) each) by arc length (see the module): each step advances the state by ``l`` along
+    the unit secant through the last two, ``l`` the last step's length at first, grown and
+    halved as :func:`trace` does its increment (up to 8 times the first or ``longest``, the
+    longest step before, whichever is longer; at least ``s.min_increment`` of the first).  Appends to ``points`` (the control ``c · x`` still recorded,
+    ``by_arc`` set) until ``stop(point)`` or ``max_points``; returns them.  PathFailure when a
+    step cannot be cut further."""
+    first = float(np.linalg.norm(history[-1][2] - history[-2][2]))
+    length, t, most = first, x.CreateVector(), max(8.0 * first, longest)
+    while len(points) < max_points:
+        (_, l1, x1), (_, l2, x2) = history[-2], history[-1]
+        secant = x2 - x1
+        t.FV().NumPy()[:] = secant / np.linalg.norm(secant)
+        along = t.InnerProduct(x)  # x holds x2 here
+        w = length / np.linalg.norm(secant)
+        x.FV().NumPy()[:] = x2 + w * secant  # the secant's predictor, where admissible
+        lam = l2 + w * (l2 - l1)
+        if not problem.admissible(x):
+            x.FV().NumPy()[:], lam = x2, l2
+        ok, lam, it, why = solve_controlled(problem, x, lam, t, along + length, s,
+                                            tol=CONTROL_RTOL * (abs(along) + length))
+        if ok and np.linalg.norm(x.FV().NumPy() - x2) > JUMP * length:
+            ok, why = False, "the state jumped (to another branch of the path)"
+        if not ok:
+            x.FV().NumPy()[:] = x2
+            length *= 0.5
+            if length < s.min_increment * first:
+                failure = PathFailure(f"no equilibrium by arc length beyond the control "
+                                      f"{history[-1][0]:.6g} (load factor {l2:.6g}): {why}")
+                failure.points = points
+                raise failure
+            continue
+        history.append((c.InnerProduct(x), lam, x.FV().NumPy().copy()))
+        del history[:-2]
+        point = PathPoint(history[-1][0], lam, it, history[-1][2].copy(), by_arc=True)
+        points.append(point)
+        if on_point is not None:
+            on_point(point)
+        if stop(point):
+            break
+        if it <= s.easy:
+            length = min(length * s.grow, most)
     return points
 
 
@@ -154,14 +230,20 @@ def _predict(problem, history, goal: float, x) -> float:
 
 
 def load_maximum(points) -> tuple[float, float] | None:
-    """``(control, load)`` at the largest load factor along the path ``points``
-    (:class:`PathPoint`), where the load falls after it: the maximum of the parabola through
-    the largest and its two neighbours; None where the largest is the first or the last."""
+    """``(control, load)`` at the first maximum of the load factor along the path ``points``
+    (:class:`PathPoint`), a point whose load is above its neighbours': the maximum of the
+    parabola through it and its two neighbours (the point itself where the control turns
+    back among them); None where the load never falls."""
     controls = np.array([q.control for q in points], dtype=float)
     loads = np.array([q.load for q in points], dtype=float)
-    top = int(np.argmax(loads)) if len(loads) else 0
-    if not 0 < top < len(loads) - 1:
+    tops = [i for i in range(1, len(loads) - 1)
+            if loads[i] >= loads[i - 1] and loads[i] > loads[i + 1]]
+    if not tops:
         return None
-    a, b, c = np.polyfit(controls[top - 1:top + 2], loads[top - 1:top + 2], 2)
+    top = tops[0]
+    near = controls[top - 1:top + 2]
+    if not (np.all(np.diff(near) > 0) or np.all(np.diff(near) < 0)):
+        return float(controls[top]), float(loads[top])
+    a, b, c = np.polyfit(near, loads[top - 1:top + 2], 2)
     at = -b / (2.0 * a) if a < 0 else controls[top]
     return float(at), float(np.polyval([a, b, c], at))

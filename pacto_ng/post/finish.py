@@ -158,10 +158,12 @@ def _write_files(subject: Subject, data: dict, sweeps: dict, shown, t0: float) -
         P = data["deformed_state"]["pressure"]
         title = (f"{run['case']} part, {shown} {P:.3g} {unit}, {subject.params.model} "
                  f"(true scale)")
+        touch = sw.contact_points()  # --contact: the walls' vertices in contact, marked
         if part.dim == 2:
-            plot_deformed(out / "deformed.png", part.mesh, u, title=title, mirror=line or False)
+            plot_deformed(out / "deformed.png", part.mesh, u, title=title, mirror=line or False,
+                          contact=touch)
         else:
-            deformed_picture(out / "deformed.png", part.mesh, u, title=title)
+            deformed_picture(out / "deformed.png", part.mesh, u, title=title, contact=touch)
         if subject.darcy is not None:
             p, p_in = subject.darcy
             extra["p"] = _vertex_values(p, subject.mesh, part.mesh) * (P / p_in)

@@ -78,7 +78,7 @@ CONTACT_PENALTY, CONTACT_REACH = 1e3, 3.0
 CONTACT_CYCLES = 20
 #: past a pressure maximum: the path is followed in steps of this fraction of the output
 #: motion Newton reached, at most PEAK_STEPS of them (:meth:`PartAnalysis.sweep`)
-PEAK_STEP, PEAK_STEPS = 0.1, 30
+PEAK_STEP, PEAK_STEPS = 0.1, 60
 #: ... growing after easy steps to at most PEAK_GROWTH times the first; Newton's load ramp
 #: gives up once its increment falls below RAMP_FLOOR of the pressure (the path takes over)
 PEAK_GROWTH, RAMP_FLOOR = 2.0, 1.0 / 64
@@ -256,7 +256,8 @@ class PartAnalysis:
         vectors = tuple(tuple(float(f.InnerProduct(x)) for f in forms) for forms in axes)
         along = tuple(float(np.dot(p.direction, vec)) for p, vec in zip(self.ports, vectors))
         u_v = np.asarray(self.mech.gfu(self._vertices)).reshape(-1, self.mesh.dim)
-        contact = (None, None) if self.mech.contact is None else self.mech.contact.measure(x)
+        contact = ((None,) * 3 if self.mech.contact is None
+                   else self.mech.contact.measure(x))  # area, force, largest pressure
         return SweepPoint(pressure, float(delta_form.InnerProduct(x)),
                           float(np.max(np.linalg.norm(u_v, axis=1))),
                           float(np.min(self._J(self._qpoints))), int(iterations), True, 1.0,
@@ -333,7 +334,7 @@ class PartAnalysis:
         """``(point, peak)`` after Newton lost the equilibrium on its way to
         ``failed.pressure``: the path from the last equilibrium it reached, followed with Δ
         prescribed (:func:`~pacto_ng.physics.path.trace`, steps of PEAK_STEP of the Δ reached;
-        it stops where Δ turns back) until the pressure is back up to the one asked, then
+        by arc length where Δ turns back) until the pressure is back up to the one asked, then
         Newton at that pressure from there (``past_peak``); the pressure maximum passed on the
         way ({"pressure", "delta"}: Δ there, None if the pressure never fell); the failed
         point where the path does not get there within PEAK_STEPS steps.  ``say(line)`` gets
@@ -343,11 +344,11 @@ class PartAnalysis:
         reached = c.InnerProduct(x)
         if reached == 0.0:
             return failed, None
-        delta = self.output_form.FV().NumPy()
 
         def line(q):
-            say(f"    on the path: Δ = {np.dot(delta, q.state):.5g} at P = {q.load:.5g}, "
-                f"{q.iterations} Newton iterations")
+            how = " (by arc length)" if q.by_arc else ""
+            say(f"    on the path: Δ = {q.control:.5g} at P = {q.load:.5g}, "
+                f"{q.iterations} Newton iterations{how}")
 
         start = PathPoint(reached, failed.load_reached * P, 0, x.FV().NumPy().copy())
         try:
@@ -361,12 +362,8 @@ class PartAnalysis:
             if say is not None:
                 say(f"    the path stops: {err}")
         peak = load_maximum([start] + path)
-        if peak:
-            # Δ at the maximum: between the path's points on either side of it
-            points = sorted([start] + path, key=lambda q: q.control)
-            at = np.interp(peak[0], [q.control for q in points],
-                           [float(np.dot(delta, q.state)) for q in points])
-            peak = {"pressure": float(np.sign(failed.pressure) * peak[1]), "delta": float(at)}
+        if peak:  # the control is Δ
+            peak = {"pressure": float(np.sign(failed.pressure) * peak[1]), "delta": peak[0]}
         if not path or path[-1].load < P:
             return failed, peak
         point = self.solve(failed.pressure)  # Newton at the pressure, from the path's state
@@ -378,7 +375,8 @@ class PartAnalysis:
             what = f"Δ = {pt.delta:.5g}" + (" (past a pressure maximum)" if pt.past_peak else "")
             if pt.contact_area:
                 what += (f", walls in contact over {pt.contact_area:.3g} m² with "
-                         f"{pt.contact_force:.3g} N")
+                         f"{pt.contact_force:.3g} N, largest contact pressure "
+                         f"{pt.contact_pressure:.3g} Pa")
         elif skipped:
             what = "not attempted (a lower pressure failed)"
         else:

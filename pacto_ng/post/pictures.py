@@ -40,13 +40,16 @@ def _framed(lo, hi):
     return fig, ax
 
 
-def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mirror=True):
+def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mirror=True,
+                  contact=None):
     """``deformed.png``: the deformed solid coloured by |u| over the undeformed outline.
 
     True scale (no magnification), equal axes; the outline is every boundary edge of the
     reference mesh.  ``mirror``: a :class:`~pacto_ng.post.domain.Line` to draw the mirror
     image about too (a part solved on a symmetric half), True for the line of ``mesh``'s own
-    straight ``symmetry`` boundary if it has one, False for the half alone.
+    straight ``symmetry`` boundary if it has one, False for the half alone.  ``contact``: the
+    reference positions ``(n, 2)`` of the walls' vertices in contact, drawn as red dots where
+    ``u`` moves them (:meth:`~.sweep_result.Sweep.contact_points`).
     """
     from ngsolve import BND
 
@@ -63,6 +66,10 @@ def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mi
     segs = np.array([[mesh[v].point for v in el.vertices] for el in mesh.Elements(BND)
                      if line is None or el.mat != "symmetry"]).reshape(-1, 2, 2)
     def_pts = pts + uv
+    touch = np.zeros((0, 2)) if contact is None else np.asarray(contact, dtype=float)
+    if len(touch):  # where u moves them
+        moved = u(mesh(touch[:, 0].copy(), touch[:, 1].copy()))
+        touch = touch + np.asarray(moved).reshape(-1, 2)
     if line is not None:  # the mirror image: reflected positions, same |u|
         n = len(pts)
         tri = np.vstack([tri, tri[:, ::-1] + n])
@@ -70,12 +77,17 @@ def plot_deformed(path, mesh, u, *, title: str | None = None, dpi: int = 150, mi
         segs = np.concatenate([segs, line.reflect(segs)])
         pts = np.vstack([pts, line.reflect(pts)])
         def_pts = np.vstack([def_pts, line.reflect(def_pts)])
+        touch = np.vstack([touch, line.reflect(touch)]) if len(touch) else touch
     lo = np.minimum(pts.min(axis=0), def_pts.min(axis=0))
     hi = np.maximum(pts.max(axis=0), def_pts.max(axis=0))
     fig, ax = _framed(lo, hi)
     tc = ax.tripcolor(Triangulation(def_pts[:, 0], def_pts[:, 1], tri), mag, shading="gouraud",
                       cmap="viridis")
     ax.add_collection(LineCollection(segs, colors="k", linewidths=0.8))
+    if len(touch):
+        ax.plot(touch[:, 0], touch[:, 1], "o", color="red", ms=2.5, ls="none",
+                label="walls in contact")
+        ax.legend(loc="upper right", fontsize="small", framealpha=0.8)
     # said under the axis (a legend below a wide, flat part ran into the axis label)
     ax.set_xlabel(f"{ax.get_xlabel()}; black: the undeformed outline")
     fig.colorbar(tc, ax=ax, label="|u| (m), deformed solid", shrink=0.9)

@@ -191,10 +191,14 @@ def pressure_picture(path, mesh, p_rel, rho, title: str = "") -> None:
     _screenshot(p, path)
 
 
-def deformed_picture(path, mesh, u, title: str = "") -> None:
+def deformed_picture(path, mesh, u, title: str = "", contact=None) -> None:
     """The deformed part of a 3D analysis: its surface moved by ``u`` (a vector field on
     ``mesh``, true scale) coloured by |u| over the undeformed surface's feature edges, seen
-    obliquely and from above (+z), with the axes in metres."""
+    obliquely and from above (+z), with the axes in metres; ``contact``: the reference
+    positions ``(n, 3)`` of the walls' vertices in contact, drawn as red dots where ``u``
+    moves them."""
+    import pyvista as pv
+
     grid = mesh_to_pyvista(mesh)
     pts = np.asarray(grid.points, dtype=float)
     uv = np.asarray(u(mesh(pts[:, 0].copy(), pts[:, 1].copy(), pts[:, 2].copy())))
@@ -204,6 +208,11 @@ def deformed_picture(path, mesh, u, title: str = "") -> None:
     moved.points = pts + uv.reshape(-1, 3)
     surface = moved.extract_surface(algorithm="dataset_surface")
     both = np.r_[pts, moved.points]
+    touch = None
+    if contact is not None and len(contact):
+        at = np.asarray(contact, dtype=float)
+        shift = np.asarray(u(mesh(at[:, 0].copy(), at[:, 1].copy(), at[:, 2].copy())))
+        touch = pv.PolyData(at + shift.reshape(-1, 3))
     box = np.c_[both.min(axis=0), both.max(axis=0)].ravel()  # deformed and undeformed
     p = plotter((1, 2))
     for col, view in enumerate(("isometric", "xy")):
@@ -211,12 +220,15 @@ def deformed_picture(path, mesh, u, title: str = "") -> None:
         p.add_mesh(edges, color="black", line_width=1)
         p.add_mesh(surface, scalars="u_mag", cmap="viridis", show_scalar_bar=col == 1,
                    scalar_bar_args=bar("displacement (m)", fmt="%.3g"))
+        if touch is not None:
+            p.add_mesh(touch, color="red", point_size=6, render_points_as_spheres=True)
         show_axes(p, box, top=view == "xy")
         if view == "xy":
             p.view_xy()
             p.camera.zoom(0.85)  # room for the scalar bar
         else:
             oblique(p)
-        p.add_text(title if col == 0 and title else
-                   "from above: the undeformed outline in black", font_size=9)
+        words = ("from above: the undeformed outline in black"
+                 + ("; red: walls in contact" if touch is not None else ""))
+        p.add_text(title if col == 0 and title else words, font_size=9)
     _screenshot(p, path)

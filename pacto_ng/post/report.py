@@ -23,7 +23,10 @@ end (:func:`short_table`); ``report.md`` is :mod:`.report_md`.
                                (the part's solid rounded onto the design mesh) and per kind ``delta``,
                                every port's ``d·u`` (``ports``) and displacement vector
                                (``vectors``), ``max_u``, ``min_J``, ``newton_iterations``,
-                               ``converged``, ``load_reached``
+                               ``converged``, ``load_reached``, ``past_peak``, ``contact``
+                               (``--contact``: ``area``, ``force``, ``pressure``; else None)
+``first_contact``              ``--contact``: per kind the first swept pressure with the walls
+                               touching and the one before it (:func:`first_contact`); else None
 ``gap_at_largest_pressure``,   per kind (analysed − expected)/|expected| (None as built)
 ``gap_at_smallest_pressure``
 ``gap_parts``                  per wall-pressure kind, at the largest pressure, the gap taken
@@ -78,6 +81,18 @@ DEFINITIONS = {
                  "boundary and the part's mesh under the same Darcy load; wall_pressure = "
                  "(kind - darcy), the pressure on the wetted walls instead of the Darcy body "
                  "force; they add up to total = (kind - expected)",
+    "contact": "--contact, per pressure and kind: area, where the walls overlap (m², of one "
+               "wall; in 2D its length times the thickness); force, the normal force between "
+               "them (N); pressure, the largest contact pressure (Pa), the largest over the "
+               "walls' vertices of the contact pressure averaged around the vertex with its "
+               "hat function as the weight (it tends to the peak as the elements shrink; "
+               "over a zone narrower than a few elements it is averaged with the walls "
+               "beside it and can fall below force / area: refine the mesh)",
+    "first_contact": "--contact, per kind: pressure, the first pressure of the sweep at which "
+                     "the walls touch (the smallest swept pressure with a contact area > 0; a "
+                     "swept pressure, not interpolated), and last_without, the swept pressure "
+                     "before it, at which they did not touch: contact began between the two "
+                     "(None: no swept pressure with contact, or none without)",
     "pressure_maximum": "per kind, the largest pressure on the equilibrium path where Newton "
                         "lost the equilibrium at a pressure of the sweep and the path, "
                         "followed on with Delta prescribed, showed the pressure falling "
@@ -128,9 +143,28 @@ def _point(pt, ports) -> dict:
             "max_u": num(pt.max_u), "min_J": num(pt.min_j),
             "newton_iterations": int(pt.iterations), "converged": bool(pt.converged),
             "load_reached": num(pt.load_reached), "past_peak": bool(pt.past_peak),
-            # --contact: where the walls touch (m²) and the force between them (N)
+            # --contact: where the walls touch (m²), the force between them (N) and the
+            # largest contact pressure (Pa)
             "contact": None if pt.contact_area is None else
-            {"area": num(pt.contact_area), "force": num(pt.contact_force)}}
+            {"area": num(pt.contact_area), "force": num(pt.contact_force),
+             "pressure": num(pt.contact_pressure)}}
+
+
+def first_contact(sweep) -> dict | None:
+    """``{"pressure", "last_without"}`` of a sweep with contact (None without): the smallest
+    swept pressure at which the walls touch (a contact area > 0; None if they touch at none)
+    and the largest converged swept pressure below it at which they do not (None if there is
+    none): the walls first touch between the two."""
+    if all(p.contact_area is None for p in sweep.points):
+        return None
+    out = {"pressure": None, "last_without": None}
+    for p in sweep.points:
+        if p.contact_area:
+            out["pressure"] = float(p.pressure)
+            break
+        if p.converged:
+            out["last_without"] = float(p.pressure)
+    return out
 
 
 def _gaps(row, kinds) -> dict:
@@ -158,7 +192,8 @@ def analysis_json(*, run: dict, settings: dict, part: dict, seal, materials, swe
     definitions = {k: v for k, v in DEFINITIONS.items()
                    if k not in (("expected", "darcy", "gap", "wetting", "rounded", "gap_parts")
                                 if built
-                                else ("wetting_as_built",))}
+                                else ("wetting_as_built",))
+                   + (() if settings.get("contact") else ("contact", "first_contact"))}
     if built:
         definitions["wetting"] = definitions.pop("wetting_as_built")
     return {"run": run, "settings": dict(settings, kinds=kinds), "part": part, "seal": seal,
@@ -167,6 +202,8 @@ def analysis_json(*, run: dict, settings: dict, part: dict, seal, materials, swe
             "gap_at_smallest_pressure": _gaps(rows[0], kinds) if expected else None,
             "gap_parts": gap_parts(rows[-1], kinds) if expected else None,
             "pressure_maximum": {k: sweeps[k].peak for k in kinds},
+            "first_contact": ({k: first_contact(sweeps[k]) for k in kinds}
+                              if settings.get("contact") else None),
             "deformed_state": deformed, "warnings": list(warnings), "wall_time_s": wall}
 
 

@@ -11,7 +11,7 @@ def report_md(d) -> str:
     """``report.md``: the same sections for every part (2D or 3D, a run's or as built): the
     part, the seal, the analyses, the gap, the warnings, the pictures."""
     L = _head(d) + _part_section(d) + _seal_section(d) + _analyses_section(d)
-    L += _gap_section(d) + _warnings_section(d) + _pictures_section(d)
+    L += _contact_section(d) + _gap_section(d) + _warnings_section(d) + _pictures_section(d)
     return "\n".join(L) + "\n"
 
 
@@ -149,6 +149,41 @@ def _analyses_section(d) -> list[str]:
     return L
 
 
+def _contact_section(d) -> list[str]:
+    """``--contact``: per pressure and kind where the walls touch, the force between them and
+    the largest contact pressure; per kind the first swept pressure with contact."""
+    if not d["settings"].get("contact"):
+        return []
+    kinds, unit = d["settings"]["kinds"], d["run"]["load_unit"]
+    L = ["### Walls in contact", "", f"{d['definitions']['contact']}.", "",
+         "| P | kind | contact area (m²) | force (N) | largest contact pressure (Pa) | "
+         "force / area (Pa) |", "|---|---|---|---|---|---|"]
+    for r in d["pressures"]:
+        for k in kinds:
+            c = r[k]["contact"] or {}
+            area, force = c.get("area"), c.get("force")
+            mean = force / area if area and force is not None else None
+            L.append(f"| {r['pressure']:.4g} | {k} | {fmt_value(area)} | {fmt_value(force)} | "
+                     f"{fmt_value(c.get('pressure'))} | {fmt_value(mean)} |")
+    L.append("")
+    for k, first in (d.get("first_contact") or {}).items():
+        if first is None:
+            continue
+        if first["pressure"] is None:
+            L.append(f"* {k}: the walls touch at no swept pressure"
+                     + ("." if first["last_without"] is None else
+                        f" (up to {first['last_without']:.4g} {unit})."))
+            continue
+        before = ("the sweep's first pressure: they may touch below it" if
+                  first["last_without"] is None else
+                  f"not at {first['last_without']:.4g} {unit}, the pressure before it: "
+                  f"contact began between the two")
+        L.append(f"* {k}: **first contact at {first['pressure']:.4g} {unit}**, the first "
+                 f"swept pressure at which the walls touch (a swept pressure, not "
+                 f"interpolated; {before}).")
+    return L + [""]
+
+
 def _gap_section(d) -> list[str]:
     L = ["## The gap", ""]
     if d["gap_at_largest_pressure"] is None:
@@ -194,7 +229,9 @@ def _pictures_section(d) -> list[str]:
     L = ["## Pictures", ""]
     if ds["kind"] is not None:
         L += [f"The {ds['kind']} analysis at {ds['pressure']:.4g} {d['run']['load_unit']}, "
-              f"true scale, over the undeformed part:", "", "![deformed](deformed.png)", ""]
+              f"true scale, over the undeformed part"
+              + (" (red: the walls' vertices in contact)" if d["settings"].get("contact")
+                 else "") + ":", "", "![deformed](deformed.png)", ""]
     L += ["Files: `analysis.json` (every number above), `analysis.csv`, `part.stl` (the part, "
           "closed and whole, in mm), `remeshed.vtu` / `deformed.vtu` (u, J, stress, von_mises"
           + (", p" if d["run"].get("as_built") is False else "") + "; reference / deformed "

@@ -25,6 +25,7 @@ class SweepPoint:
     vectors: tuple = ()  # every port's displacement vector (its mean over an edge or a face)
     contact_area: float | None = None  # with contact: where the walls touch (m², per wall)
     contact_force: float | None = None  # ... and the normal force between them (N)
+    contact_pressure: float | None = None  # ... and the largest contact pressure (Pa)
     past_peak: bool = False  # reached by following the path past a pressure maximum
 
 
@@ -71,6 +72,16 @@ class Sweep:
         gf = GridFunction(self.analysis.mech.fes)
         gf.vec.FV().NumPy()[:] = self.states[i]
         return gf
+
+    def contact_points(self, i: int | None = None):
+        """The reference positions ``(n, dim)`` of the walls' vertices in contact (a positive
+        contact pressure, :meth:`~pacto_ng.physics.contact.SelfContact.pressures`) at sweep
+        point ``i`` (default: the last converged); None without contact."""
+        contact = self.analysis.mech.contact
+        if contact is None:
+            return None
+        points, pressures = contact.pressures(self.displacement(i).vec)
+        return points[pressures > 0]
 
     def table(self) -> list[dict]:
         """One dict per pressure (for CSV/JSON): every port's ``d·u`` as ``port_<region>`` and,

@@ -140,5 +140,41 @@ def test_contact_changes_nothing_where_no_walls_touch(edge_run, tmp_path):
     for row, ref in zip(data["pressures"], plain["pressures"]):
         for kind in ("fixed", "follower", "darcy"):
             assert row[kind]["delta"] == pytest.approx(ref[kind]["delta"], rel=1e-8)
-            assert row[kind]["contact"] == {"area": 0.0, "force": 0.0}
+            assert row[kind]["contact"] == {"area": 0.0, "force": 0.0, "pressure": 0.0}
             assert ref[kind]["contact"] is None
+    assert plain["first_contact"] is None
+    assert data["first_contact"] == {k: {"pressure": None, "last_without": 1e4}
+                                     for k in ("darcy", "fixed", "follower")}
+
+
+def test_contact_is_reported_where_walls_touch(tmp_path):
+    """``--contact`` on a part whose walls meet: tests/post/cases/slotted_block.py as built
+    (a slotted block squeezed by a pressure on its top and bottom, 264 elements), at 500,
+    1500 and 3000 Pa.  The slot is open at 500 Pa and shut at 1500 Pa: analysis.json records
+    per pressure and kind the contact's area, force and largest pressure (0 where the walls do
+    not touch, growing with the load where they do), and per kind the first swept pressure
+    with contact and the one before it; report.md tabulates them; deformed.png marks the
+    walls' vertices in contact in red."""
+    from matplotlib.image import imread
+
+    out = tmp_path / "slot"
+    assert main(["analyse", str(Path(__file__).parent / "cases" / "slotted_block.py"),
+                 "--as-built", "--pressures", "500,1500,3000", "--contact", "--out", str(out),
+                 "--quiet"]) == 0
+    data = json.loads((out / "analysis.json").read_text())
+    kinds = data["settings"]["kinds"]
+    assert kinds == ["fixed", "follower"] and {"contact", "first_contact"} <= set(
+        data["definitions"])
+    for kind in kinds:
+        c = [row[kind]["contact"] for row in data["pressures"]]
+        assert all(set(ci) == {"area", "force", "pressure"} for ci in c)
+        assert c[0] == {"area": 0.0, "force": 0.0, "pressure": 0.0}
+        for ci in c[1:]:
+            assert ci["area"] > 0 and ci["force"] > 0 and ci["pressure"] > 0
+        assert c[2]["force"] > c[1]["force"] and c[2]["pressure"] > c[1]["pressure"]
+        assert data["first_contact"][kind] == {"pressure": 1500.0, "last_without": 500.0}
+    md = (out / "report.md").read_text()
+    assert "### Walls in contact" in md and "first contact at 1500 Pa" in md
+    rgb = imread(out / "deformed.png")[..., :3]
+    red = (rgb[..., 0] > 0.9) & (rgb[..., 1] < 0.2) & (rgb[..., 2] < 0.2)
+    assert red.sum() > 20
