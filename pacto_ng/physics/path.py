@@ -213,6 +213,19 @@ def _by_arc_length(problem, x, c, history, s: NewtonSettings, *, stop, points, m
     return points
 
 
+def rising(problem, x, load: float, c) -> float:
+    """``+1`` or ``-1``: the sign of the control's change where the path from the equilibrium
+    ``x`` at ``load`` goes on with the load rising, ``-sign(c · K⁻¹ ∂R/∂s)`` (the tangent:
+    ``K dx + ∂R/∂s ds = 0``); ``+1`` where the control does not move with the load."""
+    r, f, b = (x.CreateVector() for _ in range(3))
+    problem.residual(x, r, load)
+    problem.residual(x, f, load + 1.0)
+    f.data -= r
+    problem.assemble_tangent(x, load)
+    problem.solve_tangent(f, b)
+    return -1.0 if c.InnerProduct(b) > 0.0 else 1.0
+
+
 def _predict(problem, history, goal: float, x) -> float:
     """Put the secant predictor's state for the control ``goal`` into ``x`` (the last
     equilibrium's state where only one is known, or where the secant's is not admissible);

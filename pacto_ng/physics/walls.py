@@ -52,21 +52,40 @@ def outward_normal(mesh, boundary: str):
     ``specialcf.normal(d)``.  ValueError if a facet of ``boundary`` lies inside the mesh
     (its two elements' normals cancel): a wall must bound the solid.
     """
-    d = mesh.dim
     fes = FacetFESpace(mesh, order=0)
-    q, n = fes.TestFunction(), specialcf.normal(d)
-    elem = [LinearForm(n[i] * q * dx(element_boundary=True)).Assemble().vec.FV().NumPy()
-            for i in range(d)]
-    wall = [LinearForm(n[i] * q * ds(boundary)).Assemble().vec.FV().NumPy() for i in range(d)]
-    dot = sum(a * b for a, b in zip(elem, wall))
-    size = sum(b * b for b in wall)
+    dot, size = _facet_orientation(mesh, fes, boundary)
     on = size > 0
     if np.any(np.abs(dot[on]) < 0.5 * size[on]):
         raise ValueError(f"boundary '{boundary}' runs inside the part: the pressure must act on "
                          f"walls that bound the solid")
     sign = GridFunction(fes)
     sign.vec.FV().NumPy()[:] = np.where(dot < 0.0, -1.0, 1.0)
-    return sign * n
+    return sign * specialcf.normal(mesh.dim)
+
+
+def _facet_orientation(mesh, fes, boundary: str):
+    """Per facet of ``fes`` (``FacetFESpace(order=0)``): the dot product of ``∫ n_T dA`` of
+    the volume elements beside it with ``∫ n dA`` of ``boundary``'s element on it, and the
+    latter's squared size (0 off the boundary; see :func:`outward_normal`)."""
+    q, n = fes.TestFunction(), specialcf.normal(mesh.dim)
+    elem = [LinearForm(n[i] * q * dx(element_boundary=True)).Assemble().vec.FV().NumPy()
+            for i in range(mesh.dim)]
+    wall = [LinearForm(n[i] * q * ds(boundary)).Assemble().vec.FV().NumPy()
+            for i in range(mesh.dim)]
+    return sum(a * b for a, b in zip(elem, wall)), sum(b * b for b in wall)
+
+
+def solid_boundaries(mesh) -> tuple[str, ...]:
+    """The named boundaries of ``mesh`` whose every facet bounds the solid (not an interface
+    between two of its domains), sorted: the surfaces that can come into contact."""
+    fes = FacetFESpace(mesh, order=0)
+    out = []
+    for name in sorted(set(mesh.GetBoundaries())):
+        dot, size = _facet_orientation(mesh, fes, name)
+        on = size > 0
+        if np.any(on) and np.all(np.abs(dot[on]) >= 0.5 * size[on]):
+            out.append(name)
+    return tuple(out)
 
 
 @dataclass(frozen=True)

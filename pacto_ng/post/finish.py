@@ -16,7 +16,7 @@ import numpy as np
 from ..errors import InputError
 from ..files import atomic_write_text
 from ..params import Parameters
-from ..physics.walls import pressure_body_force
+from ..physics.walls import pressure_body_force, solid_boundaries
 from .domain import symmetry_line
 from .export import material_names, write_vtu
 from .materials import STIFF
@@ -39,7 +39,7 @@ class Subject:
     entry of analysis.json; ``expected`` the rows of :func:`~.expected.expected_sweep` (None
     as built); ``darcy`` ``(p, P_in)``: the thresholded design's Darcy field on ``mesh``
     (None as built); ``h`` the design's element size; ``contact``: every boundary of the part
-    in frictionless self-contact."""
+    that bounds its solid in frictionless self-contact."""
 
     case: object
     params: Parameters
@@ -116,7 +116,7 @@ def _sweep(subject: Subject, kind, pressures, ports, supports, quiet):
         p, p_in = subject.darcy
         extra = dict(body=pressure_body_force(p), body_pressure=p_in)
     if subject.contact:
-        extra["contact"] = tuple(sorted(set(subject.part.mesh.GetBoundaries())))
+        extra["contact"] = solid_boundaries(subject.part.mesh)  # not the domains' interfaces
     try:
         ana = PartAnalysis(subject.part.mesh, kind, params=subject.params, supports=supports,
                            ports=ports, **extra)

@@ -59,12 +59,12 @@ from ngsolve import VOL, Grad, InnerProduct, Integrate, LinearForm, Parameter
 from ..errors import InputError
 from ..physics.contact import SelfContact
 from ..physics.energy import make_energy
-from ..physics.equilibrium import NewtonFailure
+from ..physics.equilibrium import NewtonFailure, WarmState
 from ..physics.loads import Port, Spring
 from ..physics.materials import jacobian
 from ..physics.mechanics import Mechanics, Supports
 from ..physics.mixed import formulation_for, has_simplices
-from ..physics.path import PathFailure, PathPoint, load_maximum, trace
+from ..physics.path import PathFailure, PathPoint, load_maximum, rising, trace
 from ..physics.walls import WallPressure, follower_terms, outward_normal
 from ..threads import compute
 from .materials import STIFF
@@ -311,36 +311,42 @@ class PartAnalysis:
             raise ValueError("pressures: give them in increasing order of size (each pressure "
                              "starts from the last one's equilibrium)")
         out = Sweep(self.kind, [], self)
-        failed = False
+        failed, last = False, None  # last: the last equilibrium's (pressure, state)
         with compute():
             for P in pressures:
                 t0 = time.perf_counter()
                 skipped = failed
                 pt = self._failed(P, 0, 0.0) if skipped else self.solve(P)
                 if not (pt.converged or skipped or self.mech.contact is not None):
-                    pt, peak = self._past_peak(pt, say)
+                    pt, peak = self._past_peak(pt, last, say)
                     out.peak = peak or out.peak
                     if peak and say is not None:
                         say(f"  {self.kind} {self.model}: a pressure maximum "
                             f"{peak['pressure']:.5g} at Δ = {peak['delta']:.5g} on the way")
                 failed = not pt.converged
+                if not failed:
+                    last = (abs(pt.pressure), self.mech.gfx.vec.FV().NumPy().copy())
                 out.points.append(pt)
                 out.states.append(self.mech.gfu.vec.FV().NumPy().copy() if not failed else None)
                 if say is not None:
                     say(self._line(pt, time.perf_counter() - t0, skipped))
         return out
 
-    def _past_peak(self, failed: SweepPoint, say=None):
+    def _past_peak(self, failed: SweepPoint, last, say=None):
         """``(point, peak)`` after Newton lost the equilibrium on its way to
         ``failed.pressure``: the path from the last equilibrium it reached, followed with Δ
-        prescribed (:func:`~pacto_ng.physics.path.trace`, steps of PEAK_STEP of the Δ reached;
-        by arc length where Δ turns back) until the pressure is back up to the one asked, then
+        prescribed (:func:`~pacto_ng.physics.path.trace`, steps of PEAK_STEP of the Δ reached,
+        in the direction in which the pressure rises there; by arc length where Δ turns back) until the pressure is back up to the one asked, then
         Newton at that pressure from there (``past_peak``); the pressure maximum passed on the
         way ({"pressure", "delta"}: Δ there, None if the pressure never fell); the failed
-        point where the path does not get there within PEAK_STEPS steps.  ``say(line)`` gets
-        one line per point of the path."""
+        point where the path does not get there within PEAK_STEPS steps.  The path starts from
+        ``last`` ((pressure, state): the sweep's last equilibrium, or None) where Newton ended
+        below its pressure.  ``say(line)`` gets one line per point of the path."""
         mech, P = self.mech, abs(failed.pressure)
         x, c = mech.gfx.vec, self.output_form
+        load = failed.load_reached * P
+        if last is not None and last[0] > load:
+            load, x.FV().NumPy()[:] = last
         reached = c.InnerProduct(x)
         if reached == 0.0:
             return failed, None
@@ -350,12 +356,13 @@ class PartAnalysis:
             say(f"    on the path: Δ = {q.control:.5g} at P = {q.load:.5g}, "
                 f"{q.iterations} Newton iterations{how}")
 
-        start = PathPoint(reached, failed.load_reached * P, 0, x.FV().NumPy().copy())
+        start = PathPoint(reached, load, 0, x.FV().NumPy().copy())
+        step = PEAK_STEP * abs(reached) * rising(mech, x, load, c)  # on, not back
         try:
-            path = trace(mech, x, c, PEAK_STEP * reached,
+            path = trace(mech, x, c, step,
                          dataclasses.replace(mech.settings, min_increment=PATH_FLOOR),
                          load=start.load, stop=lambda q: q.load >= P, max_points=PEAK_STEPS,
-                         max_step=PEAK_GROWTH * PEAK_STEP * reached,
+                         max_step=PEAK_GROWTH * step,
                          on_point=None if say is None else line)
         except PathFailure as err:
             path = err.points
@@ -366,8 +373,10 @@ class PartAnalysis:
             peak = {"pressure": float(np.sign(failed.pressure) * peak[1]), "delta": peak[0]}
         if not path or path[-1].load < P:
             return failed, peak
-        point = self.solve(failed.pressure)  # Newton at the pressure, from the path's state
-        return dataclasses.replace(point, past_peak=point.converged), peak
+        # Newton at the pressure, from the path's state (an equilibrium: no ramp from rest)
+        mech.set_state(WarmState(x.FV().NumPy().copy(), True))
+        point = self.solve(failed.pressure)
+        return dataclasses.replace(point, past_peak=point.converged and peak is not None), peak
 
     def _line(self, pt: SweepPoint, seconds: float, skipped: bool) -> str:
         head = f"  {self.kind} {self.model} P = {pt.pressure:.4g}: "

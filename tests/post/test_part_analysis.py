@@ -21,7 +21,7 @@ import pytest
 from pacto_ng.params import Parameters
 from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
-from pacto_ng.physics.walls import outward_normal, pressure_body_force
+from pacto_ng.physics.walls import outward_normal, pressure_body_force, solid_boundaries
 from pacto_ng.post.part_analysis import PartAnalysis, solid_fields
 from rings import quarter_ring
 
@@ -116,6 +116,14 @@ def test_outward_normal_by_the_divergence_theorem():
 def test_a_wall_inside_the_part_is_refused():
     with pytest.raises(ValueError, match="runs inside the part"):
         outward_normal(two_material_beam(("soft", "stiff"))[0], "interface")
+
+
+def test_the_surfaces_that_can_touch_are_the_solid_s_boundaries_not_its_interfaces():
+    """The candidates for self-contact: every named boundary but the two materials'
+    interface."""
+    mesh = two_material_beam(("soft", "stiff"))[0]
+    assert "interface" in mesh.GetBoundaries()
+    assert solid_boundaries(mesh) == ("fixed", "free", "pressure")
 
 
 # -- 1. Lamé ---------------------------------------------------------------------------------
@@ -397,7 +405,11 @@ def test_sweep_stops_at_the_first_failure_and_says_each_pressure(ring):
     assert sw.converged.tolist() == [True, False, False]
     assert sw.points[1].load_reached < 1.0 and np.isnan(sw.delta[1])
     assert sw.points[2].iterations == 0 and sw.states[2] is None
-    assert len(lines) == 3 and "Δ = " in lines[0] and "not attempted" in lines[2]
+    # one line per pressure (and, indented under the second, the path followed from the
+    # first's equilibrium, which does not get there)
+    said = [line for line in lines if not line.startswith("    ")]
+    assert len(said) == 3 and "Δ = " in said[0] and "not attempted" in said[2]
+    assert "not converged" in said[1] and any("on the path" in line for line in lines)
     assert sw.displacement().vec.FV().NumPy() @ sw.states[0] > 0  # the last converged state
     with pytest.raises(ValueError, match="increasing"):
         pa.sweep([2e3, 1e3])
