@@ -122,7 +122,7 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
     subject = Subject(run.case, params, setup, problem.mesh, part, run.path / "analysis",
                       entry, float(problem.h), expected, (darcy, run.load),
                       part_measures(part))
-    subject.contact = contact
+    subject.contact, subject.time_limit = contact, time_limit
     subject.warnings += [w for w in (entry["load_path_note"], entry.get("failure")) if w]
     if part.sealed is False:
         subject.warnings.append("the part is not sealed: " + part.seal.message())

@@ -164,7 +164,7 @@ def analyse_as_built(case, params, *, pressures=None, kinds=None, order: int | N
            "mesh_h": h, "dim": dim, "load_path_note": None}
     subject = Subject(case, params, setup, mesh, part, out, run, h,
                       measures={"part": part.measure, "wetted": part.wetted},
-                      contact=contact)
+                      contact=contact, time_limit=time_limit)
     if not part.seal.sealed:
         subject.warnings.append("the inlet walls do not bound a closed chamber: "
                                 + _chamber_line(part.seal) + "; the pressure is applied to "

@@ -23,6 +23,7 @@ from .materials import STIFF
 from .part import Part, part_ports, present_supports
 from .part_analysis import PartAnalysis
 from .part_entries import materials_entry, part_entry, part_warnings
+from .part_resources import TIME_LIMIT, contact_check
 from .part_stage import write_part_stl
 from .pictures import plot_deformed, plot_materials, plot_sweeps
 from .plots3d import deformed_picture
@@ -54,6 +55,7 @@ class Subject:
     measures: dict = dataclasses.field(default_factory=dict)
     warnings: list = dataclasses.field(default_factory=list)
     contact: bool = False  # the part's boundaries in self-contact (--contact)
+    time_limit: float = TIME_LIMIT  # --time-limit: a sweep with contact estimated longer is refused
 
 
 def say(quiet, msg):
@@ -122,6 +124,9 @@ def _sweep(subject: Subject, kind, pressures, ports, supports, quiet):
                            ports=ports, **extra)
     except ValueError as err:
         raise InputError(f"analyse: the part cannot be analysed: {err}") from None
+    if subject.contact:
+        say(quiet, f"  {kind}: " + contact_check(ana.iteration_seconds(), len(pressures),
+                                                 subject.time_limit))
     return ana.sweep(pressures, say=None if quiet else (lambda line: print(line, flush=True)))
 
 

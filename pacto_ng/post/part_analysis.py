@@ -269,6 +269,20 @@ class PartAnalysis:
                           float(load_reached), (np.nan,) * n,
                           ((np.nan,) * self.mesh.dim,) * n)
 
+    def iteration_seconds(self) -> float:
+        """Seconds of one Newton iteration at the current state, measured: the contact's
+        pairing (with contact), the tangent's assembly and factorisation and one solve."""
+        mech, x = self.mech, self.mech.gfx.vec
+        out = x.CreateVector()
+        with compute():
+            t0 = time.perf_counter()
+            if mech.contact is not None:
+                mech.contact.update(mech.a, x)
+            mech.assemble_tangent(x, 1.0)
+            mech.residual(x, out, 1.0)
+            mech.solve_tangent(out, out.CreateVector())
+            return time.perf_counter() - t0
+
     def solve(self, pressure: float) -> SweepPoint:
         """Equilibrium at ``pressure`` (the wall pressure, in the run's units; negative:
         suction), warm-started from the last equilibrium (Newton ramps from zero where that

@@ -62,6 +62,26 @@ def analysis_seconds(est, dim: int, kinds, n_pressures: int, model: str) -> tupl
     return total, count
 
 
+#: Newton iterations per pressure with self-contact (pairings until the pairs hold, each a
+#: Newton solve): from 12 (the 3D slotted block of tests/physics/test_contact.py at 3 kPa,
+#: linear, order 1) to 207 (the 2D one, Neo-Hookean, order 2, at 3 kPa after 100 Pa)
+CONTACT_NEWTON_PER_PRESSURE = (12, 207)
+
+
+def contact_check(per_iteration: float, n_pressures: int, time_limit: float) -> str:
+    """The line that says how long a sweep with contact may take, from the measured seconds
+    of one Newton iteration (:data:`CONTACT_NEWTON_PER_PRESSURE`); InputError where even the
+    lower figure passes ``time_limit``."""
+    low, high = (n * n_pressures * per_iteration for n in CONTACT_NEWTON_PER_PRESSURE)
+    line = (f"with contact: {_duration(per_iteration)} per Newton iteration (measured), "
+            f"{_duration(low)} to {_duration(high)} per kind for {n_pressures} "
+            f"pressure{'s' if n_pressures != 1 else ''}")
+    if low > time_limit:
+        raise InputError(f"--contact: {line}, longer than --time-limit {time_limit:g} s; give "
+                         f"a larger --maxh, a lower --order or fewer --pressures")
+    return line
+
+
 def _duration(s: float) -> str:
     if s < 10:
         return f"{s:.2g} s"

@@ -178,3 +178,22 @@ def test_contact_is_reported_where_walls_touch(tmp_path):
     rgb = imread(out / "deformed.png")[..., :3]
     red = (rgb[..., 0] > 0.9) & (rgb[..., 1] < 0.2) & (rgb[..., 2] < 0.2)
     assert red.sum() > 20
+
+
+def test_a_contact_sweep_says_its_time_and_is_refused_past_the_time_limit(tmp_path, capsys):
+    """With ``--contact`` each kind's sweep first says what one Newton iteration with contact
+    measured on the part and the range of time it may take; where even the lower figure is
+    over ``--time-limit`` the analysis stops with one line naming ``--contact`` (exit 2) and
+    writes nothing: 0.06 s lets the analysis without contact through (estimated 0.042 s) and
+    not the one with it (at least 12 Newton iterations, 0.025 s each, measured 2026-12-06)."""
+    case = str(Path(__file__).parent / "cases" / "slotted_block.py")
+    out = tmp_path / "slot"
+    assert main(["analyse", case, "--as-built", "--pressures", "500", "--kinds", "fixed",
+                 "--contact", "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "fixed: with contact:" in said and "per Newton iteration (measured)" in said
+    code = main(["analyse", case, "--as-built", "--pressures", "500", "--kinds", "fixed",
+                 "--contact", "--time-limit", "0.06", "--out", str(tmp_path / "refused")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and err[0].startswith("pacto: error: --contact:")
+    assert "--time-limit" in err[0] and not (tmp_path / "refused").exists()
