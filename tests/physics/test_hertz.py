@@ -24,7 +24,7 @@ where the pressure falls to zero, is found at the quadrature points only).
 
 The largest contact pressure (``contact_pressure``: the largest over the walls' vertices of
 the contact pressure's mean around the vertex, its hat function the weight) against Hertz's
-peak p0 = 2 F' / (π a), a the closed form's half-width: measured (2026-12-07) -2.60e-2,
+peak p0 = 2 F' / (π a), a the closed form's half-width: measured (2026-12-06) -2.60e-2,
 -4.68e-3 and +5.4e-4 at 1, 2 and 3 levels (order 2.5 from the first to the second: the mean
 over the peak's vertex's half-hat, of width h, falls short of the peak by about h²/(12 a²);
 the third meets the finite bodies' own difference, as the half-width does).
