@@ -37,8 +37,8 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from ngsolve import (H1, Cof, FacetFESpace, Grad, GridFunction, Id, LinearForm, ds, dx,
-                     specialcf)
+from ngsolve import (BND, H1, Cof, CoefficientFunction, FacetFESpace, Grad, GridFunction, Id,
+                     Integrate, LinearForm, ds, dx, specialcf, x, y, z)
 
 
 def outward_normal(mesh, boundary: str):
@@ -111,6 +111,23 @@ def follower_terms(boundary: str, pressure, thickness: float, normal, dim: int) 
         return (load * thickness * pressure * ((Cof(Ft) * normal) * v)) * ds(boundary)
 
     return terms
+
+
+def volume_change(u, boundary: str, normal, thickness: float, origin) -> float:
+    """The change of the volume the wall ``boundary`` encloses (a chamber, in 2D its area
+    times ``thickness``) under the displacement ``u`` (a GridFunction), by Nanson's formula
+    on the reference wall: ``ΔV = -(t/d) ∫_Γ [(X - x0 + u) · cof(F̃) N0 - (X - x0) · N0] dA0``
+    (``N0`` the solid's outward normal, into the chamber; ``F̃`` as for the follower load).
+    The chamber's other faces contribute nothing where they are planes through ``origin``
+    ``x0`` (symmetry planes: give a point on all of them) or held fixed (a clamp)."""
+    mesh = u.space.mesh
+    d = mesh.dim
+    X = CoefficientFunction((x, y, z)[:d]) - CoefficientFunction(tuple(origin))
+    Ft = Id(d) + Grad(u).Trace()
+    change = (X + u) * (Cof(Ft) * normal) - X * normal
+    order = 2 * u.space.globalorder + 2
+    return float(-thickness / d * Integrate(change, mesh, BND, order=order,
+                                              definedon=mesh.Boundaries(boundary)))
 
 
 def pressure_body_force(p, order: int = 1) -> Callable:

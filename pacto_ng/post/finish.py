@@ -121,7 +121,7 @@ def _sweep(subject: Subject, kind, pressures, ports, supports, quiet):
         extra["contact"] = solid_boundaries(subject.part.mesh)  # not the domains' interfaces
     try:
         ana = PartAnalysis(subject.part.mesh, kind, params=subject.params, supports=supports,
-                           ports=ports, **extra)
+                           ports=ports, chamber=subject.part.sealed is True, **extra)
     except ValueError as err:
         raise InputError(f"analyse: the part cannot be analysed: {err}") from None
     if subject.contact:

@@ -54,7 +54,7 @@ import time
 from typing import Callable
 
 import numpy as np
-from ngsolve import VOL, Grad, InnerProduct, Integrate, LinearForm, Parameter
+from ngsolve import BND, VOL, Grad, InnerProduct, Integrate, LinearForm, Parameter
 
 from ..errors import InputError
 from ..physics.contact import SelfContact
@@ -65,7 +65,7 @@ from ..physics.materials import jacobian
 from ..physics.mechanics import Mechanics, Supports
 from ..physics.mixed import formulation_for, has_simplices
 from ..physics.path import PathFailure, PathPoint, load_maximum, rising, trace
-from ..physics.walls import WallPressure, follower_terms, outward_normal
+from ..physics.walls import WallPressure, follower_terms, outward_normal, volume_change
 from ..threads import compute
 from .materials import STIFF
 from .sweep_result import Sweep, SweepPoint
@@ -84,6 +84,19 @@ PEAK_STEP, PEAK_STEPS = 0.1, 60
 PEAK_GROWTH, RAMP_FLOOR = 2.0, 1.0 / 64
 #: ... and a step of the path is halved down to this fraction of the first
 PATH_FLOOR = 1.0 / 1024
+
+
+def held_planes_origin(mesh, supports: Supports) -> tuple:
+    """A point on every region held in one direction (``fix_x``, ``fix_y``, ``fix_z``: a
+    symmetry plane): per axis the mean coordinate of its regions' vertices (0 where none),
+    the origin of :func:`~pacto_ng.physics.walls.volume_change`."""
+    out = np.zeros(mesh.dim)
+    for axis, names in enumerate((supports.fix_x, supports.fix_y, supports.fix_z)[:mesh.dim]):
+        held = [mesh[v].point[axis] for el in mesh.Elements(BND) if el.mat in names
+                for v in el.vertices]
+        if held:
+            out[axis] = float(np.mean(held))
+    return tuple(out)
 
 
 def solid_fields(mesh) -> dict:
@@ -130,6 +143,9 @@ class PartAnalysis:
         SelfContact`, the displacement formulation only), with the penalty stiffness
         ``contact_penalty`` E1 / h (h the part's mean element size) and pairs sought within
         :data:`CONTACT_REACH` h.
+    chamber : bool
+        The wetted wall encloses a chamber (sealed): its volume change is reported
+        (:meth:`volume_change`; not for the darcy kind).
 
     Attributes: ``formulation`` (``displacement`` or ``mixed``), ``model``, ``mech`` (the
     :class:`Mechanics` block), ``ports``, ``kind``, ``order``, ``thickness``.
@@ -138,7 +154,8 @@ class PartAnalysis:
     def __init__(self, mesh, kind: str, *, params, supports: Supports, ports,
                  springs: tuple = (), order: int | None = None, boundary: str = "pressure",
                  body: Callable | None = None, body_pressure: float | None = None,
-                 contact: tuple = (), contact_penalty: float = CONTACT_PENALTY):
+                 contact: tuple = (), contact_penalty: float = CONTACT_PENALTY,
+                 chamber: bool = True):
         if kind not in KINDS:
             raise ValueError(f"kind must be one of {', '.join(KINDS)}, not {kind!r}")
         if kind == "darcy":
@@ -199,6 +216,8 @@ class PartAnalysis:
                 self.mech.space, tuple(contact), contact_penalty * float(params.E1) / h,
                 CONTACT_REACH * h, normal=outward_normal(mesh, "|".join(contact)),
                 thickness=self.thickness))
+        self._chamber = None if kind == "darcy" or not chamber else (
+            outward_normal(mesh, boundary), held_planes_origin(mesh, supports))
         self._forms = self._port_forms()
         self._J = jacobian(Grad(self.mech.gfu)).Compile()
         self._qpoints = mesh.MapToAllElements(self.mech.rules, VOL)
@@ -261,7 +280,16 @@ class PartAnalysis:
         return SweepPoint(pressure, float(delta_form.InnerProduct(x)),
                           float(np.max(np.linalg.norm(u_v, axis=1))),
                           float(np.min(self._J(self._qpoints))), int(iterations), True, 1.0,
-                          along, vectors, *contact)
+                          along, vectors, *contact, volume_change=self.volume_change())
+
+    def volume_change(self) -> float | None:
+        """The chamber's volume change at the current state (:func:`~pacto_ng.physics.walls.
+        volume_change` of the wetted wall, the origin on the planes held in their normal);
+        None for the Darcy kind and where the wall encloses no chamber."""
+        if self._chamber is None:
+            return None
+        normal, origin = self._chamber
+        return volume_change(self.mech.gfu, self.boundary, normal, self.thickness, origin)
 
     def _failed(self, pressure: float, iterations: int, load_reached: float) -> SweepPoint:
         n = len(self.ports)
@@ -332,7 +360,7 @@ class PartAnalysis:
                 skipped = failed
                 pt = self._failed(P, 0, 0.0) if skipped else self.solve(P)
                 if not (pt.converged or skipped or self.mech.contact is not None):
-                    pt, peak = self._past_peak(pt, last, say)
+                    pt, peak = self._past_peak(pt, last, say, out.path)
                     out.peak = peak or out.peak
                     if peak and say is not None:
                         say(f"  {self.kind} {self.model}: a pressure maximum "
@@ -346,7 +374,7 @@ class PartAnalysis:
                     say(self._line(pt, time.perf_counter() - t0, skipped))
         return out
 
-    def _past_peak(self, failed: SweepPoint, last, say=None):
+    def _past_peak(self, failed: SweepPoint, last, say=None, record=None):
         """``(point, peak)`` after Newton lost the equilibrium on its way to
         ``failed.pressure``: the path from the last equilibrium it reached, followed with Δ
         prescribed (:func:`~pacto_ng.physics.path.trace`, steps of PEAK_STEP of the Δ reached,
@@ -355,7 +383,8 @@ class PartAnalysis:
         way ({"pressure", "delta"}: Δ there, None if the pressure never fell); the failed
         point where the path does not get there within PEAK_STEPS steps.  The path starts from
         ``last`` ((pressure, state): the sweep's last equilibrium, or None) where Newton ended
-        below its pressure.  ``say(line)`` gets one line per point of the path."""
+        below its pressure.  ``say(line)`` gets one line per point of the path; ``record``
+        (a list) gets each point's pressure, Δ and chamber volume change."""
         mech, P = self.mech, abs(failed.pressure)
         x, c = mech.gfx.vec, self.output_form
         load = failed.load_reached * P
@@ -365,10 +394,16 @@ class PartAnalysis:
         if reached == 0.0:
             return failed, None
 
-        def line(q):
-            how = " (by arc length)" if q.by_arc else ""
-            say(f"    on the path: Δ = {q.control:.5g} at P = {q.load:.5g}, "
-                f"{q.iterations} Newton iterations{how}")
+        def line(q):  # the point's state is the block's
+            dv = self.volume_change()
+            if record is not None:
+                record.append({"pressure": float(q.load), "delta": float(q.control),
+                               "volume_change": dv})
+            if say is not None:
+                how = " (by arc length)" if q.by_arc else ""
+                vol = "" if dv is None else f", ΔV = {dv:.4g}"
+                say(f"    on the path: Δ = {q.control:.5g}{vol} at P = {q.load:.5g}, "
+                    f"{q.iterations} Newton iterations{how}")
 
         start = PathPoint(reached, load, 0, x.FV().NumPy().copy())
         step = PEAK_STEP * abs(reached) * rising(mech, x, load, c)  # on, not back
@@ -377,7 +412,7 @@ class PartAnalysis:
                          dataclasses.replace(mech.settings, min_increment=PATH_FLOOR),
                          load=start.load, stop=lambda q: q.load >= P, max_points=PEAK_STEPS,
                          max_step=PEAK_GROWTH * step,
-                         on_point=None if say is None else line)
+                         on_point=line)
         except PathFailure as err:
             path = err.points
             if say is not None:
@@ -396,6 +431,8 @@ class PartAnalysis:
         head = f"  {self.kind} {self.model} P = {pt.pressure:.4g}: "
         if pt.converged:
             what = f"Δ = {pt.delta:.5g}" + (" (past a pressure maximum)" if pt.past_peak else "")
+            if pt.volume_change is not None:
+                what += f", chamber ΔV = {pt.volume_change:.4g}"
             if pt.contact_area:
                 what += (f", walls in contact over {pt.contact_area:.3g} m² with "
                          f"{pt.contact_force:.3g} N, largest contact pressure "

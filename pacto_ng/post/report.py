@@ -23,8 +23,11 @@ end (:func:`short_table`); ``report.md`` is :mod:`.report_md`.
                                (the part's solid rounded onto the design mesh) and per kind ``delta``,
                                every port's ``d·u`` (``ports``) and displacement vector
                                (``vectors``), ``max_u``, ``min_J``, ``newton_iterations``,
-                               ``converged``, ``load_reached``, ``past_peak``, ``contact``
+                               ``converged``, ``load_reached``, ``past_peak``,
+                               ``volume_change`` (the chamber's), ``contact``
                                (``--contact``: ``area``, ``force``, ``pressure``; else None)
+``pressure_maximum``,          per kind the pressure maximum passed, and the path's
+``path``                       equilibria (``pressure``, ``delta``, ``volume_change``)
 ``first_contact``              ``--contact``: per kind the first swept pressure with the walls
                                touching and the one before it (:func:`first_contact`); else None
 ``gap_at_largest_pressure``,   per kind (analysed − expected)/|expected| (None as built)
@@ -93,6 +96,13 @@ DEFINITIONS = {
                      "swept pressure, not interpolated), and last_without, the swept pressure "
                      "before it, at which they did not touch: contact began between the two "
                      "(None: no swept pressure with contact, or none without)",
+    "volume_change": "per pressure and kind, the change of the volume the wetted walls "
+                     "enclose (the chamber; m³, in 2D its area times the thickness), from "
+                     "the walls' motion (Nanson's formula), the symmetry planes through its "
+                     "origin; None for the darcy kind",
+    "path": "per kind, the equilibria of the path followed where Newton lost the "
+            "equilibrium (pressure, delta, volume_change), in order: the pressure against "
+            "the chamber's volume through a pressure maximum",
     "pressure_maximum": "per kind, the largest pressure on the equilibrium path where Newton "
                         "lost the equilibrium at a pressure of the sweep and the path, "
                         "followed on with Delta prescribed, showed the pressure falling "
@@ -143,6 +153,7 @@ def _point(pt, ports) -> dict:
             "max_u": num(pt.max_u), "min_J": num(pt.min_j),
             "newton_iterations": int(pt.iterations), "converged": bool(pt.converged),
             "load_reached": num(pt.load_reached), "past_peak": bool(pt.past_peak),
+            "volume_change": None if pt.volume_change is None else num(pt.volume_change),
             # --contact: where the walls touch (m²), the force between them (N) and the
             # largest contact pressure (Pa)
             "contact": None if pt.contact_area is None else
@@ -202,6 +213,7 @@ def analysis_json(*, run: dict, settings: dict, part: dict, seal, materials, swe
             "gap_at_smallest_pressure": _gaps(rows[0], kinds) if expected else None,
             "gap_parts": gap_parts(rows[-1], kinds) if expected else None,
             "pressure_maximum": {k: sweeps[k].peak for k in kinds},
+            "path": {k: sweeps[k].path for k in kinds},
             "first_contact": ({k: first_contact(sweeps[k]) for k in kinds}
                               if settings.get("contact") else None),
             "deformed_state": deformed, "warnings": list(warnings), "wall_time_s": wall}

@@ -27,6 +27,7 @@ class SweepPoint:
     contact_force: float | None = None  # ... and the normal force between them (N)
     contact_pressure: float | None = None  # ... and the largest contact pressure (Pa)
     past_peak: bool = False  # reached by following the path past a pressure maximum
+    volume_change: float | None = None  # the chamber's (m³; 2D: area × thickness); None: Darcy
 
 
 @dataclass
@@ -42,6 +43,9 @@ class Sweep:
     #: the pressure maximum the path passed ({"pressure", "delta"}, :meth:`PartAnalysis.
     #: sweep`), None where the pressure never fell
     peak: dict | None = None
+    #: the equilibria of the path past a lost equilibrium, in order ({"pressure", "delta",
+    #: "volume_change"}, :meth:`PartAnalysis.sweep`)
+    path: list = field(default_factory=list)
 
     def _arr(self, name):
         return np.array([getattr(p, name) for p in self.points])

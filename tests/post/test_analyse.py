@@ -77,6 +77,22 @@ def test_2d_and_3d_write_the_same_layout(edge_run, run3d):
     assert d2["settings"]["kinds"] == ["darcy", "fixed", "follower"]
 
 
+def test_the_chamber_s_volume_change_is_reported_where_the_part_is_sealed(edge_run, run3d):
+    """Each pressure's ``volume_change`` for the wall-pressure kinds of a sealed part: the
+    chamber grows under pressure, ten times as much at ten times the (small) pressure of a
+    linear model; None for the darcy kind and for a part whose chamber is open."""
+    for _, data in (edge_run, run3d):
+        rows, sealed = data["pressures"], data["seal"]["sealed"]
+        for kind in set(rows[0]) & {"fixed", "follower"}:
+            low, high = (row[kind]["volume_change"] for row in rows)
+            if sealed:
+                assert 0 < low and high == pytest.approx(10 * low, rel=1e-3)
+            else:
+                assert low is None and high is None
+        assert all(row["darcy"]["volume_change"] is None for row in rows if "darcy" in row)
+    assert run3d[1]["seal"]["sealed"]  # one of the two is checked with a chamber
+
+
 def test_a_port_on_an_edge_is_analysed(edge_run):
     """The output is the mean of -u_y over the part's edge on ``tip``: the part reaches the
     edge (about 0.035 m of it: the solid band), and Δ is that mean, read back here from
