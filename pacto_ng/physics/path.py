@@ -242,6 +242,20 @@ def _predict(problem, history, goal: float, x) -> float:
     return l2 + w * (l2 - l1)
 
 
+def retraces(loads, volumes) -> bool:
+    """Whether a path of a closed chamber's pressure ``loads`` and volume ``volumes`` (one
+    each per point, in order) turns back on itself at its first pressure maximum: the volume
+    falls with the pressure right after it.  Past a true maximum the volume goes on growing
+    (the pressure is the energy's conjugate of the chamber's volume, whose curve is smooth
+    there).  False where a volume is not known (None)."""
+    if len(loads) < 2 or None in volumes:
+        return False
+    tops = [i for i in range(1, len(loads) - 1)
+            if loads[i] >= loads[i - 1] and loads[i] > loads[i + 1]]
+    top = tops[0] if tops else int(np.argmax(loads))
+    return top + 1 < len(loads) and volumes[top + 1] < volumes[top]
+
+
 def load_maximum(points) -> tuple[float, float] | None:
     """``(control, load)`` at the first maximum of the load factor along the path ``points``
     (:class:`PathPoint`), a point whose load is above its neighbours': the maximum of the

@@ -130,6 +130,19 @@ def volume_change(u, boundary: str, normal, thickness: float, origin) -> float:
                                               definedon=mesh.Boundaries(boundary)))
 
 
+def held_planes_origin(mesh, held) -> tuple:
+    """A point on every region held in one direction, ``held`` = the region names held in x,
+    in y (and in z): symmetry planes.  Per axis the mean coordinate of its regions' vertices
+    (0 where none): the origin of :func:`volume_change`."""
+    out = np.zeros(mesh.dim)
+    for axis, names in enumerate(tuple(held)[:mesh.dim]):
+        on = [mesh[v].point[axis] for el in mesh.Elements(BND) if el.mat in names
+              for v in el.vertices]
+        if on:
+            out[axis] = float(np.mean(on))
+    return tuple(out)
+
+
 def pressure_body_force(p, order: int = 1) -> Callable:
     """A body-force callable ``mesh -> -∇p`` for the ``darcy`` kind.
 

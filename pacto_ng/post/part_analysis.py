@@ -54,7 +54,7 @@ import time
 from typing import Callable
 
 import numpy as np
-from ngsolve import BND, VOL, Grad, InnerProduct, Integrate, LinearForm, Parameter
+from ngsolve import VOL, Grad, InnerProduct, Integrate, LinearForm, Parameter
 
 from ..errors import InputError
 from ..physics.contact import SelfContact
@@ -64,8 +64,9 @@ from ..physics.loads import Port, Spring
 from ..physics.materials import jacobian
 from ..physics.mechanics import Mechanics, Supports
 from ..physics.mixed import formulation_for, has_simplices
-from ..physics.path import PathFailure, PathPoint, load_maximum, rising, trace
-from ..physics.walls import WallPressure, follower_terms, outward_normal, volume_change
+from ..physics.path import PathFailure, PathPoint, load_maximum, retraces, rising, trace
+from ..physics.walls import (WallPressure, follower_terms, held_planes_origin, outward_normal,
+                             volume_change)
 from ..threads import compute
 from .materials import STIFF
 from .sweep_result import Sweep, SweepPoint
@@ -84,19 +85,6 @@ PEAK_STEP, PEAK_STEPS = 0.1, 60
 PEAK_GROWTH, RAMP_FLOOR = 2.0, 1.0 / 64
 #: ... and a step of the path is halved down to this fraction of the first
 PATH_FLOOR = 1.0 / 1024
-
-
-def held_planes_origin(mesh, supports: Supports) -> tuple:
-    """A point on every region held in one direction (``fix_x``, ``fix_y``, ``fix_z``: a
-    symmetry plane): per axis the mean coordinate of its regions' vertices (0 where none),
-    the origin of :func:`~pacto_ng.physics.walls.volume_change`."""
-    out = np.zeros(mesh.dim)
-    for axis, names in enumerate((supports.fix_x, supports.fix_y, supports.fix_z)[:mesh.dim]):
-        held = [mesh[v].point[axis] for el in mesh.Elements(BND) if el.mat in names
-                for v in el.vertices]
-        if held:
-            out[axis] = float(np.mean(held))
-    return tuple(out)
 
 
 def solid_fields(mesh) -> dict:
@@ -217,7 +205,8 @@ class PartAnalysis:
                 CONTACT_REACH * h, normal=outward_normal(mesh, "|".join(contact)),
                 thickness=self.thickness))
         self._chamber = None if kind == "darcy" or not chamber else (
-            outward_normal(mesh, boundary), held_planes_origin(mesh, supports))
+            outward_normal(mesh, boundary),
+            held_planes_origin(mesh, (supports.fix_x, supports.fix_y, supports.fix_z)))
         self._forms = self._port_forms()
         self._J = jacobian(Grad(self.mech.gfu)).Compile()
         self._qpoints = mesh.MapToAllElements(self.mech.rules, VOL)
@@ -394,11 +383,12 @@ class PartAnalysis:
         if reached == 0.0:
             return failed, None
 
+        seen = []  # this path's points: pressure, Δ and chamber volume change
+
         def line(q):  # the point's state is the block's
             dv = self.volume_change()
-            if record is not None:
-                record.append({"pressure": float(q.load), "delta": float(q.control),
-                               "volume_change": dv})
+            seen.append({"pressure": float(q.load), "delta": float(q.control),
+                         "volume_change": dv})
             if say is not None:
                 how = " (by arc length)" if q.by_arc else ""
                 vol = "" if dv is None else f", ΔV = {dv:.4g}"
@@ -417,7 +407,14 @@ class PartAnalysis:
             path = err.points
             if say is not None:
                 say(f"    the path stops: {err}")
+        if record is not None:
+            record.extend(seen)
         peak = load_maximum([start] + path)
+        if peak and retraces([q["pressure"] for q in seen], [q["volume_change"] for q in seen]):
+            if say is not None:
+                say(f"    the path turns back on itself at P = {peak[1]:.5g} (the chamber's "
+                    f"volume falls with the pressure): not a pressure maximum")
+            peak = None
         if peak:  # the control is Δ
             peak = {"pressure": float(np.sign(failed.pressure) * peak[1]), "delta": peak[0]}
         if not path or path[-1].load < P:

@@ -15,7 +15,7 @@ import pytest
 from ngsolve import BaseVector
 
 from pacto_ng.physics.newton import NewtonSettings
-from pacto_ng.physics.path import PathFailure, load_maximum, trace
+from pacto_ng.physics.path import PathFailure, load_maximum, retraces, trace
 
 K = 0.2
 
@@ -117,3 +117,13 @@ def test_arc_length_follows_the_snap_back_to_the_load_beyond_the_maximum(start):
     first = int(np.argmax(s[:np.argmin(s)]))
     assert v[first - 1] < w_star + s_star / K < v[first + 1]
     assert v[first - 1] < at < v[first + 1]
+
+
+def test_a_path_whose_pressure_and_volume_fall_together_retraces_itself():
+    """``retraces``: past a true pressure maximum of a closed chamber the volume goes on
+    growing (the sphere's path, the balloon's); where it falls with the pressure the path is
+    turning back on itself; without volumes nothing is said."""
+    loads = [1.0, 2.0, 3.0, 2.5, 2.0]
+    assert not retraces(loads, [0.1, 0.2, 0.3, 0.4, 0.5])
+    assert retraces(loads, [0.1, 0.2, 0.3, 0.25, 0.2])
+    assert not retraces(loads, [0.1, 0.2, None, 0.4, 0.5])
