@@ -148,18 +148,10 @@ def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, s
             if arc and len(history) > 1:
                 return _by_arc_length(problem, x, c, history, s, stop=stop, points=points,
                                       max_points=max_points, on_point=on_point, longest=longest)
-            failure = PathFailure(f"no equilibrium beyond the control {here[0]:.6g} "
-                                  f"(load factor {here[1]:.6g}): {why}")
-            failure.points = points
-            raise failure
+            raise _failure(f"no equilibrium beyond the control {here[0]:.6g} (load factor "
+                           f"{here[1]:.6g}): {why}", points)
         rate, longest = moved, max(longest, moved * abs(inc))
-        history.append((goal, lam, x.FV().NumPy().copy()))
-        del history[:-2]
-        point = PathPoint(goal, lam, it, history[-1][2].copy())
-        points.append(point)
-        if on_point is not None:
-            on_point(point)
-        if stop(point):
+        if _accept(history, points, goal, lam, it, x, on_point, stop):
             break
         if it <= s.easy:
             inc = min(abs(inc) * s.grow, abs(max_step)) * np.sign(step)
@@ -172,9 +164,10 @@ def _by_arc_length(problem, x, c, history, s: NewtonSettings, *, stop, points, m
     state) each) by arc length (see the module): each step advances the state by ``l`` along
     the unit secant through the last two, ``l`` the last step's length at first, grown and
     halved as :func:`trace` does its increment (up to 8 times the first or ``longest``, the
-    longest step before, whichever is longer; at least ``s.min_increment`` of the first).  Appends to ``points`` (the control ``c · x`` still recorded,
-    ``by_arc`` set) until ``stop(point)`` or ``max_points``; returns them.  PathFailure when a
-    step cannot be cut further."""
+    longest step before, whichever is longer; at least ``s.min_increment`` of the first).
+    Appends to ``points`` (the control ``c · x`` still recorded, ``by_arc`` set) until
+    ``stop(point)`` or ``max_points``; returns them.  PathFailure when a step cannot be cut
+    further."""
     first = float(np.linalg.norm(history[-1][2] - history[-2][2]))
     length, t, most = first, x.CreateVector(), max(8.0 * first, longest)
     while len(points) < max_points:
@@ -195,22 +188,35 @@ def _by_arc_length(problem, x, c, history, s: NewtonSettings, *, stop, points, m
             x.FV().NumPy()[:] = x2
             length *= 0.5
             if length < s.min_increment * first:
-                failure = PathFailure(f"no equilibrium by arc length beyond the control "
-                                      f"{history[-1][0]:.6g} (load factor {l2:.6g}): {why}")
-                failure.points = points
-                raise failure
+                raise _failure(f"no equilibrium by arc length beyond the control "
+                               f"{history[-1][0]:.6g} (load factor {l2:.6g}): {why}", points)
             continue
-        history.append((c.InnerProduct(x), lam, x.FV().NumPy().copy()))
-        del history[:-2]
-        point = PathPoint(history[-1][0], lam, it, history[-1][2].copy(), by_arc=True)
-        points.append(point)
-        if on_point is not None:
-            on_point(point)
-        if stop(point):
+        if _accept(history, points, c.InnerProduct(x), lam, it, x, on_point, stop, True):
             break
         if it <= s.easy:
             length = min(length * s.grow, most)
     return points
+
+
+def _accept(history, points, control: float, load: float, iterations: int, x, on_point,
+            stop, by_arc: bool = False) -> bool:
+    """Record the equilibrium held in ``x`` at ``control`` and ``load``: into ``history`` (its
+    last two kept) and as a :class:`PathPoint` into ``points``, given to ``on_point``;
+    whether ``stop`` says the path is done."""
+    history.append((control, load, x.FV().NumPy().copy()))
+    del history[:-2]
+    point = PathPoint(control, load, iterations, history[-1][2].copy(), by_arc=by_arc)
+    points.append(point)
+    if on_point is not None:
+        on_point(point)
+    return stop(point)
+
+
+def _failure(message: str, points) -> PathFailure:
+    """A PathFailure carrying the ``points`` found before it."""
+    failure = PathFailure(message)
+    failure.points = points
+    return failure
 
 
 def rising(problem, x, load: float, c) -> float:

@@ -53,7 +53,7 @@ def outward_normal(mesh, boundary: str):
     (its two elements' normals cancel): a wall must bound the solid.
     """
     fes = FacetFESpace(mesh, order=0)
-    dot, size = _facet_orientation(mesh, fes, boundary)
+    dot, size = _facet_orientation(fes, _element_normals(fes), boundary)
     on = size > 0
     if np.any(np.abs(dot[on]) < 0.5 * size[on]):
         raise ValueError(f"boundary '{boundary}' runs inside the part: the pressure must act on "
@@ -63,15 +63,21 @@ def outward_normal(mesh, boundary: str):
     return sign * specialcf.normal(mesh.dim)
 
 
-def _facet_orientation(mesh, fes, boundary: str):
-    """Per facet of ``fes`` (``FacetFESpace(order=0)``): the dot product of ``∫ n_T dA`` of
-    the volume elements beside it with ``∫ n dA`` of ``boundary``'s element on it, and the
+def _element_normals(fes) -> list:
+    """Per facet of ``fes`` (``FacetFESpace(order=0)``), each component of ``∫ n_T dA`` of
+    the volume elements beside it (0 on an interior facet, whose two sides cancel)."""
+    q, n = fes.TestFunction(), specialcf.normal(fes.mesh.dim)
+    return [LinearForm(n[i] * q * dx(element_boundary=True)).Assemble().vec.FV().NumPy()
+            for i in range(fes.mesh.dim)]
+
+
+def _facet_orientation(fes, elem, boundary: str):
+    """Per facet of ``fes``: the dot product of the volume elements' normals ``elem``
+    (:func:`_element_normals`) with ``∫ n dA`` of ``boundary``'s element on it, and the
     latter's squared size (0 off the boundary; see :func:`outward_normal`)."""
-    q, n = fes.TestFunction(), specialcf.normal(mesh.dim)
-    elem = [LinearForm(n[i] * q * dx(element_boundary=True)).Assemble().vec.FV().NumPy()
-            for i in range(mesh.dim)]
+    q, n = fes.TestFunction(), specialcf.normal(fes.mesh.dim)
     wall = [LinearForm(n[i] * q * ds(boundary)).Assemble().vec.FV().NumPy()
-            for i in range(mesh.dim)]
+            for i in range(fes.mesh.dim)]
     return sum(a * b for a, b in zip(elem, wall)), sum(b * b for b in wall)
 
 
@@ -79,9 +85,10 @@ def solid_boundaries(mesh) -> tuple[str, ...]:
     """The named boundaries of ``mesh`` whose every facet bounds the solid (not an interface
     between two of its domains), sorted: the surfaces that can come into contact."""
     fes = FacetFESpace(mesh, order=0)
+    elem = _element_normals(fes)
     out = []
     for name in sorted(set(mesh.GetBoundaries())):
-        dot, size = _facet_orientation(mesh, fes, name)
+        dot, size = _facet_orientation(fes, elem, name)
         on = size > 0
         if np.any(on) and np.all(np.abs(dot[on]) >= 0.5 * size[on]):
             out.append(name)
