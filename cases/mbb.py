@@ -2,8 +2,12 @@
 
 Unit square elements (structured nelx x nely), E = 1, E0 = 1e-9, ν = 0.3, plane stress, unit
 load at the top-left corner, symmetry on the left edge, roller at the bottom-right corner;
-volume fraction 0.5, p = 3, cone density filter of radius 1.5 elements, no projection.  The
-88-line code's density-filter result for 60 x 20 is a compliance of about 218.8.
+volume fraction 0.5, cone density filter of radius 1.5 elements.  The 88-line code's
+optimisation (p = 3 throughout, no projection: ``--set penal=3 --set beta=0 --set move=0.2``)
+ends grey: its published compliance for 60 x 20 is about 218.8, and this case with those
+settings reached 210.7 at greyness 0.197.  By default the case takes the library's penalty and
+projection continuation (p 1 -> 3, β 1 -> 64): the design ends crisp, at greyness 4e-5 and
+compliance 187.2 after 101 iterations (``pacto run mbb``, measured 2026-12-06).
 """
 from __future__ import annotations
 
@@ -30,7 +34,7 @@ CASE = Case(
     source="Andreassen et al. (2011), Efficient topology optimization in MATLAB using 88 lines of code",
     defaults=Parameters(model="linear", nelx=60, nely=20, maxh=1.0, plane="stress", thickness=1.0,
                         E1=1.0, E0=1e-9, nu=0.3, volfrac=0.5, filter="cone", filter_radius=1.5,
-                        penal=3.0, beta=0.0, load=1.0, iterations=300, tol=0.01, move=0.2),
+                        load=1.0),
     geometry=_geometry,
     setup=_setup,
     load_unit="N",

@@ -94,7 +94,7 @@ def _with_part(done, out, args) -> int:
     """A finished optimisation's part made, checked and analysed (unless ``--no-part``), and
     then, for a linear run the refinement applies to
     (:func:`~pacto_ng.post.refine_setup.refuses`: a pressure case with an output port) whose
-    part is sealed, and unless ``--no-refine``, its shape refined as ``pacto refine DIR``
+    part is sealed, and unless ``--no-refine`` or the optimisation stopped on a failure, its shape refined as ``pacto refine DIR``
     does (the refinement keeps the part's topology: an open chamber stays open, and the part
     line has said so; under a nonlinear model a line says how to refine it, as that takes
     many times the run: gripper-silicone's was at step 7 of 20 after 21 minutes; a
@@ -102,7 +102,7 @@ def _with_part(done, out, args) -> int:
     exit code."""
     if leads() and not args.no_part:
         summary = finish_run(out, done.problem, done.summary, quiet=args.quiet)
-        if (args.no_refine or not summary["part"].get("made")
+        if (args.no_refine or done.exit_code != 0 or not summary["part"].get("made")
                 or summary.get("sealed") is False or refuses(run := load_run(out, "refine"))):
             return done.exit_code
         if run.params.model != "linear":

@@ -9,6 +9,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+#: ``pacto run mbb`` options for the 88-line code's optimisation (p = 3 throughout, no
+#: projection, move limit 0.2) in place of the case's default, the library's continuation
+TOP88_OPTIMISER = ["--set", "penal=3", "--set", "beta=0", "--set", "move=0.2"]
+
 
 def q4_stiffness(nu):
     """The 88-line code's KE for E = 1 (its node order: LL, LR, UR, UL counter-clockwise

@@ -263,7 +263,10 @@ def _face_names(pts, tris, tets, source, h_source, *, exclude, wet_boundaries, p
     nrm /= np.maximum(2.0 * area[:, None], 1e-300)
     faces = {tuple(sorted(f)): t for t, tet in enumerate(tets)
              for f in (tet[[0, 1, 2]], tet[[0, 1, 3]], tet[[0, 2, 3]], tet[[1, 2, 3]])}
-    opp = np.array([np.setdiff1d(tets[faces[tuple(sorted(t))]], t)[0] for t in tris])
+    # a triangle that bounds no tetrahedron (Netgen may leave one where the surface folds onto
+    # itself) keeps its own orientation; remesh_part drops it with the faces of no kept piece
+    opp = np.array([np.setdiff1d(tets[faces[key]], t)[0] if (key := tuple(sorted(t))) in faces
+                    else t[0] for t in tris])
     nrm *= np.where(np.einsum("ij,ij->i", nrm, cen - pts[opp]) > 0, 1.0, -1.0)[:, None]
     # names by position
     bnd, names = _bounding_faces(source, exclude)

@@ -4,19 +4,21 @@ the rewrite), equal to 1e-8 relative.  They run with that commit's optimiser, MM
 (``--optimizer mma``; the default now switches to GCMMA on the final problem), and at the full
 load from the first iteration, as then (``load_ramp=0`` where the load ramp chosen from the
 load would start lower: the Neo-Hookean cantilever), and with the standard chain (the
-pa-inverter's default is now the robust formulation: ``robust=0``)."""
+pa-inverter's default is now the robust formulation: ``robust=0``; the MBB beam's is now the
+library's penalty and projection continuation: ``TOP88_OPTIMISER``)."""
 import json
 
 import numpy as np
 import pytest
 
 from pacto_ng.cli import main
+from top88_reference import TOP88_OPTIMISER
 
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
 #: key: (pacto run options, elements, objective history of commit ed63e52)
 PINS = {
-    'mbb': (['--optimizer', 'mma', '--iterations', '3'], 1200, [1007.0221007367791, 671.4110628090416, 464.7119626284639]),
+    'mbb': (['--optimizer', 'mma', '--iterations', '3', *TOP88_OPTIMISER], 1200, [1007.0221007367791, 671.4110628090416, 464.7119626284639]),
     'cantilever': (['--optimizer', 'mma', '--iterations', '3', '--maxh', '0.04'], 350, [123551.87220656009, 95021.68990908479, 78862.4071909315]),
     'cantilever-nh': (['--optimizer', 'mma', '--iterations', '3', '--maxh', '0.04', '--model', 'neohookean', '--load', '1e5', '--set', 'load_ramp=0'], 350, [45389.21477701899, 36912.17748395768, 31534.172466164506]),
     'inverter': (['--optimizer', 'mma', '--iterations', '3', '--maxh', '6e-6'], 713, [4.534562362228096e-06, 4.358170708555088e-08, -2.2283984149247137e-10]),
