@@ -35,6 +35,7 @@ from .physics.energy import make_energy
 from .physics.loads import PointLoad
 from .physics.mechanics import Mechanics
 from .physics.mixed import formulation_for, has_simplices
+from .physics.newton import NEWTON_PER_ITERATION
 from .problem import Problem
 from .settings import Settings, setting
 from .setup import OBJECTIVES, Pressure
@@ -252,7 +253,10 @@ class Builder:
                              supports=setup.supports, loads=loads, springs=setup.all_springs,
                              body=pressure.body, thickness=thickness, guard=model.guard,
                              linear=model.linear, newton=params.newton.settings(),
-                             residual_density=pressure.follower, realcompile=params.realcompile,
+                             residual_density=pressure.follower,
+                             realcompile=params.newton.compiles(
+                                 model.linear, self.mesh.ne * params.iterations
+                                 * NEWTON_PER_ITERATION),
                              output="u" + suffix, formulation=formulation)
         except ValueError as err:
             raise InputError(str(err)) from None

@@ -99,6 +99,10 @@ def solid_fields(mesh) -> dict:
     return {"rho_bar1": ones, "rho_bar2": np.array([m == STIFF for m in mats], dtype=float)}
 
 
+#: Newton iterations of a sweep, for the compiler's estimate (newton.COMPILE_PAYS): five
+#: pressures at 3-4 each (pneunet-3d's part, Neo-Hookean, 2026-12-06)
+SWEEP_NEWTON = 20
+
 class PartAnalysis:
     """One analysis of a part with the run's material law (see the module).
 
@@ -110,7 +114,7 @@ class PartAnalysis:
         The load: the wall pressure, fixed or follower, or the Darcy body force (``body``).
     params : pacto_ng.params.Parameters
         The run's parameters: model, E0, E1, E2, ν, plane, thickness, material, Wang's β1, η1
-        (and γ), penal, formulation, order, Newton's settings, realcompile.
+        (and γ), penal, formulation, order, Newton's settings, realcompile (-1: where it pays).
     supports : Supports
         Dirichlet conditions by name (a name the part lacks: ValueError from Mechanics).
     ports : Port or tuple of Port
@@ -194,7 +198,9 @@ class PartAnalysis:
             thickness=self.thickness, guard=guard,
             linear=linear and kind != "follower" and not contact,
             newton=self._newton(params, contact), residual_terms=terms,
-            realcompile=params.realcompile, formulation=self.formulation)
+            realcompile=params.newton.compiles(linear and kind != "follower" and not contact,
+                                               mesh.ne * SWEEP_NEWTON),
+            formulation=self.formulation)
         if contact and self.formulation != "displacement":
             raise ValueError(f"contact: the part is analysed with the {self.formulation} "
                              "formulation (the run's), which takes no contact yet")

@@ -1,0 +1,33 @@
+"""Where a nonlinear model's Newton forms are compiled to machine code by themselves
+(``realcompile`` = -1, :meth:`pacto_ng.physics.newton.NewtonParameters.compiles`): where the
+elements times the Newton iterations expected reach ``COMPILE_PAYS`` and NGSolve's ``ngscxx``
+is on PATH; 1 and 0 force it.  That compiled forms change nothing but the speed is
+tests/physics/test_wang.py's ``test_realcompile_gives_the_same_residual_and_tangent``."""
+import shutil
+
+import pytest
+
+from pacto_ng.case import build_problem, get_case
+from pacto_ng.physics.newton import COMPILE_PAYS, NewtonParameters
+
+
+def test_the_forms_are_compiled_where_the_work_pays_for_the_compiler(monkeypatch):
+    auto, on, off = (NewtonParameters(realcompile=v) for v in (-1, 1, 0))
+    assert on.compiles(True, 1.0) and not off.compiles(False, 1e12)
+    monkeypatch.setattr(shutil, "which", lambda name: "/bin/" + name)
+    assert auto.compiles(False, COMPILE_PAYS) and not auto.compiles(False, 0.99 * COMPILE_PAYS)
+    assert not auto.compiles(True, 1e12)  # a linear model has no Newton forms to speed up
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    assert not auto.compiles(False, 1e12)  # no compiler wrapper: not compiled
+    assert on.compiles(False, 1.0)  # asked for: NGSolve says what is missing
+
+
+@pytest.mark.skipif(shutil.which("ngscxx") is None, reason="needs NGSolve's ngscxx")
+def test_a_long_nonlinear_run_compiles_its_forms_and_a_short_one_not():
+    """pneunet-silicone (Wang, 2400 elements): 3 iterations are 2.9e4 element-Newton
+    iterations, not compiled; its default 160 iterations 1.5e6, compiled."""
+    case = get_case("pneunet-silicone")
+    short = build_problem(case, case.resolve(case.defaults.replace(iterations=3)))
+    assert short.mesh.ne == 2400 and not short.mech.realcompile
+    long = build_problem(case, case.resolve(case.defaults))
+    assert long.params.iterations == 160 and long.mech.realcompile
