@@ -46,10 +46,12 @@ the backward pass.
 """
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from netgen.meshing import NgException
 
 from .adjoint import Adjoint
 from .body_coupling import BodyCoupling
@@ -379,9 +381,16 @@ class Mechanics(Equilibrium, Adjoint):
             self._lin.expect_many_designs()
 
     def hot(self, cf):
-        """``cf`` compiled for a form that Newton assembles in every iteration."""
+        """``cf`` compiled for a form that Newton assembles in every iteration: to machine code
+        with :attr:`realcompile`, unless the compiler behind NGSolve's ``ngscxx`` fails (no
+        C++ compiler on the machine: said once, and the forms run as compiled expressions)."""
         if self.realcompile:
-            return cf.Compile(realcompile=True, wait=True)
+            try:
+                return cf.Compile(realcompile=True, wait=True)
+            except NgException as err:
+                self.realcompile = False
+                print(f"pacto: warning: the Newton forms are not compiled to machine code "
+                      f"({err}); they assemble about 2x slower", file=sys.stderr, flush=True)
         return cf.Compile()
 
     def displacement(self, x):

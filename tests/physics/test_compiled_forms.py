@@ -5,6 +5,7 @@ is on PATH; 1 and 0 force it.  That compiled forms change nothing but the speed 
 tests/physics/test_wang.py's ``test_realcompile_gives_the_same_residual_and_tangent``."""
 import shutil
 
+import numpy as np
 import pytest
 
 from pacto_ng.case import build_problem, get_case
@@ -31,3 +32,24 @@ def test_a_long_nonlinear_run_compiles_its_forms_and_a_short_one_not():
     assert short.mesh.ne == 2400 and not short.mech.realcompile
     long = build_problem(case, case.resolve(case.defaults))
     assert long.params.iterations == 160 and long.mech.realcompile
+
+
+def test_without_a_compiler_the_forms_run_as_compiled_expressions(tmp_path, monkeypatch, capfd):
+    """ngscxx on PATH but no C++ compiler behind it: one warning line, and the problem is
+    built and solves as one built with the forms not compiled."""
+    case = get_case("pneunet-silicone")
+    params = case.resolve(case.defaults.replace(iterations=3))
+    plain = build_problem(case, params.replace(realcompile=0))
+    x = np.linspace(0.1, 0.9, plain.n_design)
+    plain.chain.forward(x=x)
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    for name in ("ngscxx", "python3"):
+        (fake / name).symlink_to(shutil.which(name))
+    monkeypatch.setenv("PATH", str(fake))
+    problem = build_problem(case, params.replace(realcompile=1))
+    assert not problem.mech.realcompile
+    assert capfd.readouterr().err.count("pacto: warning: the Newton forms are not compiled") == 1
+    problem.chain.forward(x=x)
+    key = problem.mech.output
+    assert np.array_equal(problem.values[key].FV().NumPy(), plain.values[key].FV().NumPy())
