@@ -2,7 +2,8 @@
 and examples/cad_actuator (a STEP file written by make_step.py, then a case file run by path).
 
 Each: a 3-iteration run that ends with a finite objective, and the finite-difference check of
-the whole chain."""
+the whole chain (the built-in ones' objective histories are pinned in
+tests/cases/test_case_pins.py)."""
 import json
 import math
 import shutil
