@@ -213,6 +213,9 @@ def _refine_parser(sub):
                    "than this (m): the descent is steered to keep the walls above it and a "
                    "step below it is refused (default: no floor; summary.json and the last "
                    "line report the thinnest wall either way)")
+    f.add_argument("--contact", action="store_true", help="the part's walls in frictionless "
+                   "self-contact, in its analysis and in the shape gradient (slower: each "
+                   "equilibrium is solved again with the pairs sought anew until they hold)")
     f.add_argument("--check-gradients", action="store_true", help="instead of refining, "
                    "check the refinement's shape gradients (Δ, volume, and Δ/SE for a "
                    "mechanism) against central differences on the run's part; writes nothing; "

@@ -37,7 +37,7 @@ def post_command(args) -> int:
     if args.command == "analyse":
         return _analyse_command(args)
     if args.command == "refine":
-        loading = Loading(args.model, args.load, args.load_type)
+        loading = Loading(args.model, args.load, args.load_type, args.contact)
         if args.check_gradients:
             return check_refine_gradients(args.dir, directions=args.directions, tol=args.tol,
                                           quiet=args.quiet, loading=loading)

@@ -63,6 +63,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..physics.equilibrium import NewtonFailure
+from ..physics.walls import solid_boundaries
 from ..shape import moved_field, refine, remesh_moved, volume
 from .finish import say
 from .part import part_ports, present_supports
@@ -125,7 +126,7 @@ def refine_run(folder, *, steps: int = STEPS, quiet: bool = False, overwrite: bo
                                                           floor["floor"])
     settings = dict(threshold=part.threshold, threshold_note=part.choice.get("note"),
                     maxh=job.maxh, order=job.params.order, elements=part.mesh.ne,
-                    part_size=part_size(part.mesh))
+                    part_size=part_size(part.mesh), contact=job.contact)
     summary = _summary(run, result, bound, (job.params.model, kind, load), settings)
     summary["ratio"] = _ratio(response, result) if job.hold_ratio else None
     summary["remeshes"] = remeshes
@@ -296,7 +297,8 @@ def _sweep(job: Job, checked, pressures, quiet: bool) -> tuple[list[dict], dict 
     mesh = checked[0]
     ana = PartAnalysis(mesh, job.kind, params=job.params,
                        supports=present_supports(job.setup.supports, mesh),
-                       ports=part_ports(job.setup))
+                       ports=part_ports(job.setup),
+                       contact=solid_boundaries(mesh) if job.contact else ())
     sweep = ana.sweep(sorted(pressures), say=None if quiet else (lambda line: say(False, line)))
     return [{"pressure": p.pressure, "converged": bool(p.converged), "delta": num(p.delta),
              "newton_iterations": p.iterations, "past_peak": p.past_peak}

@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import InputError
+from ..physics.walls import solid_boundaries
 from ..shape import PartResponse, ShapeSpace, volume
 from .analysis_options import analysis_params
 from .finish import say
@@ -30,11 +31,13 @@ REFINED = {"mechanism": True, "output": False}
 class Loading:
     """What a user may change of the run's loading for the refinement (None: the run's own):
     the material ``model``, the inlet pressure ``load`` and its ``kind`` (``fixed`` or
-    ``follower``)."""
+    ``follower``); ``contact``: the part's walls in frictionless self-contact
+    (:mod:`pacto_ng.shape.contact_term`)."""
 
     model: str | None = None
     load: float | None = None
     kind: str | None = None
+    contact: bool = False
 
 
 def refinement(run, quiet: bool, what: str, loading: Loading = Loading()):
@@ -49,10 +52,12 @@ def refinement(run, quiet: bool, what: str, loading: Loading = Loading()):
     problem = rebuild(run)
     dim = problem.mesh.dim
     params = analysis_params(run.params, loading.model, PART_ORDER[dim])
+    walls = ", the walls in self-contact" if loading.contact else ""
     say(quiet, f"refine {run.path}: {run.case.name}, model {params.model}, {kind} "
-               f"pressure {load:g} {run.case.load_unit}, {what}")
+               f"pressure {load:g} {run.case.load_unit}{walls}, {what}")
     part, maxh = _part(run, problem, setup)
-    job = Job(setup, params, load, kind, maxh, _bounds(problem.mesh), REFINED[objective])
+    job = Job(setup, params, load, kind, maxh, _bounds(problem.mesh), REFINED[objective],
+              loading.contact)
     say(quiet, f"  the part: {part.mesh.ne} elements, maxh {maxh:.4g} m, order "
                f"{job.params.order}, volume {volume(part.mesh, job.thickness(dim)):.4g} m³ "
                f"(the bound)")
@@ -72,6 +77,7 @@ class Job:
     maxh: float
     domain: tuple
     hold_ratio: bool
+    contact: bool = False  # the part's walls in self-contact (--contact)
 
     def thickness(self, dim: int) -> float:
         """The part's thickness: the run's for a 2D part (its volume is thickness × area),
@@ -81,7 +87,8 @@ class Job:
 
 def shape_response(mesh, job: Job):
     """``(PartResponse, ShapeSpace)`` of the part: the run's supports, ports and pressure;
-    the clamp and the ports held, the symmetry lines held in their normal component."""
+    the clamp and the ports held, the symmetry lines held in their normal component; with
+    ``job.contact`` every boundary of the solid in self-contact."""
     supports = present_supports(job.setup.supports, mesh)
     ports = part_ports(job.setup)
     regions = set(mesh.GetBoundaries()) | set(mesh.GetBBoundaries())
@@ -92,6 +99,8 @@ def shape_response(mesh, job: Job):
         response = PartResponse(mesh, params=job.params, supports=supports, ports=ports,
                                 pressure=job.load, kind=job.kind)
         space = ShapeSpace(mesh, hold=hold)
+        if job.contact:
+            response.use_contact(space, solid_boundaries(mesh))
     except ValueError as err:
         raise InputError(f"refine: the part cannot be refined: {err}") from None
     return response, space

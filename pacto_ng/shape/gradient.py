@@ -80,6 +80,7 @@ The displacement formulation throughout (the mixed one of
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -96,7 +97,8 @@ from ..physics.newton import solve_with_continuation
 from ..physics.quadrature import integration_rules
 from ..physics.spaces import dirichlet_options
 from ..physics.walls import outward_normal
-from ..post.part_analysis import solid_fields
+from ..post.part_analysis import CONTACT_CYCLES, solid_fields
+from .contact_term import ShapeContact, summed
 from .deformation import ShapeSpace, shape_ds, shape_dx
 
 KINDS = ("fixed", "follower")
@@ -194,7 +196,9 @@ class PartResponse:
         self.load = Parameter(self.pressure)  # the load factor of Newton's continuation
         self.settings = params.newton.settings()
         self.u, self.lam = GridFunction(self.fes), GridFunction(self.fes)
-        self.a, self._se = self._tangent_form(), self._energy_form()
+        self.a, self._se = self._tangent_form(kind == "fixed"), self._energy_form()
+        self.contact: ShapeContact | None = None
+        self._E1 = float(params.E1)
         self._inverse = None
         self._tangent_current = False
         self._trial = GridFunction(self.fes)
@@ -211,12 +215,12 @@ class PartResponse:
             return self.normal
         return Cof(Id(self.mesh.dim) + Grad(u).Trace()) * self.normal
 
-    def _tangent_form(self):
+    def _tangent_form(self, symmetric: bool):
         """The residual ``R(u; v)`` as a BilinearForm (Variation of the potential, and the
-        follower term as a residual term)."""
+        follower term as a residual term); ``symmetric``: its matrix in symmetric storage."""
         u, v = self.fes.TnT()
         t, P = self.thickness, self.sign * self.load
-        a = BilinearForm(self.fes, symmetric=self.kind == "fixed")
+        a = BilinearForm(self.fes, symmetric=symmetric)
         a += Variation(t * self.energy(Grad(u), self.coeffs) * shape_dx())
         if self.kind == "fixed":
             a += Variation(t * P * InnerProduct(self.normal, u) * shape_ds(self.boundary))
@@ -296,15 +300,29 @@ class PartResponse:
                              f"{self.strain_energy!r})")
         return 1.0 / self.strain_energy, self.delta / self.strain_energy ** 2
 
+    def use_contact(self, space: ShapeSpace, names) -> None:
+        """The walls ``names`` in frictionless self-contact from now on, the shape's
+        deformation that of ``space`` (:mod:`pacto_ng.shape.contact_term`): in the state, its
+        tangent and adjoint, and the shape gradient."""
+        self.contact = ShapeContact(self.fes, space, names, E1=self._E1,
+                                    thickness=self.thickness)
+        self.a = self._tangent_form(False)  # full storage: the contact's tangent is added
+        self.linear, self._inverse = False, None
+
     # -- the problem Newton drives (pacto_ng.physics.newton) ---------------------------------
     def residual(self, vec, out, load):
         self.load.Set(load)
         self.a.Apply(vec, out)
+        if self.contact is not None:
+            self.contact.add_residual(vec, out)
 
     def assemble_tangent(self, vec, load):
         self.load.Set(load)
         self.a.AssembleLinearization(vec)
-        if self._inverse is None:
+        if self.contact is not None:  # a new pattern with every pairing: factorised anew
+            self._matrix = summed(self.a.mat, self.contact.tangent(vec))
+            self._inverse = self._matrix.Inverse(self.fes.FreeDofs(), inverse="umfpack")
+        elif self._inverse is None:
             inverse = "sparsecholesky" if self.kind == "fixed" else "umfpack"
             self._inverse = self.a.mat.Inverse(self.fes.FreeDofs(), inverse=inverse)
         else:
@@ -333,12 +351,24 @@ class PartResponse:
         NewtonFailure if Newton does not reach the pressure (with ``ramp`` False, if the warm
         start fails: no ramp from zero)."""
         self._measure_springs()
-        warm = self.result is not None or self._started
-        self.result = solve_with_continuation(self, self.u.vec, self.pressure, self.settings,
-                                              warm=warm, linear=self.linear,
-                                              ramp=ramp or not warm)
-        if not self.result.converged:
-            raise NewtonFailure(self.result)
+        # with contact: Newton with the pairs fixed, then paired anew, until they hold (from
+        # the last pairing's equilibrium: no ramp from zero)
+        for cycle in range(CONTACT_CYCLES if self.contact is not None else 1):
+            if self.contact is not None:
+                self.contact.pair(self.u.vec)
+            warm = self.result is not None or self._started
+            self.result = solve_with_continuation(
+                self, self.u.vec, self.pressure, self.settings, warm=warm, linear=self.linear,
+                ramp=(ramp or not warm) and cycle == 0,
+                on_step=None if self.contact is None else self._repair)
+            if not self.result.converged:
+                raise NewtonFailure(self.result)
+            if self.contact is None or self._pairs_hold():
+                break
+        else:
+            raise NewtonFailure(dataclasses.replace(
+                self.result, converged=False,
+                reason=f"the contact's pairs did not settle in {CONTACT_CYCLES} pairings"))
         self.load.Set(self.pressure)
         # the factorised tangent is the equilibrium's own if the problem is linear and Newton
         # assembled it on this shape
@@ -347,6 +377,21 @@ class PartResponse:
         self.delta = float(InnerProduct(self._output, self.u.vec))
         self.strain_energy = float(self._se.Energy(self.u.vec))
         return self.delta
+
+    def _repair(self, load, vec) -> None:
+        """A load ramp's step reached: the pairs sought anew there, for the next step."""
+        self.contact.pair(vec)
+
+    def _pairs_hold(self) -> bool:
+        """Pair anew at the equilibrium found; whether it holds with the new pairs."""
+        self.contact.pair(self.u.vec)
+        r = self.u.vec.CreateVector()
+        self.residual(self.u.vec, r, self.pressure)
+        return free_norm(r, self.free) <= self._tolerance()
+
+    def _tolerance(self) -> float:
+        """Newton's residual tolerance at the full pressure (absolute)."""
+        return self.settings.for_route(True).rtol * self.load_norm(self.pressure)
 
     def start_from(self, field) -> None:
         """The next solve starts at the full load from ``field`` (a displacement, e.g. that of
@@ -402,4 +447,7 @@ class PartResponse:
         (``{"delta": a, "ratio": b}``) on ``space`` (its held dofs zeroed) at the last
         equilibrium: the adjoint solve and the shape derivative of :meth:`lagrangian`."""
         self.adjoint(objective)
-        return space.derivative(self.lagrangian(objective))
+        gradient = space.derivative(self.lagrangian(objective))
+        if self.contact is not None:  # -∂/∂d R_c(u; d)[λ] (contact_term)
+            gradient -= self.contact.shape_term(self.lam.vec)
+        return gradient

@@ -1,0 +1,145 @@
+"""Frictionless self-contact in a part's shape refinement: its term in the state, the adjoint
+and the shape gradient of :class:`~pacto_ng.shape.gradient.PartResponse`.
+
+The contact energy of the shape ``Ω = (id + d)(Ω0)`` is the penalty of
+:mod:`pacto_ng.physics.contact` on the reference mesh ``Ω0``, at the positions
+``X0 + d + u`` of its walls:
+
+    E_c(u; d) = E0(u + P d),
+
+``E0(w) = t ∫_Γc0 k/2 max(g(w), 0)² dA0`` with the gap ``g`` along the reference walls'
+normals, and ``P`` the embedding of the shape's deformation (an order-1 VectorH1) in the
+displacement's space: its vertex coefficients (NGSolve's H1 basis is hierarchical, a vertex's
+function the P1 hat at every order).  The penalty thus treats the shape's motion as it treats
+the displacement: the pairs are sought at ``X0 + d + u``, and the walls' normals and areas are
+those of ``Ω0`` (the penalty's numerical weight; the refinement moves walls by fractions of an
+element).  Then the residual's contact term is ``R_c(u; d)[v] = DE0(u + P d)[v]``, its tangent
+``H = D²E0(u + P d)``, and exactly
+
+    ∂/∂d R_c(u; d)[λ] = Pᵀ H λ,
+
+so the shape gradient's contact term is ``-Pᵀ H λ`` (the Lagrangian ``L = J - R(u; λ)`` of
+:mod:`pacto_ng.shape.gradient`).  NGSolve's ``ContactBoundary`` has no ``DiffShape``: written
+on ``Ω`` (areas and normals of the moved walls) the shape derivative would need the pairs'
+motion by hand; on ``Ω0`` it is the tangent NGSolve assembles.  Checked against central
+differences of the re-solved state, pairs sought anew at every shape
+(tests/shape/test_contact_gradient.py).
+
+Every contact form is assembled with the mesh's deformation unset (on ``Ω0``) and the
+deformation set again afterwards; its tangent, on a sparsity pattern of its own (the pairs
+couple dofs of facing walls), is added to the body's as a sparse matrix (:func:`summed`).
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+import numpy as np
+from ngsolve import VERTEX, BilinearForm, Integrate, NodeId
+from ngsolve.la import SparseMatrixd
+
+from ..physics.contact import SelfContact
+from ..physics.walls import outward_normal
+from ..post.part_analysis import CONTACT_PENALTY, CONTACT_REACH
+
+
+def summed(a, b) -> SparseMatrixd:
+    """``a + b`` of two sparse matrices in full storage (either sparsity pattern)."""
+    parts = [tuple(np.asarray(p) for p in m.COO()) for m in (a, b)]
+    rows, cols, vals = (np.concatenate([p[k] for p in parts]) for k in range(3))
+    n = a.height
+    return SparseMatrixd.CreateFromCOO(rows.astype(np.int64), cols.astype(np.int64), vals, n, n)
+
+
+class ShapeContact:
+    """The walls ``names`` of the part in frictionless self-contact, on the reference mesh at
+    the positions ``X0 + d + u`` (see the module).
+
+    Parameters
+    ----------
+    fes : ngsolve FESpace
+        The displacement's VectorH1 space on the part.
+    space : ShapeSpace
+        The shape's deformation ``d``: an order-1 space (its coefficients the vertices'
+        motions).
+    names : tuple of str
+        The candidate walls.
+    E1 : float
+        The solid's modulus: the penalty is ``penalty E1 / h`` (h the mean element size of
+        ``Ω0``) and pairs are sought within ``reach h``, as the part's analysis does
+        (:class:`~pacto_ng.post.part_analysis.PartAnalysis`).
+    thickness : float
+        The 2D thickness (1 in 3D).
+    """
+
+    def __init__(self, fes, space, names, *, E1: float, thickness: float = 1.0,
+                 penalty: float = CONTACT_PENALTY, reach: float = CONTACT_REACH):
+        if not space.vertex_dofs:
+            raise ValueError("contact in the shape gradient needs an order-1 shape space (its "
+                             "coefficients the vertices' motions)")
+        self.mesh, self.space = fes.mesh, space
+        with self._reference():
+            h = (Integrate(1.0, self.mesh) / self.mesh.ne) ** (1.0 / self.mesh.dim)
+            self.contact = SelfContact(fes, tuple(names), penalty * float(E1) / h, reach * h,
+                                       normal=outward_normal(self.mesh, "|".join(names)),
+                                       thickness=thickness)
+        self.form = BilinearForm(fes, symmetric=False)
+        nodes = [NodeId(VERTEX, i) for i in range(self.mesh.nv)]
+        self._u_dofs = np.array([fes.GetDofNrs(n) for n in nodes], dtype=np.int64).ravel()
+        self._d_dofs = np.array([space.space.GetDofNrs(n) for n in nodes],
+                                dtype=np.int64).ravel()
+        self._w = None
+
+    @contextmanager
+    def _reference(self):
+        """The mesh without its deformation (``Ω0``) for the duration."""
+        self.mesh.UnsetDeformation()
+        try:
+            yield
+        finally:
+            self.mesh.SetDeformation(self.space.deformation)
+
+    def _positions(self, vec):
+        """``u + P d``: the displacement of the walls' points from ``Ω0``."""
+        if self._w is None:
+            self._w = vec.CreateVector()
+        self._w.data = vec
+        w = self._w.FV().NumPy()
+        w[self._u_dofs] += self.space.deformation.vec.FV().NumPy()[self._d_dofs]
+        return self._w
+
+    def pair(self, vec) -> None:
+        """Seek the pairs at the state ``vec`` (they hold until the next pairing)."""
+        w = self._positions(vec)
+        with self._reference():
+            self.contact.update(self.form, w)
+
+    def add_residual(self, vec, out) -> None:
+        """``out += R_c(u; d)``, ``u`` = ``vec``, with the current pairs."""
+        w, r = self._positions(vec), out.CreateVector()
+        with self._reference():
+            self.form.Apply(w, r)
+        out.data += r
+
+    def tangent(self, vec):
+        """``H = D²E0(u + P d)`` at ``u`` = ``vec`` (the form's matrix, current pairs)."""
+        w = self._positions(vec)
+        with self._reference():
+            self.form.AssembleLinearization(w)
+        return self.form.mat
+
+    def shape_term(self, lam) -> np.ndarray:
+        """``Pᵀ H λ`` on the shape space's coefficients (``H`` of the last :meth:`tangent`),
+        the held dofs zeroed: the shape derivative of ``R_c(u; d)[λ]``."""
+        y = lam.CreateVector()
+        y.data = self.form.mat * lam
+        out = np.zeros(self.space.ndof)
+        out[self._d_dofs] = y.FV().NumPy()[self._u_dofs]
+        out[self.space.held] = 0.0
+        return out
+
+    def measure(self, vec) -> tuple[float, float, float]:
+        """``(area, force, largest pressure)`` of the contact at the state ``vec``
+        (:meth:`~pacto_ng.physics.contact.SelfContact.measure`)."""
+        w = self._positions(vec)
+        with self._reference():
+            return self.contact.measure(w)
