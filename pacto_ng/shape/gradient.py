@@ -360,7 +360,7 @@ class PartResponse:
             self.result = solve_with_continuation(
                 self, self.u.vec, self.pressure, self.settings, warm=warm, linear=self.linear,
                 ramp=(ramp or not warm) and cycle == 0,
-                on_step=None if self.contact is None else self._repair)
+                on_step=None if self.contact is None else lambda _, x: self.contact.pair(x))
             if not self.result.converged:
                 raise NewtonFailure(self.result)
             if self.contact is None or self._pairs_hold():
@@ -378,20 +378,14 @@ class PartResponse:
         self.strain_energy = float(self._se.Energy(self.u.vec))
         return self.delta
 
-    def _repair(self, load, vec) -> None:
-        """A load ramp's step reached: the pairs sought anew there, for the next step."""
-        self.contact.pair(vec)
-
     def _pairs_hold(self) -> bool:
-        """Pair anew at the equilibrium found; whether it holds with the new pairs."""
+        """Pair anew at the equilibrium found; whether it holds with the new pairs (Newton's
+        tolerance).  A load ramp pairs anew at each of its steps (``on_step``)."""
         self.contact.pair(self.u.vec)
         r = self.u.vec.CreateVector()
         self.residual(self.u.vec, r, self.pressure)
-        return free_norm(r, self.free) <= self._tolerance()
-
-    def _tolerance(self) -> float:
-        """Newton's residual tolerance at the full pressure (absolute)."""
-        return self.settings.for_route(True).rtol * self.load_norm(self.pressure)
+        tol = self.settings.for_route(True).rtol * self.load_norm(self.pressure)
+        return free_norm(r, self.free) <= tol
 
     def start_from(self, field) -> None:
         """The next solve starts at the full load from ``field`` (a displacement, e.g. that of
