@@ -98,7 +98,7 @@ from ..physics.quadrature import integration_rules
 from ..physics.spaces import dirichlet_options
 from ..physics.walls import outward_normal
 from ..post.part_analysis import CONTACT_CYCLES, solid_fields
-from .contact_term import ShapeContact, summed
+from .contact_term import ShapeContact
 from .deformation import ShapeSpace, shape_ds, shape_dx
 
 KINDS = ("fixed", "follower")
@@ -320,8 +320,11 @@ class PartResponse:
         self.load.Set(load)
         self.a.AssembleLinearization(vec)
         if self.contact is not None:  # a new pattern with every pairing: factorised anew
-            self._matrix = summed(self.a.mat, self.contact.tangent(vec))
-            self._inverse = self._matrix.Inverse(self.fes.FreeDofs(), inverse="umfpack")
+            tangent = self.contact.tangent_with(self.a.mat, vec)
+            if self.contact.new_pattern or self._inverse is None:
+                self._inverse = tangent.Inverse(self.fes.FreeDofs(), inverse="umfpack")
+            else:
+                self._inverse.Update()
         elif self._inverse is None:
             inverse = "sparsecholesky" if self.kind == "fixed" else "umfpack"
             self._inverse = self.a.mat.Inverse(self.fes.FreeDofs(), inverse=inverse)

@@ -19,12 +19,14 @@ The test asserts 1e-3: the contact term right to 0.3 % of itself."""
 import numpy as np
 import pytest
 from netgen import occ
-from ngsolve import CF, Mesh, cos, sin, x, y
+from ngsolve import (CF, BilinearForm, Grad, InnerProduct, Mesh, VectorH1, cos, ds, dx, sin,
+                     x, y)
 
 from pacto_ng.params import Parameters
 from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
 from pacto_ng.shape import PartResponse, ShapeSpace
+from pacto_ng.shape.contact_term import MatrixSum
 from pacto_ng.threads import compute
 
 PRESSURE = 3e3
@@ -87,3 +89,32 @@ def test_the_gradient_with_the_walls_in_contact_matches_central_differences(mode
     assert area > 0.01 and force > 0.0  # the walls are in contact
     assert rel < 1e-3
     assert abs(analytic + term - numeric) / abs(numeric) > 0.1  # the contact term matters
+
+
+def test_the_sum_of_two_patterns_is_their_matrices_sum():
+    """MatrixSum: a + b on the union of two sparsity patterns (the body's volume couplings,
+    a boundary term's), made once and then summed anew, against the two products."""
+    mesh = slotted_block(0.2)
+    space = VectorH1(mesh, order=2, dirichlet="left")
+    u, v = space.TnT()
+    a = BilinearForm(space, symmetric=False)
+    a += InnerProduct(Grad(u), Grad(v)) * dx
+    b = BilinearForm(space, symmetric=False)
+    b += (x + 2) * InnerProduct(u, v) * ds("slot")
+    total = MatrixSum()
+    vec = None
+    for scale, new in ((1.0, True), (3.0, False)):  # the pattern made, then reused
+        a.Assemble()
+        b.Assemble()
+        b.mat.AsVector().data *= scale
+        if vec is None:
+            vec = a.mat.CreateColVector()
+            vec.FV().NumPy()[:] = np.random.default_rng(3).random(len(vec))
+        assert total.of(a.mat, b.mat) is new
+        got, want, extra = (vec.CreateVector() for _ in range(3))
+        got.data = total.matrix * vec
+        want.data = a.mat * vec
+        extra.data = b.mat * vec
+        want.data += extra
+        assert np.abs(got.FV().NumPy() - want.FV().NumPy()).max() <= \
+            1e-13 * np.abs(want.FV().NumPy()).max()
