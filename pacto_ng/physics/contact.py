@@ -47,7 +47,8 @@ from __future__ import annotations
 
 import numpy as np
 from ngsolve import (H1, VERTEX, BilinearForm, CoefficientFunction, ContactBoundary,
-                     GridFunction, IfPos, LinearForm, NodeId, ds, specialcf, x, y, z)
+                     GridFunction, IfPos, Integrate, LinearForm, NodeId, ds, specialcf, x, y,
+                     z)
 
 #: the cosine of the least angle between two walls' normals for them to be in contact (120°)
 FACING = 0.5
@@ -55,6 +56,12 @@ FACING = 0.5
 #: tests/physics/test_contact.py (711 tetrahedra, linear, order 1, slot 0.02 m) order 10 took
 #: 36 s (no overlap where sampled), 6 took 13 s (overlap 4.3e-6 m), 4 took 6.2 s (9.9e-5 m)
 INTORDER = {2: 10, 3: 6}
+
+
+def element_scale(mesh) -> float:
+    """``(|Ω| / elements)^(1/d)``: the element size the penalty and the pairing distance are
+    measured in (the cube or square root of the mean element's measure)."""
+    return float((Integrate(1.0, mesh) / mesh.ne) ** (1.0 / mesh.dim))
 
 
 class SelfContact:
@@ -128,12 +135,20 @@ class SelfContact:
         wall where they overlap (in 2D the length times the thickness), the normal force
         between them, ``2 k ∫ max(g, 0)`` over one wall (times the thickness in 2D), and the
         largest contact pressure, the largest of :meth:`pressures` (0 without contact)."""
-        self._state.vec.data = vec
-        out = []
-        for cb, form in self._probes:
-            cb.Update(self._state, form, intorder=self.intorder, maxdist=self.maxdist)
-            out.append(float(form.Energy(self._state.vec)))
+        out = [self._probe(vec, k) for k in range(len(self._probes))]
         return out[0], out[1], float(self._pressures().max(initial=0.0))
+
+    def overlap(self, vec) -> float:
+        """The area of either wall where the walls overlap at the state ``vec`` (in 2D the
+        length times the thickness): :meth:`measure`'s first figure, one pairing."""
+        return self._probe(vec, 0)
+
+    def _probe(self, vec, k: int) -> float:
+        """The ``k``-th measure's energy at the state ``vec``, paired there."""
+        self._state.vec.data = vec
+        cb, form = self._probes[k]
+        cb.Update(self._state, form, intorder=self.intorder, maxdist=self.maxdist)
+        return float(form.Energy(self._state.vec))
 
     def pressures(self, vec) -> tuple[np.ndarray, np.ndarray]:
         """``(points, p)`` at the state ``vec``: the reference positions of Γc's vertices

@@ -54,10 +54,10 @@ import time
 from typing import Callable
 
 import numpy as np
-from ngsolve import VOL, Grad, InnerProduct, Integrate, LinearForm, Parameter
+from ngsolve import VOL, Grad, InnerProduct, LinearForm, Parameter
 
 from ..errors import InputError
-from ..physics.contact import SelfContact
+from ..physics.contact import SelfContact, element_scale
 from ..physics.energy import make_energy
 from ..physics.equilibrium import NewtonFailure, WarmState
 from ..physics.loads import Port, Spring
@@ -205,7 +205,7 @@ class PartAnalysis:
             raise ValueError(f"contact: the part is analysed with the {self.formulation} "
                              "formulation (the run's), which takes no contact yet")
         if contact:
-            h = (Integrate(1.0, mesh) / mesh.ne) ** (1.0 / mesh.dim)
+            h = element_scale(mesh)
             self.mech.use_contact(SelfContact(
                 self.mech.space, tuple(contact), contact_penalty * float(params.E1) / h,
                 CONTACT_REACH * h, normal=outward_normal(mesh, "|".join(contact)),

@@ -37,13 +37,15 @@ import numpy as np
 
 from ..errors import InputError
 from ..files import atomic_write_text
+from ..physics.contact import SelfContact, element_scale
 from ..physics.equilibrium import NewtonFailure
+from ..physics.walls import outward_normal, solid_boundaries
 from .domain import symmetry_line
 from .mirror3d import mirror_surface, symmetry_planes
 from .part import Part, make_part, part_ports, present_supports
 from .part2d import part_mesh, write_part_stl as write_stl_2d
 from .part3d import write_part_stl as write_stl_3d
-from .part_analysis import PartAnalysis
+from .part_analysis import CONTACT_REACH, PartAnalysis
 from .pictures import plot_deformed
 from .plots3d import deformed_picture
 from .runs import at_order, copy_gridfunction, design_delta
@@ -115,14 +117,10 @@ def _analyse(path, part: Part, problem, summary, say) -> dict:
     order = PART_ORDER[part.dim]
     kind = params.load_type
     ports = part_ports(setup)
-    try:
-        ana = PartAnalysis(part.mesh, kind, params=params.replace(order=order),
-                           supports=present_supports(setup.supports, part.mesh), ports=ports)
-    except ValueError as err:
-        raise InputError(f"the part cannot be analysed: {err}") from None
-    point = ana.solve(load)
+    ana, point = _solved(part, problem, (load, kind, order))
     say(f"analysed at {load:.4g} {problem.case.load_unit} ({kind}, {ana.model}, order {order})"
         + ("" if point.converged else ": no equilibrium"))
+    contact, (ana, point) = _with_contact(part, problem, (ana, point), (load, kind, order), say)
     entry = {"analysed": True, "kind": kind, "model": ana.model, "order": order,
              "formulation": ana.formulation, "load": load, "converged": point.converged,
              "newton_iterations": point.iterations, "min_J": _num(point.min_j),
@@ -139,7 +137,8 @@ def _analyse(path, part: Part, problem, summary, say) -> dict:
                     (point.delta - design) / abs(design))
     entry["gap_to_run"] = (None if not point.converged or not run_delta else
                            (point.delta - run_delta) / abs(run_delta))
-    entry["warnings"] = _warnings(part, problem, ports, point)
+    entry["contact"] = contact
+    entry["warnings"] = _warnings(part, problem, ports, point) + _overlap_warning(contact, path)
     if point.converged and ana.model == "linear":
         entry["warnings"] += beyond_linear(part.mesh, point.max_u)
     if point.converged:
@@ -152,6 +151,64 @@ def _analyse(path, part: Part, problem, summary, say) -> dict:
         else:
             deformed_picture(path / "part.png", part.mesh, u, title=title)
     return entry
+
+
+def _solved(part: Part, problem, loading: tuple, contact: tuple = ()):
+    """``(PartAnalysis, SweepPoint)``: the part solved at ``loading`` = (load, kind, order)
+    with the run's model, the walls ``contact`` in self-contact."""
+    load, kind, order = loading
+    setup = problem.setup
+    try:
+        ana = PartAnalysis(part.mesh, kind, params=problem.params.replace(order=order),
+                           supports=present_supports(setup.supports, part.mesh),
+                           ports=part_ports(setup), contact=contact)
+    except ValueError as err:
+        raise InputError(f"the part cannot be analysed: {err}") from None
+    return ana, ana.solve(load)
+
+
+def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
+    """``(entry, (PartAnalysis, SweepPoint))``: where a 2D part's walls pass through each
+    other at the solved state (:func:`walls_overlap`), the part solved again with its walls
+    in self-contact, whose figures are then the part's (``entry``: the overlap and Δ without
+    contact, and whether the contact's solve converged; with the mixed formulation, which
+    takes no contact, only the overlap).  ``entry`` is None where the walls do not meet, and
+    for a 3D part, whose walls are not probed: one pairing of pneunet-3d's part took 36 s at
+    the contact's quadrature (2026-12-06), a minute's run's half (``pacto analyse DIR
+    --contact`` analyses a 3D part with contact)."""
+    ana, point = solved
+    overlap = walls_overlap(ana) if point.converged and part.dim == 2 else 0.0
+    if not overlap > 0.0:
+        return None, solved
+    entry = {"overlap_without": overlap, "output_displacement_without": _num(point.delta),
+             "analysed": False}
+    if ana.formulation != "displacement":
+        return entry, solved
+    again = _solved(part, problem, loading, contact=solid_boundaries(part.mesh))
+    entry.update(analysed=True, converged=bool(again[1].converged))
+    say(f"its walls pass through each other there (overlap {overlap:.3g} m²): analysed again "
+        f"with them in contact" + ("" if again[1].converged else ": no equilibrium"))
+    return entry, again if again[1].converged else solved
+
+
+def walls_overlap(ana: PartAnalysis) -> float:
+    """The area (in 2D length times thickness) over which the part's walls overlap in the
+    analysis ``ana``'s current state: one pairing of every boundary of the solid with itself
+    (:meth:`~pacto_ng.physics.contact.SelfContact.overlap`)."""
+    mesh = ana.mech.mesh
+    names = solid_boundaries(mesh)
+    probe = SelfContact(ana.mech.space, names, 1.0, CONTACT_REACH * element_scale(mesh),
+                        normal=outward_normal(mesh, "|".join(names)), thickness=ana.thickness)
+    return probe.overlap(ana.mech.gfx.vec)
+
+
+def _overlap_warning(contact, path) -> list[str]:
+    """The warning for walls that pass through each other and were not analysed in contact."""
+    if contact is None or contact.get("converged"):
+        return []
+    return [f"its walls pass through each other in this analysis (overlap "
+            f"{contact['overlap_without']:.3g} m²): 'pacto analyse {path} --contact' analyses "
+            f"it with them in contact"]
 
 
 def _design_at(problem, order: int, run_delta):
@@ -250,13 +307,21 @@ def last_line(summary: dict, path) -> str:
         else:
             d, e = part["output_displacement"], part["output_displacement_design"]
             text = f"moves {d:.4g} m at {part['load']:.4g} {unit}"
+            touch = part.get("contact") or {}
+            if touch.get("converged"):
+                text += (f" with its walls in contact (passing through each other: "
+                         f"{touch['output_displacement_without']:.4g} m)")
             if part.get("gap") is not None:
                 text += f" against the design's {e:.4g} m ({100 * part['gap']:+.1f} %)"
                 if part.get("run_order", part["order"]) != part["order"]:
                     text += (f" at order {part['order']}, as the part (the run's order-"
                              f"{part['run_order']} analysis: {part['output_displacement_run']:.4g}"
                              f" m)")
-                if abs(part["gap"]) > GAP_LIMIT:
+                if abs(part["gap"]) > GAP_LIMIT and touch.get("converged"):
+                    text += (" — not as designed: its walls touch, which the design's analysis "
+                             f"lets pass through each other ('pacto refine {path} --contact' "
+                             "refines the part with them in contact)")
+                elif abs(part["gap"]) > GAP_LIMIT:
                     robust = (summary.get("parameters") or {}).get("robust")
                     text += (" — not as designed: " + (
                         f"'pacto analyse {path}' tells where the gap comes from" if robust

@@ -35,10 +35,10 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 import numpy as np
-from ngsolve import VERTEX, BilinearForm, Integrate, NodeId
+from ngsolve import VERTEX, BilinearForm, NodeId
 from ngsolve.la import SparseMatrixd
 
-from ..physics.contact import SelfContact
+from ..physics.contact import SelfContact, element_scale
 from ..physics.walls import outward_normal
 from ..post.part_analysis import CONTACT_PENALTY, CONTACT_REACH
 
@@ -101,7 +101,7 @@ class ShapeContact:
                              "coefficients the vertices' motions)")
         self.mesh, self.space = fes.mesh, space
         with self._reference():
-            h = (Integrate(1.0, self.mesh) / self.mesh.ne) ** (1.0 / self.mesh.dim)
+            h = element_scale(self.mesh)
             self.contact = SelfContact(fes, tuple(names), penalty * float(E1) / h, reach * h,
                                        normal=outward_normal(self.mesh, "|".join(names)),
                                        thickness=thickness)

@@ -120,9 +120,9 @@ def test_a_short_run_of_the_user_case(tmp_path):
 def test_a_built_in_case_resolves_as_before(case):
     """Built-in cases give their settings: nothing is derived but the filter radius of the two
     that leave it at 0, whose meaning (3 mesh sizes, pacto_ng.builders) it now records as a
-    length, and the continuation of the three set up as a peer code, which give none (as the
-    codes: derive.PENALTY, PROJECTION, CONTINUATION_OPTIMISER); their set-ups' objective
-    scale is their own."""
+    length, and the continuation of the three set up as a peer code and of mbb and
+    cantilever-3d, which give none (derive.PENALTY, PROJECTION, CONTINUATION_OPTIMISER; the
+    peer cases keep their codes' move limit); their set-ups' objective scale is their own."""
     params = case.resolve(case.defaults)
     before = case.defaults.to_dict()  # the resolution before derivations: order only
     if not before["order"] and before["model"] != "auto":
@@ -132,6 +132,9 @@ def test_a_built_in_case_resolves_as_before(case):
     if case.name in ("sorotop", "topress", "topress-3d"):
         expected = {"penal_start", "penal_step", "beta_max", "beta_every", "beta_settle",
                     "iterations", "obj_tol"}
+    if case.name in ("mbb", "cantilever-3d"):
+        expected = {"penal_start", "penal_step", "beta_max", "beta_every", "beta_settle",
+                    "iterations", "obj_tol", "move"}
     assert changed == expected and set(params.derived) == expected
     if "filter_radius" in expected:
         assert params.filter_radius == pytest.approx(3.0 * params.maxh, rel=1e-12)
