@@ -138,6 +138,10 @@ class Case:
         # run folders of the version before case options kept every case's options
         legacy = {k for k in ("load_width", "output_width", "k_in")
                   if k in values and k not in known and values[k] == 0.0}
+        # ... and before the forms chose their compilation (2026-12-06) realcompile was
+        # true / false: on (1) / off (0), as those runs ran
+        if isinstance(values.get("realcompile"), bool):
+            values = dict(values, realcompile=int(values["realcompile"]))
         return self.defaults.replace(**{k: v for k, v in values.items() if k not in legacy})
 
     def make_geometry(self, params: Parameters):

@@ -9,6 +9,7 @@ import sys
 import numpy as np
 import pytest
 
+from pacto_ng.case import read_run_params
 from pacto_ng.cli import main
 from pacto_ng.files import LOCK_NAME, FolderLock
 from top88_reference import TOP88_OPTIMISER
@@ -231,3 +232,16 @@ def test_resume_of_a_converged_run_killed_in_its_final_writes(tmp_path):
     assert b["converged"] and b["stopped"] == "converged" and b["message"] == a["message"]
     assert b["objective_history"] == a["objective_history"]
     assert b["objective"] == pytest.approx(a["objective"], rel=1e-12)
+
+
+def test_a_run_folder_from_before_the_compiled_forms_choice_still_resumes(tmp_path):
+    """Run folders written before 2026-12-06 hold realcompile as true / false: read as on (1)
+    / off (0), as those runs ran, and the run resumes."""
+    out = tmp_path / "run"
+    assert main(["run", *MBB, "--no-part", "--out", str(out), "--quiet"]) == 0
+    info = json.loads((out / "params.json").read_text())
+    for old, now in ((False, 0), (True, 1)):
+        info["params"]["realcompile"] = old
+        (out / "params.json").write_text(json.dumps(info))
+        assert read_run_params(out, "resume")[2].realcompile == now
+    assert main(["resume", str(out), "--iterations", "3", "--no-part", "--quiet"]) == 0
