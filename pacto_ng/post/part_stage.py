@@ -195,20 +195,23 @@ def walls_overlap(ana: PartAnalysis) -> float:
     """The area (in 2D length times thickness) over which the part's walls overlap in the
     analysis ``ana``'s current state: one pairing of every boundary of the solid with itself
     (:meth:`~pacto_ng.physics.contact.SelfContact.overlap`)."""
-    mesh = ana.mech.mesh
+    mesh, u = ana.mech.mesh, ana.mech.gfu  # the displacement (of the mixed state too)
     names = solid_boundaries(mesh)
-    probe = SelfContact(ana.mech.space, names, 1.0, CONTACT_REACH * element_scale(mesh),
+    probe = SelfContact(u.space, names, 1.0, CONTACT_REACH * element_scale(mesh),
                         normal=outward_normal(mesh, "|".join(names)), thickness=ana.thickness)
-    return probe.overlap(ana.mech.gfx.vec)
+    return probe.overlap(u.vec)
 
 
 def _overlap_warning(contact, path) -> list[str]:
     """The warning for walls that pass through each other and were not analysed in contact."""
     if contact is None or contact.get("converged"):
         return []
-    return [f"its walls pass through each other in this analysis (overlap "
-            f"{contact['overlap_without']:.3g} m²): 'pacto analyse {path} --contact' analyses "
-            f"it with them in contact"]
+    overlap = f"its walls pass through each other in this analysis (overlap " \
+              f"{contact['overlap_without']:.3g} m²)"
+    if not contact["analysed"]:  # the mixed formulation
+        return [overlap + ", and contact does not yet take the mixed formulation"]
+    return [overlap + f": 'pacto analyse {path} --contact' sweeps the pressure up to it with "
+                      f"them in contact"]
 
 
 def _design_at(problem, order: int, run_delta):

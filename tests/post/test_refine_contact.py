@@ -13,6 +13,12 @@ from pathlib import Path
 import pytest
 
 from pacto_ng.cli import main
+from pacto_ng.params import Parameters
+from pacto_ng.physics.loads import Port
+from pacto_ng.physics.mechanics import Supports
+from pacto_ng.post.part_analysis import PartAnalysis
+from pacto_ng.post.part_stage import walls_overlap
+from contact_parts import slotted_block
 
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
@@ -45,3 +51,20 @@ def test_the_refinement_with_contact_sees_the_walls_touch(run):
     assert refined["part"]["contact"] and part["order"] == refined["part"]["order"]
     assert refined["delta_before"] == pytest.approx(part["output_displacement"], rel=1e-6)
     assert refined["delta_after"] > 2.0 * refined["delta_before"]  # the slot's mouth opened
+
+
+@pytest.mark.parametrize("formulation", ["displacement", "mixed"])
+def test_the_walls_overlap_is_measured_on_the_displacement(formulation):
+    """walls_overlap reads the displacement of either formulation (the mixed state holds
+    (u, ϑ, p̃)): the slotted block's walls overlap at 3 kPa and not at 300 Pa."""
+    mesh = slotted_block(0.1)
+    params = Parameters(model="neohookean", E1=1e6, E0=1.0, nu=0.45, plane="strain",
+                        thickness=1.0, formulation=formulation)
+    ana = PartAnalysis(mesh, "fixed", params=params, supports=Supports(clamp=("left",)),
+                       ports=Port("corner", (0.0, -1.0)), boundary="pressure", order=2)
+    assert ana.formulation == formulation
+    overlaps = []
+    for pressure in (300.0, 3000.0):
+        assert ana.solve(pressure).converged
+        overlaps.append(walls_overlap(ana))
+    assert overlaps[0] == 0.0 and overlaps[1] > 0.1

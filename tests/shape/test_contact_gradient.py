@@ -21,8 +21,7 @@ at order 2 (106 s), without the contact term 0.21 and 0.20: the term right to 1.
 itself; the test asserts 5e-3 at order 1."""
 import numpy as np
 import pytest
-from netgen import occ
-from ngsolve import (CF, BilinearForm, Grad, InnerProduct, Mesh, VectorH1, cos, ds, dx, sin,
+from ngsolve import (CF, BilinearForm, Grad, InnerProduct, VectorH1, cos, ds, dx, sin,
                      x, y, z)
 
 from pacto_ng.params import Parameters
@@ -31,23 +30,10 @@ from pacto_ng.physics.mechanics import Supports
 from pacto_ng.shape import PartResponse, ShapeSpace
 from pacto_ng.shape.contact_term import MatrixSum
 from pacto_ng.threads import compute
+from contact_parts import slotted_block, slotted_slab
 
 PRESSURE = 3e3
 STEP = 1e-4  # the central differences' step (V is of size ~0.1)
-
-
-def slotted_block(maxh=0.1):
-    body = (occ.MoveTo(0, 0).Rectangle(1, 1).Face()
-            - occ.MoveTo(0.3, 0.49).Rectangle(0.8, 0.02).Face())
-    body.edges.name = "slot"
-    body.edges.Min(occ.X).name = "left"
-    body.edges.Max(occ.Y).name = "pressure"
-    body.edges.Min(occ.Y).name = "pressure"
-    for e in body.edges:
-        if abs(e.center.x - 1.0) < 1e-9:
-            e.name = "right"
-    body.vertices.Nearest((1.0, 1.0, 0.0)).name = "corner"
-    return Mesh(occ.OCCGeometry(body, dim=2).GenerateMesh(maxh=maxh))
 
 
 def part(mesh, model):
@@ -121,19 +107,6 @@ def test_the_sum_of_two_patterns_is_their_matrices_sum():
         want.data += extra
         assert np.abs(got.FV().NumPy() - want.FV().NumPy()).max() <= \
             1e-13 * np.abs(want.FV().NumPy()).max()
-
-
-def slotted_slab(maxh=0.1):
-    """The slotted block extruded 0.2 m in z, its faces z = 0 and 0.2 held in z."""
-    body = occ.Box((0, 0, 0), (1, 1, 0.2)) - occ.Box((0.3, 0.49, -1), (1.5, 0.51, 1))
-    body.faces.name = "slot"
-    body.faces.Min(occ.X).name = "left"
-    body.faces.Max(occ.Y).name = "pressure"
-    body.faces.Min(occ.Y).name = "pressure"
-    body.faces.Min(occ.Z).name = "front"
-    body.faces.Max(occ.Z).name = "back"
-    body.vertices.Nearest((1.0, 1.0, 0.0)).name = "corner"
-    return Mesh(occ.OCCGeometry(body).GenerateMesh(maxh=maxh))
 
 
 @pytest.mark.slow
