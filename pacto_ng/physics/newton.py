@@ -82,11 +82,13 @@ class NewtonSettings:
 
 #: a nonlinear model's Newton forms are compiled to machine code (``realcompile`` = -1) where the
 #: work they save pays for the compiler: the elements times the Newton iterations expected at
-#: least this.  Measured 2026-12-06 (cantilever-3d, 15,977 tetrahedra, order 1, Neo-Hookean,
-#: 1 thread): compiling took 5.5-7.5 s once per problem built; the tangent's assembly fell
-#: from 0.58 to 0.29 s and the residual's from 0.083 to 0.035 s, 21 µs per element and
-#: Newton iteration, so that 6 s pays after 3e5; twice that, for a margin
-COMPILE_PAYS = 6e5
+#: least this.  Measured 2026-12-06 (1 thread): compiling took 5.5-7.5 s once per problem
+#: built; on cantilever-3d (15,977 tetrahedra, order 1, Neo-Hookean) the tangent's assembly
+#: fell from 0.58 to 0.29 s and the residual's from 0.083 to 0.035 s, 21 µs per element and
+#: Newton iteration, so that 6 s pays after 3e5; on pneunet-silicone (2400 quadrilaterals,
+#: Wang, the mixed formulation) an optimisation iteration of 3 Newton iterations fell from
+#: 1.24 to 0.60 s, 89 µs, paying after 7e4
+COMPILE_PAYS = 3e5
 #: Newton iterations per optimisation iteration, for that estimate (warm-started at the
 #: direct route's tolerance: 4 on the same run)
 NEWTON_PER_ITERATION = 4
