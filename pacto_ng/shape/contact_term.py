@@ -57,7 +57,7 @@ class MatrixSum:
         parts = [tuple(np.asarray(p) for p in m.COO()) for m in (a, b)]
         rows, cols, vals = (np.concatenate([p[k] for p in parts]) for k in range(3))
         n = a.height
-        new = self.matrix is None
+        new = self.matrix is None or len(vals) != len(self._at)  # (a pattern changed size)
         if new:  # the union pattern, rows sorted, and where each entry lands in it
             key = rows.astype(np.int64) * n + cols
             union = np.unique(key)
