@@ -50,6 +50,8 @@ from ngsolve import (H1, VERTEX, BilinearForm, CoefficientFunction, ContactBound
                      GridFunction, IfPos, Integrate, LinearForm, NodeId, ds, specialcf, x, y,
                      z)
 
+from .walls import outward_normal
+
 #: the cosine of the least angle between two walls' normals for them to be in contact (120°)
 FACING = 0.5
 #: the quadrature order on the candidate faces, by dimension: on the 3D slotted block of
@@ -129,6 +131,17 @@ class SelfContact:
         self._force_form = BilinearForm(fes)
         self._thickness = float(thickness)
         self._vertices, self._dofs, self._shares = _vertex_shares(fes, region)
+
+    @classmethod
+    def on_walls(cls, fes, names, *, modulus: float, penalty: float, reach: float,
+                 thickness: float = 1.0) -> "SelfContact":
+        """The walls ``names`` of a solid in self-contact: the stiffness ``penalty modulus /
+        h`` and pairs sought within ``reach h`` (``h`` the mesh's :func:`element_scale`), the
+        walls' outward normals (:func:`~pacto_ng.physics.walls.outward_normal`)."""
+        mesh, names = fes.mesh, tuple(names)
+        h = element_scale(mesh)
+        return cls(fes, names, penalty * float(modulus) / h, reach * h,
+                   normal=outward_normal(mesh, "|".join(names)), thickness=thickness)
 
     def measure(self, vec) -> tuple[float, float, float]:
         """``(area, force, pressure)`` of the contact at the state ``vec``: the area of either

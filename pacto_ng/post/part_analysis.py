@@ -57,7 +57,7 @@ import numpy as np
 from ngsolve import VOL, Grad, InnerProduct, LinearForm, Parameter
 
 from ..errors import InputError
-from ..physics.contact import SelfContact, element_scale
+from ..physics.contact import SelfContact
 from ..physics.energy import make_energy
 from ..physics.equilibrium import NewtonFailure, WarmState
 from ..physics.loads import Port, Spring
@@ -205,11 +205,9 @@ class PartAnalysis:
             raise ValueError(f"contact: the part is analysed with the {self.formulation} "
                              "formulation (the run's), which takes no contact yet")
         if contact:
-            h = element_scale(mesh)
-            self.mech.use_contact(SelfContact(
-                self.mech.space, tuple(contact), contact_penalty * float(params.E1) / h,
-                CONTACT_REACH * h, normal=outward_normal(mesh, "|".join(contact)),
-                thickness=self.thickness))
+            self.mech.use_contact(SelfContact.on_walls(
+                self.mech.space, contact, modulus=params.E1, penalty=contact_penalty,
+                reach=CONTACT_REACH, thickness=self.thickness))
         self._chamber = None if kind == "darcy" or not chamber else (
             outward_normal(mesh, boundary),
             held_planes_origin(mesh, (supports.fix_x, supports.fix_y, supports.fix_z)))

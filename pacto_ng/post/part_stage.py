@@ -37,9 +37,9 @@ import numpy as np
 
 from ..errors import InputError
 from ..files import atomic_write_text
-from ..physics.contact import SelfContact, element_scale
+from ..physics.contact import SelfContact
 from ..physics.equilibrium import NewtonFailure
-from ..physics.walls import outward_normal, solid_boundaries
+from ..physics.walls import solid_boundaries
 from .domain import symmetry_line
 from .mirror3d import mirror_surface, symmetry_planes
 from .part import Part, make_part, part_ports, present_supports
@@ -177,28 +177,29 @@ def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
     the contact's quadrature (2026-12-06), a minute's run's half (``pacto analyse DIR
     --contact`` analyses a 3D part with contact)."""
     ana, point = solved
-    overlap = walls_overlap(ana) if point.converged and part.dim == 2 else 0.0
+    walls = solid_boundaries(part.mesh)
+    overlap = walls_overlap(ana, walls) if point.converged and part.dim == 2 else 0.0
     if not overlap > 0.0:
         return None, solved
     entry = {"overlap_without": overlap, "output_displacement_without": _num(point.delta),
              "analysed": False}
     if ana.formulation != "displacement":
         return entry, solved
-    again = _solved(part, problem, loading, contact=solid_boundaries(part.mesh))
+    again = _solved(part, problem, loading, contact=walls)
     entry.update(analysed=True, converged=bool(again[1].converged))
     say(f"its walls pass through each other there (overlap {overlap:.3g} m²): analysed again "
         f"with them in contact" + ("" if again[1].converged else ": no equilibrium"))
     return entry, again if again[1].converged else solved
 
 
-def walls_overlap(ana: PartAnalysis) -> float:
-    """The area (in 2D length times thickness) over which the part's walls overlap in the
-    analysis ``ana``'s current state: one pairing of every boundary of the solid with itself
-    (:meth:`~pacto_ng.physics.contact.SelfContact.overlap`)."""
-    mesh, u = ana.mech.mesh, ana.mech.gfu  # the displacement (of the mixed state too)
-    names = solid_boundaries(mesh)
-    probe = SelfContact(u.space, names, 1.0, CONTACT_REACH * element_scale(mesh),
-                        normal=outward_normal(mesh, "|".join(names)), thickness=ana.thickness)
+def walls_overlap(ana: PartAnalysis, walls) -> float:
+    """The area (in 2D length times thickness) over which the part's ``walls`` (the
+    boundaries of its solid) overlap in the analysis ``ana``'s current state: one pairing of
+    them with themselves (:meth:`~pacto_ng.physics.contact.SelfContact.overlap`; the
+    stiffness plays no part in it)."""
+    u = ana.mech.gfu  # the displacement (of the mixed state too)
+    probe = SelfContact.on_walls(u.space, walls, modulus=1.0, penalty=1.0, reach=CONTACT_REACH,
+                                 thickness=ana.thickness)
     return probe.overlap(u.vec)
 
 

@@ -33,8 +33,6 @@ WINDOW = (1200, 500)  #: pixels of design.png (two views) and pressure.png
 ROUND_RTOL = 1e-9
 #: the cut's shift above mid-depth, as a fraction of the part's size
 CUT_SHIFT = 1e-6
-#: VTK's cell type of a hexahedron (a structured mesh's voxels)
-HEXAHEDRON = 12
 
 
 def plotter(shape=(1, 1), window=WINDOW):

@@ -38,8 +38,7 @@ import numpy as np
 from ngsolve import VERTEX, BilinearForm, NodeId
 from ngsolve.la import SparseMatrixd
 
-from ..physics.contact import SelfContact, element_scale
-from ..physics.walls import outward_normal
+from ..physics.contact import SelfContact
 from ..post.part_analysis import CONTACT_PENALTY, CONTACT_REACH
 
 
@@ -101,10 +100,8 @@ class ShapeContact:
                              "coefficients the vertices' motions)")
         self.mesh, self.space = fes.mesh, space
         with self._reference():
-            h = element_scale(self.mesh)
-            self.contact = SelfContact(fes, tuple(names), penalty * float(E1) / h, reach * h,
-                                       normal=outward_normal(self.mesh, "|".join(names)),
-                                       thickness=thickness)
+            self.contact = SelfContact.on_walls(fes, names, modulus=E1, penalty=penalty,
+                                                reach=reach, thickness=thickness)
         self.form = BilinearForm(fes, symmetric=False)
         nodes = [NodeId(VERTEX, i) for i in range(self.mesh.nv)]
         self._u_dofs = np.array([fes.GetDofNrs(n) for n in nodes], dtype=np.int64).ravel()

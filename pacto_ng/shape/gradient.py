@@ -319,7 +319,7 @@ class PartResponse:
     def assemble_tangent(self, vec, load):
         self.load.Set(load)
         self.a.AssembleLinearization(vec)
-        if self.contact is not None:  # a new pattern with every pairing: factorised anew
+        if self.contact is not None:  # factorised anew where a pairing made a new pattern
             tangent = self.contact.tangent_with(self.a.mat, vec)
             if self.contact.new_pattern or self._inverse is None:
                 self._inverse = tangent.Inverse(self.fes.FreeDofs(), inverse="umfpack")
@@ -357,7 +357,7 @@ class PartResponse:
         # with contact: Newton with the pairs fixed, then paired anew, until they hold (from
         # the last pairing's equilibrium: no ramp from zero)
         for cycle in range(CONTACT_CYCLES if self.contact is not None else 1):
-            if self.contact is not None:
+            if self.contact is not None and cycle == 0:  # later: paired by _pairs_hold
                 self.contact.pair(self.u.vec)
             warm = self.result is not None or self._started
             self.result = solve_with_continuation(
