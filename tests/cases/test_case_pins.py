@@ -41,7 +41,12 @@ PINS = {
 }
 
 
-@pytest.mark.parametrize("case", sorted(PINS))
+#: the pins of 9-13 s each, under ``pytest -m slow`` (the suite's 10 minutes)
+SLOW = ("gripper-silicone", "pa-gripper-3d", "pa-inverter-3d")
+
+
+@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) if c in SLOW else c
+                                  for c in sorted(PINS)])
 def test_the_case_gives_its_pinned_objective_history(case, tmp_path):
     args, elements, history = PINS[case]
     assert main(["run", "--no-part", case, *args, "--iterations", "3", "--out", str(tmp_path),
