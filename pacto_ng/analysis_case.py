@@ -105,7 +105,7 @@ def _c_beam(case, params, path, quiet: bool) -> int:
         "thesis_forces_N": {"neohookean": [0.0009, 0.0099], "wang": [0.0055, 0.0145]},
     }
     with atomic_path(path / "deformed.png") as tmp:
-        deformed_png(tmp, res.mechanics.mesh, res.mechanics.gfu,
+        deformed_png(tmp, res.mechanics.mesh, res.mechanics.u,
                      f"C-beam, {params.model}: λ = {res.load_factor:.3g}, "
                      f"(f1, f2) = ({res.forces[0]:.2g}, {res.forces[1]:.2g}) N")
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: complete

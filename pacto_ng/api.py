@@ -52,8 +52,8 @@ class Result:
         two-material cases).
     problem : Problem
         The case's problem with the reported design analysed: ``problem.mesh``,
-        ``problem.values`` (``rho_bar``, ``p``, ``u``, responses), ``problem.mech.gfu`` (the
-        displacement), ``problem.pressure_block.gfp`` (the pressure, pressure cases).
+        ``problem.values`` (``rho_bar``, ``p``, ``u``, responses), ``problem.mech.u`` (the
+        displacement), ``problem.pressure_block.pressure`` (the pressure, pressure cases).
     """
 
     folder: Path
@@ -83,13 +83,13 @@ class Result:
     @property
     def displacement(self):
         """The displacement ``GridFunction`` of the reported design at the reported load."""
-        return self.problem.mech.gfu
+        return self.problem.mech.u
 
     @property
     def pressure(self):
         """The Darcy pressure ``GridFunction`` (``None`` for cases without a pressure load)."""
         blk = self.problem.pressure_block
-        return None if blk is None else blk.gfp
+        return None if blk is None else blk.pressure
 
 
 def case_parameters(case: Case, settings: dict) -> Parameters:

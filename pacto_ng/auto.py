@@ -37,10 +37,10 @@ STRAIN_THRESHOLD = 0.01
 
 
 def strain_field(mech):
-    """The Frobenius norm of the Green–Lagrange strain of ``mech.gfu`` (a CoefficientFunction)."""
+    """The Frobenius norm of the Green–Lagrange strain of ``mech.u`` (a CoefficientFunction)."""
     from ngsolve import Grad, InnerProduct, sqrt
 
-    E = green_lagrange(Grad(mech.gfu))
+    E = green_lagrange(Grad(mech.u))
     return sqrt(InnerProduct(E, E))
 
 
@@ -115,7 +115,7 @@ def displacement_ratio(mech) -> float:
     from ngsolve import VOL
 
     mesh = mech.mesh
-    u = np.asarray(mech.gfu(mesh.MapToAllElements(mech.rules, VOL))).reshape(-1, mesh.dim)
+    u = np.asarray(mech.u(mesh.MapToAllElements(mech.rules, VOL))).reshape(-1, mesh.dim)
     u_max = max(rank_max(mesh, np.linalg.norm(u, axis=1)), 0.0)
     pts = np.array([v.point for v in mesh.vertices]).reshape(-1, mesh.dim)
     hi = [rank_max(mesh, pts[:, a]) for a in range(mesh.dim)]

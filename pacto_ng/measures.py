@@ -25,7 +25,7 @@ def strain_stress_measures(problem: Problem) -> dict:
     from ngsolve import Grad
 
     mech = problem.mech
-    G, c = Grad(mech.gfu), mech.coeffs
+    G, c = Grad(mech.u), mech.coeffs
     model = problem.params.model
     if model == "wang":
         wm = mech.energy  # the WangModel (make_energy passes the model as the energy)

@@ -91,7 +91,7 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "newton_iterations": newton_counts,
         "newton_iterations_total": int(sum(newton_counts)),
         "mesh": {"elements": problem.mesh.ne, "h": problem.h, "order": p.order,
-                 "displacement_dofs": problem.mech.fes.ndof,
+                 "displacement_dofs": problem.mech.ndof,
                  "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely, "nelz": p.nelz,
                  "dim": problem.mesh.dim},
         "element_order": p.order,
@@ -269,11 +269,11 @@ def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
             add_l2(key, np.asarray(vals[key]))
     if x is not None and problem.n_design_fields == 1:
         add_l2("x", problem.field.full(x))
-    _finite("u", mech.gfu.vec.FV().NumPy())
-    coefs.append(mech.gfu)
+    _finite("u", mech.u.vec.FV().NumPy())
+    coefs.append(mech.u)
     names.append("u")
     if "p" in vals and problem.pressure_block is not None:
-        pg = problem.pressure_block.gfp
+        pg = problem.pressure_block.pressure
         _finite("p", pg.vec.FV().NumPy())
         coefs.append(pg)
         names.append("p")

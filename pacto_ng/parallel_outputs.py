@@ -27,15 +27,15 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
     summ["mpi"] = {"ranks": numbering.comm.size, "elements_per_rank": numbering.counts}
     summ["mesh"] = {"elements": numbering.ne, "h": problem.h, "order": problem.params.order,
                     "dim": problem.mesh.dim,
-                    "displacement_dofs": int(problem.mech.fes.ndofglobal)}
+                    "displacement_dofs": int(problem.mech.ndof)}
     rho = numbering.gather(np.asarray(vals.get("rho_bar", vals.get("rho_bar1")), dtype=float))
     xs = None
     if problem.n_design_fields == 1:
         xs = numbering.gather(problem.field.full(problem.design_numbering.local(x)))
     mech, points = problem.mech, {}
-    points["u"] = _vertex_field(numbering, problem.mesh, mech.gfu, problem.mesh.dim)
+    points["u"] = _vertex_field(numbering, problem.mesh, mech.u, problem.mesh.dim)
     if problem.pressure_block is not None:
-        points["p"] = _vertex_field(numbering, problem.mesh, problem.pressure_block.gfp, 1)
+        points["p"] = _vertex_field(numbering, problem.mesh, problem.pressure_block.pressure, 1)
     if not write:
         return summ
     write_history(path / "history.csv", history, problem)

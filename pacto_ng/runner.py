@@ -374,7 +374,7 @@ def _announce(case: Case, params: Parameters, problem: Problem, resumed_at: int 
     ne = problem.mesh.ne if problem.numbering is None else problem.numbering.ne
     ranks = "" if problem.numbering is None else f" on {problem.numbering.comm.size} ranks"
     print(f"{case.name}: model {params.model}{mixed}, {ne} elements{ranks}, order "
-          f"{params.order}, {problem.mech.fes.ndofglobal} displacement dofs, "
+          f"{params.order}, {problem.mech.ndof} displacement dofs, "
           f"{problem.n_design} design variables")
 
 

@@ -115,12 +115,12 @@ def c_beam_limit(model: str = "neohookean", *, order: int = 1, mesh: str = "quad
     mech.set_fields(solid.astype(float))
     steps = []
     accept = _inversion_check(mech, solid, mesh, model == "wang", stop_at_inversion, steps)
-    res = solve_with_continuation(mech, mech.gfu.vec, lam_max, settings, warm=False,
+    res = solve_with_continuation(mech, mech.state_vector, lam_max, settings, warm=False,
                                   linear=linear, accept=accept)
     lam = res.load_reached
     reason = f"reached lam_max = {lam_max:g}" if res.converged else res.reason
-    u1 = mech.gfu(msh(layout.width, layout.height))
-    u2 = mech.gfu(msh(layout.width, 0.0))
+    u1 = mech.u(msh(layout.width, layout.height))
+    u2 = mech.u(msh(layout.width, 0.0))
     return CBeamResult(model, order, mesh, lam, (lam * f1, lam * f2), res.converged, reason,
                        res.iterations, (u1[0], u1[1], u2[0], u2[1]), res.history, steps, mech)
 
@@ -145,14 +145,14 @@ def _inversion_check(mech, solid, mesh: str, wang: bool, stop_at_inversion: bool
     from ngsolve import QUAD, TRIG, VOL, Grad
 
     rules = guard_rules(mech.rules)
-    Jcf = jacobian(Grad(mech.gfu))
+    Jcf = jacobian(Grad(mech.u))
     pts = mech.mesh.MapToAllElements(rules, VOL)
     per_el = len(rules[QUAD if mesh == "quad" else TRIG].points)
     solid_pts = np.repeat(solid, per_el)
     checked = solid_pts if wang else np.ones_like(solid_pts)
 
     def accept(load, u):
-        mech.gfu.vec.data = u
+        mech.state_vector.data = u
         vals = np.asarray(Jcf(pts)).ravel()
         if stop_at_inversion and float(vals[checked].min()) <= 0.0:
             where = "of the solid " if wang else ""

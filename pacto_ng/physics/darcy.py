@@ -333,6 +333,12 @@ class DarcyPressure:
                 self._drain * heaviside_deriv_np(rho, self.eta_h, self.beta_h))
 
     @property
+    def pressure(self):
+        """The pressure of the last forward pass, a GridFunction: the block's output, for
+        evaluating and copying; the block sets it."""
+        return self.gfp
+
+    @property
     def solver_info(self) -> dict:
         """The pressure system's linear solver, for the run summary
         (:attr:`~pacto_ng.physics.solvers.LinearSolver.info`)."""

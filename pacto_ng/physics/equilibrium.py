@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from ngsolve import GridFunction
 
 from ..parallel import everywhere, free_norm
 from .materials import jacobian
@@ -278,6 +279,30 @@ class Equilibrium:
         recomputed at the next use."""
         self._unit_load_norm = None
         self._f_unit = None
+
+    # -- the fields it gives ----------------------------------------------------------------
+    @property
+    def u(self):
+        """The displacement, a GridFunction (of the mixed state too): the block's output, for
+        evaluating, differentiating (``Grad(mech.u)``) and copying; the block sets it."""
+        return self.gfu
+
+    @property
+    def state_vector(self):
+        """The state's coefficient vector (``u``, or ``(u, ϑ, p̃)`` mixed), in place: a path
+        follower or a sweep that moves the equilibrium writes it."""
+        return self.gfx.vec
+
+    @property
+    def ndof(self) -> int:
+        """The number of displacement dofs (over every rank of a distributed mesh)."""
+        return int(self.fes.ndofglobal)
+
+    def displacement_from(self, values):
+        """A new displacement GridFunction holding ``values`` (the dofs of :attr:`u`)."""
+        gf = GridFunction(self.fes)
+        gf.vec.FV().NumPy()[:] = values
+        return gf
 
     # -- the warm state ---------------------------------------------------------------------
     @property

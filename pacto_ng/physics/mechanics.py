@@ -172,12 +172,14 @@ class Mechanics(Equilibrium, Adjoint):
         vectors the block passes to and takes from the responses are states.
 
     Public state: ``result`` (the :class:`~pacto_ng.physics.newton.NewtonResult` of the last
-    forward pass: iterations, load reached, ...; None before), ``space`` and ``gfx`` (the
-    unknowns' space and the state on it), ``fes`` and ``gfu`` (the displacement's),
-    ``lam`` (the adjoint state), :attr:`state` / :meth:`set_state` (the warm start: a
-    :class:`~pacto_ng.physics.equilibrium.WarmState`),
+    forward pass: iterations, load reached, ...; None before), ``u`` (the displacement),
+    ``state_vector`` and ``ndof`` (:class:`~pacto_ng.physics.equilibrium.Equilibrium`),
+    ``space`` (the unknowns' space), ``lam`` (the adjoint state), :attr:`state` /
+    :meth:`set_state` (the warm start: a :class:`~pacto_ng.physics.equilibrium.WarmState`),
     ``adjoint_solves`` / ``adjoint_solves_skipped`` and ``self_adjoint_shortcut`` (set False
-    to always solve the adjoint), :attr:`assembly` (the routes in use).
+    to always solve the adjoint), :attr:`assembly` (the routes in use).  ``gfx``, ``fes``
+    and ``gfu`` (the state, the displacement's space and its GridFunction) are the block's
+    storage, read within physics/ alone.
     """
 
     def __init__(self, mesh, *, order: int = 1, energy: Callable, fields=("rho_bar",),

@@ -150,7 +150,7 @@ def _rebuilt_entry(run, problem, quiet):
         entry["failure"] = (f"the run's own model fails on its final design at the full load "
                             f"({problem.failure}); the expected Δ is recorded where it "
                             f"converges")
-    return entry, copy_gridfunction(problem.pressure_block.gfp)
+    return entry, copy_gridfunction(problem.pressure_block.pressure)
 
 
 def _at_part_order(problem, order, entry, quiet):
@@ -179,4 +179,4 @@ def _thresholded_darcy(problem, part: Part):
     block = problem.pressure_block
     with compute():
         block.forward(rho)
-    return copy_gridfunction(block.gfp)
+    return copy_gridfunction(block.pressure)

@@ -206,12 +206,12 @@ def part_fields(problem, part: PartMesh) -> tuple[dict, dict, list]:
         if key in vals:
             cell[key] = on_cells(np.asarray(l2(vals[key])(mp_c)).ravel())
     if "p" in vals and problem.pressure_block is not None:
-        point["p"] = on_points(np.asarray(problem.pressure_block.gfp(mp_v)).ravel())
+        point["p"] = on_points(np.asarray(problem.pressure_block.pressure(mp_v)).ravel())
     if getattr(problem, "failure", None):
         notes.append("no displacement, strain or stress: the run's own model has no "
                      f"equilibrium on its final design at the full load ({problem.failure})")
         return point, cell, notes
-    point["u"] = on_points(np.asarray(mech.gfu(mp_v)).reshape(-1, 2))
+    point["u"] = on_points(np.asarray(mech.u(mp_v)).reshape(-1, 2))
     cell.update(_measure_cells(problem, part, mp_c, len(vc), R))
     for key, val in {**point, **cell}.items():
         if not np.all(np.isfinite(val)):

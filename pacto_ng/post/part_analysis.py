@@ -212,7 +212,7 @@ class PartAnalysis:
             outward_normal(mesh, boundary),
             held_planes_origin(mesh, (supports.fix_x, supports.fix_y, supports.fix_z)))
         self._forms = self._port_forms()
-        self._J = jacobian(Grad(self.mech.gfu)).Compile()
+        self._J = jacobian(Grad(self.mech.u)).Compile()
         self._qpoints = mesh.MapToAllElements(self.mech.rules, VOL)
         xyz = np.array([v.point for v in mesh.vertices], dtype=float)
         self._vertices = mesh(*(xyz[:, i].copy() for i in range(mesh.dim)))
@@ -263,11 +263,11 @@ class PartAnalysis:
 
     def _read(self, pressure: float, iterations: int) -> SweepPoint:
         """The converged state's record at ``pressure``."""
-        x = self.mech.gfx.vec
+        x = self.mech.state_vector
         delta_form, axes = self._forms
         vectors = tuple(tuple(float(f.InnerProduct(x)) for f in forms) for forms in axes)
         along = tuple(float(np.dot(p.direction, vec)) for p, vec in zip(self.ports, vectors))
-        u_v = np.asarray(self.mech.gfu(self._vertices)).reshape(-1, self.mesh.dim)
+        u_v = np.asarray(self.mech.u(self._vertices)).reshape(-1, self.mesh.dim)
         contact = ((None,) * 3 if self.mech.contact is None
                    else self.mech.contact.measure(x))  # area, force, largest pressure
         return SweepPoint(pressure, float(delta_form.InnerProduct(x)),
@@ -282,7 +282,7 @@ class PartAnalysis:
         if self._chamber is None:
             return None
         normal, origin = self._chamber
-        return volume_change(self.mech.gfu, self.boundary, normal, self.thickness, origin)
+        return volume_change(self.mech.u, self.boundary, normal, self.thickness, origin)
 
     def _failed(self, pressure: float, iterations: int, load_reached: float) -> SweepPoint:
         n = len(self.ports)
@@ -293,7 +293,7 @@ class PartAnalysis:
     def iteration_seconds(self) -> float:
         """Seconds of one Newton iteration at the current state, measured: the contact's
         pairing (with contact), the tangent's assembly and factorisation and one solve."""
-        mech, x = self.mech, self.mech.gfx.vec
+        mech, x = self.mech, self.mech.state_vector
         out = x.CreateVector()
         with compute():
             t0 = time.perf_counter()
@@ -360,9 +360,9 @@ class PartAnalysis:
                             f"{peak['pressure']:.5g} at Δ = {peak['delta']:.5g} on the way")
                 failed = not pt.converged
                 if not failed:
-                    last = (abs(pt.pressure), self.mech.gfx.vec.FV().NumPy().copy())
+                    last = (abs(pt.pressure), self.mech.state_vector.FV().NumPy().copy())
                 out.points.append(pt)
-                out.states.append(self.mech.gfu.vec.FV().NumPy().copy() if not failed else None)
+                out.states.append(self.mech.u.vec.FV().NumPy().copy() if not failed else None)
                 if say is not None:
                     say(self._line(pt, time.perf_counter() - t0, skipped))
         return out
@@ -379,7 +379,7 @@ class PartAnalysis:
         below its pressure.  ``say(line)`` gets one line per point of the path; ``record``
         (a list) gets each point's pressure, Δ and chamber volume change."""
         mech, P = self.mech, abs(failed.pressure)
-        x, c = mech.gfx.vec, self.output_form
+        x, c = mech.state_vector, self.output_form
         load = failed.load_reached * P
         if last is not None and last[0] > load:
             load, x.FV().NumPy()[:] = last

@@ -98,7 +98,7 @@ def _part_and_analysis(path, problem, summary, say):
                          "(serially)")
     pressure = problem.pressure_block
     part = make_part(problem, setup, maxh=PART_MAXH[problem.mesh.dim] * problem.h,
-                     pressure=None if pressure is None else copy_gridfunction(pressure.gfp),
+                     pressure=None if pressure is None else copy_gridfunction(pressure.pressure),
                      p_in=params.load, mesh_time_limit=params.mesh_time_limit)
     write_part_stl(path / "part.stl", part, problem)
     say(f"made, {part.mesh.ne} elements"
@@ -144,7 +144,7 @@ def _analyse(path, part: Part, problem, summary, say) -> dict:
     if point.converged:
         title = (f"{problem.case.name} part, {load:.3g} {problem.case.load_unit} {kind}, "
                  f"{ana.model} (true scale)")
-        u = ana.mech.gfu
+        u = ana.mech.u
         if part.dim == 2:
             plot_deformed(path / "part.png", part.mesh, u, title=title,
                           mirror=symmetry_line(problem.mesh) or False)
@@ -197,7 +197,7 @@ def walls_overlap(ana: PartAnalysis, walls) -> float:
     boundaries of its solid) overlap in the analysis ``ana``'s current state: one pairing of
     them with themselves (:meth:`~pacto_ng.physics.contact.SelfContact.overlap`; the
     stiffness plays no part in it)."""
-    u = ana.mech.gfu  # the displacement (of the mixed state too)
+    u = ana.mech.u  # the displacement (of the mixed state too)
     probe = SelfContact.on_walls(u.space, walls, modulus=1.0, penalty=1.0, reach=CONTACT_REACH,
                                  thickness=ana.thickness)
     return probe.overlap(u.vec)

@@ -170,7 +170,7 @@ def pressure_png(path, problem, title: str | None = None, leak: float | None = N
     mesh = problem.mesh
     rho = np.asarray(problem.values[block.inputs[0]])
     p_in = block.p_in  # the load factor scales the body force, not p
-    pv = block.gfp.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
+    pv = block.pressure.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
     quoted = "" if leak is None else f"leak Q/(Kv P_in) = {leak:.3g}"
     if mesh.dim == 3:
         pressure_picture(path, mesh, pv, rho, title=title or f"{problem.case.name} (P_in = "

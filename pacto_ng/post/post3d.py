@@ -131,13 +131,13 @@ def part_solid(part, problem=None):
         raise ValueError(f"{int(np.sum(mips['nr'] < 0))} points of the part lie outside the "
                          f"run's mesh: its fields cannot be sampled there")
     if "p" in vals and problem.pressure_block is not None:
-        solid.point_data["p"] = np.asarray(problem.pressure_block.gfp(mips)).ravel()
+        solid.point_data["p"] = np.asarray(problem.pressure_block.pressure(mips)).ravel()
     notes = []
     if problem.failure:
         notes.append("no displacement, strain or stress: the run's own model has no "
                      f"equilibrium on its final design at the full load ({problem.failure})")
     else:
-        solid.point_data["u"] = np.asarray(problem.mech.gfu(mips)).reshape(-1, 3)
+        solid.point_data["u"] = np.asarray(problem.mech.u(mips)).reshape(-1, 3)
         for name, cf in strain_stress_measures(problem).items():
             T = np.empty((mesh.ne, 6))
             for k, ((i, j), _) in enumerate(tensor_components(3)):

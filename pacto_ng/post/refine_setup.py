@@ -142,7 +142,7 @@ def _part(run, problem, setup):
     """``(Part, maxh)``: the run's part as ``pacto analyse RUN`` makes it at its defaults."""
     maxh = PART_MAXH[problem.mesh.dim] * float(problem.h)
     part = make_part(problem, setup, threshold=0.5, maxh=maxh, threshold2=0.5, connect=True,
-                     pressure=copy_gridfunction(problem.pressure_block.gfp), p_in=run.load,
+                     pressure=copy_gridfunction(problem.pressure_block.pressure), p_in=run.load,
                      mesh_time_limit=run.params.mesh_time_limit)
     return part, maxh
 

@@ -215,7 +215,7 @@ def part_of_run(run: Run, threshold_value: float, maxh: float | None, threshold2
     shape, exclude = domain_of(problem, setup)
     kw = {}
     if setup.pressure is not None and problem.pressure_block is not None:
-        kw = dict(pressure=copy_gridfunction(problem.pressure_block.gfp), p_in=run.load,
+        kw = dict(pressure=copy_gridfunction(problem.pressure_block.pressure), p_in=run.load,
                   wet_boundaries=setup.pressure.inlet)
     h = 0.5 * problem.h if maxh is None else maxh
     check_part_mesh(run, problem, rho, h)

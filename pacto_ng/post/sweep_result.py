@@ -64,8 +64,6 @@ class Sweep:
 
     def displacement(self, i: int | None = None):
         """The displacement GridFunction at sweep point ``i`` (default: the last converged)."""
-        from ngsolve import GridFunction
-
         if i is None:
             ok = [k for k, p in enumerate(self.points) if p.converged]
             if not ok:
@@ -73,9 +71,7 @@ class Sweep:
             i = ok[-1]
         if self.states[i] is None:
             raise ValueError(f"the {self.kind} analysis did not converge at point {i}")
-        gf = GridFunction(self.analysis.mech.fes)
-        gf.vec.FV().NumPy()[:] = self.states[i]
-        return gf
+        return self.analysis.mech.displacement_from(self.states[i])
 
     def contact_points(self, i: int | None = None):
         """The reference positions ``(n, dim)`` of the walls' vertices in contact (a positive

@@ -87,7 +87,7 @@ def test_material_strain_weights_by_density(rho_right, expected):
     rho = GridFunction(L2(mesh, order=0))
     rho.Set(IfPos(x - 0.5, rho_right, 1.0))
     rules = integration_rules(2)
-    mech = SimpleNamespace(gfu=gfu, mesh=mesh, rules=rules, DX=dx(intrules=rules),
+    mech = SimpleNamespace(u=gfu, mesh=mesh, rules=rules, DX=dx(intrules=rules),
                            fields=[SimpleNamespace(gf=rho)])
     s, largest = material_strain(mech)
     gl = {"left": e1 + e1 ** 2 / 2, "right": e2 + e2 ** 2 / 2}  # E_xx = e + e²/2

@@ -166,3 +166,57 @@ def test_every_subpackage_is_installed():
     found = {".".join(p.parent.relative_to(PACKAGE.parent).parts)
              for p in PACKAGE.rglob("__init__.py")}
     assert found <= listed, sorted(found - listed)
+
+
+def _private_reads(tree) -> set[tuple[str, int]]:
+    """``(name, line)`` of every ``obj._name`` read where ``obj`` is not ``self``/``cls``."""
+    return {(node.attr, node.lineno) for node in ast.walk(tree)
+            if isinstance(node, ast.Attribute) and node.attr.startswith("_")
+            and not node.attr.startswith("__")
+            and not (isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"))}
+
+
+def _own_names(tree) -> set[str]:
+    """The names a module defines: functions, classes and ``self.X`` attributes it sets."""
+    own = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            own.add(node.name)
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+            own.add(node.attr)
+    return own
+
+
+def test_the_reader_of_private_names_finds_one_read_across_modules():
+    tree = ast.parse("class A:\n    def f(self, b):\n        self._x = 1\n"
+                     "        return self._x + b._y + b._x\n")
+    assert {name for name, _ in _private_reads(tree)} == {"_y", "_x"}
+    assert {name for name, _ in _private_reads(tree)} - _own_names(tree) == {"_y"}
+
+
+def test_no_private_name_is_read_across_modules():
+    found = {}
+    for path in PACKAGE.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        own = _own_names(tree)
+        for name, line in _private_reads(tree):
+            if name not in own:
+                found[f"{path.relative_to(PACKAGE.parent)}:{line}"] = name
+    assert found == {}
+
+
+BLOCK_STORAGE = {"gfu", "gfx", "gfp", "fes"}  # the blocks' GridFunctions and spaces
+
+
+def test_only_the_blocks_own_package_reads_their_storage():
+    """Outside physics/, a block's fields are read through its public names (``mech.u``,
+    ``mech.state_vector``, ``mech.ndof``, ``pressure_block.pressure``)."""
+    found = {}
+    for path in PACKAGE.rglob("*.py"):
+        if path.parent.name == "physics":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.Attribute) and node.attr in BLOCK_STORAGE
+                    and not (isinstance(node.value, ast.Name) and node.value.id == "self")):
+                found[f"{path.relative_to(PACKAGE.parent)}:{node.lineno}"] = ast.unparse(node)
+    assert found == {}
