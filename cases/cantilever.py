@@ -4,6 +4,17 @@
 over ±2 element heights; E1 = 3e9, E0 = 3e3, ν = 0.4, t = 0.1 m, volume fraction 0.5.
 Objective: end compliance F·u (``--set objective=energy`` for total strain energy).  Loads
 studied: 80–500 kN (thesis limits: Neo-Hookean 150 kN, Wang 250 kN).
+
+Its chain (``pacto run cantilever --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    Mechanics            rho_bar -> u
+    LinearFunctional     u -> compliance
+    Volume               rho_bar -> volume
+    objective: compliance; constraints (<= 0): volume; reported: -
 """
 from __future__ import annotations
 

@@ -15,6 +15,17 @@ compliance 1.327e4, greyness 0.026, one connected part reaching the loaded end; 
 case's earlier β 1 -> 16 on tetrahedra of 0.03 m (the filter two elements wide) ended at
 greyness 0.138 (compliance 1.531e4), and the same projection to 64 on that mesh made a part
 in two pieces that stopped 0.11 m short of the loaded end.
+
+Its chain (``pacto run cantilever-3d --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    Mechanics            rho_bar -> u
+    LinearFunctional     u -> compliance
+    Volume               rho_bar -> volume
+    objective: compliance; constraints (<= 0): volume; reported: -
 """
 from __future__ import annotations
 

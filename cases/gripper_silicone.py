@@ -16,6 +16,20 @@ material, small strains in the void); ν = 0.45 (the preset's) and ``formulation
 takes the mixed formulation there (Q1/P0 on these quadrilaterals) against volumetric locking.
 Structured quadrilaterals of 0.4 mm (100 x 50), Darcy penetration depth Δs = 1 mm, filter
 radius 1.6 mm, volume fraction 0.2.  Load 10 kPa: p/E1 = 1.1e-2, 34 times the pa-gripper's.
+
+Its chain (``pacto run gripper-silicone --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    StrainEnergy         u, rho_bar, p -> se
+    MechanismRatio       delta, se -> objective
+    Volume               rho_bar -> volume
+    objective: objective; constraints (<= 0): volume; reported: delta, se
 """
 from __future__ import annotations
 

@@ -5,6 +5,18 @@ fraction 0.2.  Input force in +x at the left end of the symmetry line (spread ov
 heights) with an input spring k_in = 4000 N/m; output at the right end with k_out = 40 N/m;
 clamp on the top 7.5 µm of the left edge.  Objective: maximise -u_x at the output (it moves
 against the input).
+
+Its chain (``pacto run inverter --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    Mechanics            rho_bar -> u
+    LinearFunctional     u -> delta
+    Scale                delta -> objective
+    Volume               rho_bar -> volume
+    objective: objective; constraints (<= 0): volume; reported: delta
 """
 from __future__ import annotations
 

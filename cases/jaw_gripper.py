@@ -24,6 +24,45 @@ expected Δ as the other cases' parts (docs/studies.md, "Convergence at defaults
     pacto run jaw-gripper                      # output/jaw-gripper-linear/
     pacto check-gradients jaw-gripper
     pacto analyse output/jaw-gripper-linear    # threshold, remesh, re-analysis
+
+Its chain (``pacto run jaw-gripper --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    HeavisideProjection  rho_tilde -> rho_proj_e
+    FixPassive           rho_proj_e -> rho_bar_e
+    HeavisideProjection  rho_tilde -> rho_proj_d
+    FixPassive           rho_proj_d -> rho_bar_d
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    LinearFunctional     u -> delta_top_jaw
+    LinearFunctional     u -> delta_bottom_jaw
+    StrainEnergy         u, rho_bar, p -> se
+    MechanismRatio       delta, se -> objective
+    DarcyPressure        rho_bar_e -> p_e
+    Mechanics            rho_bar_e, p_e -> u_e
+    LinearFunctional     u_e -> delta_e
+    LinearFunctional     u_e -> delta_top_jaw_e
+    LinearFunctional     u_e -> delta_bottom_jaw_e
+    StrainEnergy         u_e, rho_bar_e, p_e -> se_e
+    MechanismRatio       delta_e, se_e -> objective_e
+    DarcyPressure        rho_bar_d -> p_d
+    Mechanics            rho_bar_d, p_d -> u_d
+    LinearFunctional     u_d -> delta_d
+    LinearFunctional     u_d -> delta_top_jaw_d
+    LinearFunctional     u_d -> delta_bottom_jaw_d
+    StrainEnergy         u_d, rho_bar_d, p_d -> se_d
+    MechanismRatio       delta_d, se_d -> objective_d
+    Alias                objective -> objective_i
+    WorstCase            objective_e, objective_i, objective_d -> worst_case
+    Volume               rho_bar -> volume
+    Volume               rho_bar_d -> volume_d
+    VolumeFraction       rho_bar -> vol_i
+    VolumeFraction       rho_bar_d -> vol_d
+    objective: worst_case; constraints (<= 0): volume_d; reported: delta, se, delta_top_jaw, delta_bottom_jaw, delta_e, se_e, delta_top_jaw_e, delta_bottom_jaw_e, delta_d, se_d, delta_top_jaw_d, delta_bottom_jaw_d, objective_e, objective_i, objective_d, vol_i, vol_d
 """
 from __future__ import annotations
 

@@ -8,6 +8,17 @@ ends grey: its published compliance for 60 x 20 is about 218.8, and this case wi
 settings reached 210.7 at greyness 0.197.  By default the case takes the library's penalty and
 projection continuation (p 1 -> 3, β 1 -> 64): the design ends crisp, at greyness 4e-5 and
 compliance 187.2 after 101 iterations (``pacto run mbb``, measured 2026-12-06).
+
+Its chain (``pacto run mbb --show-chain``)::
+
+    Embed                x -> rho
+    ConeFilter           rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    Mechanics            rho_bar -> u
+    LinearFunctional     u -> compliance
+    Volume               rho_bar -> volume
+    objective: compliance; constraints (<= 0): volume; reported: -
 """
 from __future__ import annotations
 

@@ -22,6 +22,27 @@ objective of the trade study (docs/studies.md), 0.002 m 1.0 % at 4.6x its time.
 falling by about 0.1 % per iteration; every 8 and 0.1 the same (−0.1037, the last 4 changes below
 1e-3 at the cap); every 7 and 0.1 converged at iteration 151, −0.1030 (one run each,
 docs/studies.md, "Convergence at defaults", measured 2026-12-03).
+
+Its chain (``pacto run mm-gripper --show-chain``)::
+
+    Slice                x -> x1
+    Slice                x -> x2
+    Embed                x1 -> rho1
+    HelmholtzFilter      rho1 -> rho_tilde1
+    HeavisideProjection  rho_tilde1 -> rho_proj1
+    FixPassive           rho_proj1 -> rho_bar1
+    Embed                x2 -> rho2
+    HelmholtzFilter      rho2 -> rho_tilde2
+    HeavisideProjection  rho_tilde2 -> rho_proj2
+    FixPassive           rho_proj2 -> rho_bar2
+    DarcyPressure        rho_bar1 -> p
+    Mechanics            rho_bar1, rho_bar2, p -> u
+    LinearFunctional     u -> delta
+    StrainEnergy         u, rho_bar1, rho_bar2, p -> se
+    MechanismRatio       delta, se -> objective
+    Volume               rho_bar1 -> volume
+    Volume               rho_bar2 -> volume2
+    objective: objective; constraints (<= 0): volume, volume2; reported: delta, se
 """
 from __future__ import annotations
 

@@ -17,6 +17,20 @@ load 1e6 Pa by default (the thesis ran 1e5–1e7 Pa).  The thesis mesh (0.004 m,
 Objective ``mechanism``: minimise -sΔ/SE (thesis eq. 3.9); ``--set objective=output_se``
 maximises Δ subject to SE <= se_max.  Structured quads and the unit-element set-up as for
 pa-inverter (see its docstring).
+
+Its chain (``pacto run pa-gripper --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    StrainEnergy         u, rho_bar, p -> se
+    MechanismRatio       delta, se -> objective
+    Volume               rho_bar -> volume
+    objective: objective; constraints (<= 0): volume; reported: delta, se
 """
 from __future__ import annotations
 

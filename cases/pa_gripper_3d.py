@@ -18,6 +18,39 @@ a grey hinge 1-2 elements wide, which thresholding at 0.5 cut: ``pacto analyse``
 part ("the part does not reach the output face").  With it the run converged at iteration 107
 (48 s) and its part, re-analysed under follower pressure, closes the jaw by 2.93 mm at 1e6 Pa
 (docs/studies.md, "3D cases at defaults", measured 2026-12-04).
+
+Its chain (``pacto run pa-gripper-3d --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    HeavisideProjection  rho_tilde -> rho_proj_e
+    FixPassive           rho_proj_e -> rho_bar_e
+    HeavisideProjection  rho_tilde -> rho_proj_d
+    FixPassive           rho_proj_d -> rho_bar_d
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    StrainEnergy         u, rho_bar, p -> se
+    MechanismRatio       delta, se -> objective
+    DarcyPressure        rho_bar_e -> p_e
+    Mechanics            rho_bar_e, p_e -> u_e
+    LinearFunctional     u_e -> delta_e
+    StrainEnergy         u_e, rho_bar_e, p_e -> se_e
+    MechanismRatio       delta_e, se_e -> objective_e
+    DarcyPressure        rho_bar_d -> p_d
+    Mechanics            rho_bar_d, p_d -> u_d
+    LinearFunctional     u_d -> delta_d
+    StrainEnergy         u_d, rho_bar_d, p_d -> se_d
+    MechanismRatio       delta_d, se_d -> objective_d
+    Alias                objective -> objective_i
+    WorstCase            objective_e, objective_i, objective_d -> worst_case
+    Volume               rho_bar -> volume
+    Volume               rho_bar_d -> volume_d
+    VolumeFraction       rho_bar -> vol_i
+    VolumeFraction       rho_bar_d -> vol_d
+    objective: worst_case; constraints (<= 0): volume_d; reported: delta, se, delta_e, se_e, delta_d, se_d, objective_e, objective_i, objective_d, vol_i, vol_d
 """
 from __future__ import annotations
 

@@ -21,6 +21,39 @@ unit-element set-up of the MATLAB codes (domain nelx x nely, 1 x 1 elements): ``
 --nely 60 --set unit_elements=1 --set plane=stress --set E1=1 --set E0=1e-6 --set load=1
 --set thickness=1 --set delta_s=1 --set filter_radius=2.5 --set k_out=0.01``; every length
 (Δs, filter radius) and k_out must then be given in element units.
+
+Its chain (``pacto run pa-inverter --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    HeavisideProjection  rho_tilde -> rho_proj_e
+    FixPassive           rho_proj_e -> rho_bar_e
+    HeavisideProjection  rho_tilde -> rho_proj_d
+    FixPassive           rho_proj_d -> rho_bar_d
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    StrainEnergy         u, rho_bar, p -> se
+    MechanismRatio       delta, se -> objective
+    DarcyPressure        rho_bar_e -> p_e
+    Mechanics            rho_bar_e, p_e -> u_e
+    LinearFunctional     u_e -> delta_e
+    StrainEnergy         u_e, rho_bar_e, p_e -> se_e
+    MechanismRatio       delta_e, se_e -> objective_e
+    DarcyPressure        rho_bar_d -> p_d
+    Mechanics            rho_bar_d, p_d -> u_d
+    LinearFunctional     u_d -> delta_d
+    StrainEnergy         u_d, rho_bar_d, p_d -> se_d
+    MechanismRatio       delta_d, se_d -> objective_d
+    Alias                objective -> objective_i
+    WorstCase            objective_e, objective_i, objective_d -> worst_case
+    Volume               rho_bar -> volume
+    Volume               rho_bar_d -> volume_d
+    VolumeFraction       rho_bar -> vol_i
+    VolumeFraction       rho_bar_d -> vol_d
+    objective: worst_case; constraints (<= 0): volume_d; reported: delta, se, delta_e, se_e, delta_d, se_d, objective_e, objective_i, objective_d, vol_i, vol_d
 """
 from __future__ import annotations
 

@@ -11,6 +11,22 @@ under it.  Output: the strip y ∈ [0, 0.05 H] of the right face, Δ = the mean 
 1e4 N/m per mm of depth).  E1 = 3e9 Pa, E0 = 1e-6 E1, ν = 0.4, volume fraction 0.2,
 tetrahedra of 0.005 m, Helmholtz filter of radius 0.012 m and the 2D case's continuation; load
 1e6 Pa.  Objective ``mechanism``: minimise -sΔ/SE.
+
+Its chain (``pacto run pa-inverter-3d --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    StrainEnergy         u, rho_bar, p -> se
+    MechanismRatio       delta, se -> objective
+    Outflow              rho_bar, p -> leak
+    Bound                leak -> leak_limit
+    Volume               rho_bar -> volume
+    objective: objective; constraints (<= 0): volume, leak_limit; reported: delta, se, leak
 """
 from __future__ import annotations
 

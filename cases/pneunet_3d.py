@@ -20,6 +20,20 @@ objective changes below 0.3 %) or after 30 iterations, up to 300 iterations.  Me
 2026-12-06 (`PACTO_THREADS=1 pacto run pneunet-3d`): converged at iteration 113 (-4.07e-3),
 greyness 0.045, sealed, the part 16.6 µm against the design's 19.8 µm at order 2 (-16.3 %);
 51 s + 16 s for the part.
+
+Its chain (``pacto run pneunet-3d --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    StrainEnergy         u, rho_bar, p -> se
+    MechanismRatio       delta, se -> objective
+    Volume               rho_bar -> volume
+    objective: objective; constraints (<= 0): volume; reported: delta, se
 """
 from __future__ import annotations
 

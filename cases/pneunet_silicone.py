@@ -26,6 +26,20 @@ Why this chamber and volume: with a 20 x 6 mm chamber and volume fraction 0.3 th
 thinned the chamber's walls to a one- or two-element membrane that balloons (its top wall moved
 12 mm at 10 kPa), and Newton lost the follower equilibrium every few iterations, at 0.29-0.95
 of the load (docs/guide.md, "Silicone cases", has the measurements).
+
+Its chain (``pacto run pneunet-silicone --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    StrainEnergy         u, rho_bar, p -> se
+    MechanismRatio       delta, se -> objective
+    Volume               rho_bar -> volume
+    objective: objective; constraints (<= 0): volume; reported: delta, se
 """
 from __future__ import annotations
 

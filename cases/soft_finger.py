@@ -23,6 +23,20 @@ its design's 17 µm came from the Darcy load on the opening's grey walls: its pa
     pacto run soft-finger                      # output/soft-finger-linear/
     pacto check-gradients soft-finger
     pacto analyse output/soft-finger-linear    # threshold, remesh, re-analysis
+
+Its chain (``pacto run soft-finger --show-chain``)::
+
+    Embed                x -> rho
+    HelmholtzFilter      rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    StrainEnergy         u, rho_bar, p -> se
+    MechanismRatio       delta, se -> objective
+    Volume               rho_bar -> volume
+    objective: objective; constraints (<= 0): volume; reported: delta, se
 """
 from __future__ import annotations
 

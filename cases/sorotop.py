@@ -35,6 +35,21 @@ with β doubled to 64, so that the design is crisp and its part holds pressure a
 designed.  ``--set beta=0 --set beta_max=0 --set penal_start=0`` runs without them, as the code
 (no projection, p = 3 throughout): greyness 0.19 and the part 23.7 % short of its design
 (2026-12-06, docs/benchmarks.md), against 0.0007 and -6.4 % with them.
+
+Its chain (``pacto run sorotop --show-chain``)::
+
+    Embed                x -> rho
+    ConeFilter           rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    LinearFunctional     u -> delta
+    Scale                delta -> objective
+    StrainEnergy         u, rho_bar, p -> se
+    Bound                se -> se_limit
+    Volume               rho_bar -> volume
+    objective: objective; constraints (<= 0): volume, se_limit; reported: delta, se
 """
 from __future__ import annotations
 

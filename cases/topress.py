@@ -18,6 +18,18 @@ here: volfrac 0.2, rmin 2.4, ηf 0.2, βf 10, p 3 (those of sorotop).  As soroto
 optimisation adds the library's penalty and projection continuation (``--set beta=0 --set
 beta_max=0 --set penal_start=0``: without them, as the code; greyness 0.12 against 2e-5 with
 them, 2026-12-06).
+
+Its chain (``pacto run topress --show-chain``)::
+
+    Embed                x -> rho
+    ConeFilter           rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    Compliance           u, p -> compliance
+    Volume               rho_bar -> volume
+    objective: compliance; constraints (<= 0): volume; reported: -
 """
 from __future__ import annotations
 

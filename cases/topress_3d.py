@@ -40,6 +40,18 @@ The geometry is a :class:`~pacto_ng.box.Box` of ``nelx x nely x nelz`` unit cube
 structured hexahedra: patches "inlet" (the whole face z = nelz) and "zero_pressure" (the whole
 face z = 0), and the rim's nodes as points all named "rim" (a Box names faces and points, not
 edges).
+
+Its chain (``pacto run topress-3d --show-chain``)::
+
+    Embed                x -> rho
+    ConeFilter           rho -> rho_tilde
+    HeavisideProjection  rho_tilde -> rho_proj
+    FixPassive           rho_proj -> rho_bar
+    DarcyPressure        rho_bar -> p
+    Mechanics            rho_bar, p -> u
+    Compliance           u, p -> compliance
+    Volume               rho_bar -> volume
+    objective: compliance; constraints (<= 0): volume; reported: -
 """
 from __future__ import annotations
 
