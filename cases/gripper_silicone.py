@@ -55,7 +55,7 @@ CASE = Case(
     summary="pa-gripper in Dragon Skin 30, mm scale, 10 kPa follower pressure: the jaw closes",
     source="pa-gripper (thesis §6.2) at real scale; the preset's source in presets.py",
     defaults=Parameters(model="wang", material="dragonskin-30", nelx=100, nely=50,
-                        plane="strain", thickness=0.01, E1=3e9, E0=3e3, volfrac=0.2,
+                        plane="strain", thickness=0.01, volfrac=0.2,
                         filter="helmholtz", filter_radius=0.0016, penal=3.0, penal_start=1.0,
                         penal_step=0.04, beta=1.0, beta_max=32.0, beta_every=15,
                         delta_s=0.001, load=1e4, k_out=900.0, load_type="follower",

@@ -66,7 +66,7 @@ CASE = Case(
             "pressure: bends down",
     source="pneunet (thesis §6.3) at real scale; the preset's source in presets.py",
     defaults=Parameters(model="wang", material="dragonskin-30", nelx=80, nely=30,
-                        plane="strain", thickness=0.015, E1=3e9, E0=3e3, volfrac=0.4,
+                        plane="strain", thickness=0.015, volfrac=0.4,
                         filter="helmholtz", filter_radius=0.002, penal=3.0, penal_start=1.0,
                         penal_step=0.04, beta=1.0, beta_max=64.0, beta_every=10, eta_k=0.2,
                         eta_h=0.3, delta_s=0.001, load=1e4, k_out=1000.0,

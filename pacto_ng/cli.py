@@ -50,7 +50,7 @@ from .threads import compute
 def _show_parameters(case, params: Parameters):
     print(f"{case.name}: {case.summary}")
     units = {"load": case.load_unit}
-    derived = params.derived
+    derived = {**params.mechanics.set_by_material(), **params.derived}
     for name, val, unit, help_ in params.describe(units):
         how = f"  ({derived[name]})" if name in derived else ""
         print(f"  {name:18s} {val!s:>12s} {unit:12s} {help_}{how}")

@@ -27,6 +27,11 @@ FILTER_ELEMENTS = 3.0
 #: side: the smallest member the design may have (the built-in pressure cases: 1/5.5-1/8,
 #: e.g. pa-inverter 0.012 m of 0.1 m, pneunet-silicone 0.002 m of 0.015 m)
 FILTER_SHARE = 1.0 / 8.0
+#: the Darcy drainage depth Δs (``delta_s``) of a pressure case that gives none, in element
+#: sizes: the pressure falls to r P_in within this depth of solid, so a wall of the filter's
+#: smallest member (2 R = 6 elements) holds it back by r^6; one element is the thinnest
+#: layer the mesh resolves (the built-in pressure cases: 0.5-1.5 element sizes)
+DRAIN_ELEMENTS = 1.0
 #: default strain-energy limit of objective output_se in units of P_in² V / E1 (V: the domain's
 #: volume, t W H in 2D) -- the energy scale of a pressure P_in on a body of modulus E1; the
 #: default mechanism designs store 14-18 of these units (measured), so 15 gives designs of
@@ -34,7 +39,7 @@ FILTER_SHARE = 1.0 / 8.0
 SE_FACTOR = 15.0
 
 #: the parameters the pressure-actuated mechanisms start from (pa-inverter, pa-gripper,
-#: mm-gripper, pa-inverter-3d): thesis Table 6.1, and a continuation that gives clean designs
+#: mm-gripper, pa-inverter-3d): thesis Table 6.1 (Δs = 0.002 m among them), and a continuation that gives clean designs
 #: at the thesis mesh (measured, docs/studies.md): p = 1 -> 3 in steps of 0.04, then
 #: β = 1 -> 32 doubling every 15 iterations, move limit 0.05 (0.1 oscillates from the start);
 #: the filter radius is a length (3 thesis mesh sizes), so that finer meshes resolve the same
@@ -43,9 +48,9 @@ SE_FACTOR = 15.0
 #: iterations while the design barely changes (docs/studies.md, "Convergence at defaults")
 PRESSURE_DEFAULTS = Parameters(
     model="linear", maxh=0.004, plane="strain", thickness=1e-3, E1=3e9, E0=3e3, nu=0.4,
-    volfrac=0.2, filter="helmholtz", filter_radius=0.012, penal=3.0, penal_start=1.0,
-    penal_step=0.04, beta=1.0, beta_max=32.0, beta_every=15, load=1e6, k_out=1e4,
-    iterations=160, move=0.05, tol=0.01, obj_tol=1e-3)
+    volfrac=0.2, filter="helmholtz", filter_radius=0.012, delta_s=0.002, penal=3.0,
+    penal_start=1.0, penal_step=0.04, beta=1.0, beta_max=32.0, beta_every=15, load=1e6,
+    k_out=1e4, iterations=160, move=0.05, tol=0.01, obj_tol=1e-3)
 
 #: ... and in 3D (pa-inverter-3d, pa-gripper-3d): the 2D settings that carry over (the mesh,
 #: the plane and the thickness do not), the output spring of the quarter model, the penalty
@@ -119,13 +124,16 @@ def derive_settings(case, params: Parameters) -> Parameters:
       filter radius (:func:`~pacto_ng.meshing.derived_maxh`);
     - ``filter_radius``: :data:`FILTER_ELEMENTS` element sizes, and where ``maxh`` is derived
       too at least :data:`FILTER_SHARE` of the domain's smallest side;
+    - ``delta_s`` of a pressure case: :data:`DRAIN_ELEMENTS` element sizes;
     - a case that gives none of the penalty (or of the projection) schedule's settings:
       :data:`PENALTY` (:data:`PROJECTION`), and with either :data:`CONTINUATION_OPTIMISER`.
 
     An analysis case (the C-beam) gets the mesh size only.  A derived value stays until one
     of its inputs changes (:meth:`Parameters.replace`)."""
+    drains = case.load_unit == "Pa" and not case.analysis_only  # a pressure case
     needs_geometry = ((params.unset("maxh") and params.nelx == 0)
-                      or (params.unset("filter_radius") and not case.analysis_only))
+                      or (params.unset("filter_radius") and not case.analysis_only)
+                      or (drains and params.unset("delta_s")))
     geometry = case.make_geometry(params) if needs_geometry else None
     if params.unset("maxh") and params.nelx == 0:
         params = _derive_maxh(geometry, params)
@@ -133,7 +141,19 @@ def derive_settings(case, params: Parameters) -> Parameters:
         return params
     if params.unset("filter_radius"):
         params = _derive_filter(geometry, params)
+    if drains and params.unset("delta_s"):
+        params = _derive_drainage(geometry, params)
     return _derive_continuation(params)
+
+
+def _derive_drainage(geometry, params: Parameters) -> Parameters:
+    h = element_size(geometry, maxh=params.maxh, nelx=params.nelx, nely=params.nely,
+                     nelz=params.nelz)
+    if h is None:
+        return params
+    return params.derive({"delta_s": float(f"{DRAIN_ELEMENTS * h:.4g}")},
+                         {"delta_s": f"derived: {DRAIN_ELEMENTS:g} element size of {h:.3g} m"},
+                         inputs=("maxh", "nelx", "nely", "nelz"))
 
 
 def _derive_continuation(params: Parameters) -> Parameters:

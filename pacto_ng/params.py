@@ -100,7 +100,7 @@ class Parameters:
 
     __slots__ = ("_parts", "_index", "_given", "_derived")
 
-    def __init__(self, options=None, **values):
+    def __init__(self, options=None, _explicit=None, **values):
         index = {}
         for part, cls in PARTS:
             for f in fields(cls):
@@ -125,6 +125,9 @@ class Parameters:
         object.__setattr__(self, "_parts", built)
         object.__setattr__(self, "_index", index)
         object.__setattr__(self, "_given", frozenset(values))
+        explicit = values.keys() if _explicit is None else _explicit
+        if "E1" in explicit:
+            built["mechanics"].check_explicit_E1(values["E1"])
         # name -> (how it was derived, the names it was derived from)
         object.__setattr__(self, "_derived", {})
 
@@ -178,7 +181,7 @@ class Parameters:
         closed = [n for n in values if not self.unset(n)]
         if closed:
             raise ValueError(f"derive: '{closed[0]}' is given or derived already")
-        new = Parameters(self.options, **{**self.to_dict(), **values})
+        new = Parameters(self.options, (), **{**self.to_dict(), **values})
         derived = dict(self._derived)
         for name in values:
             derived[name] = (why[name], frozenset(inputs))
@@ -222,7 +225,7 @@ class Parameters:
                 values[name] = self._declared_default(name)
                 continue
             derived[name] = (why, inputs)
-        new = Parameters(self.options, **values)
+        new = Parameters(self.options, changes.keys(), **values)
         return new._marked(self._given | changes.keys(), derived)
 
     def _declared_default(self, name: str):
@@ -240,7 +243,7 @@ class Parameters:
 
     def with_options(self, options) -> "Parameters":
         """These parameters with the case's own part ``options`` (its defaults) added."""
-        return Parameters(options, **self.to_dict())._marked(self._given, self._derived)
+        return Parameters(options, (), **self.to_dict())._marked(self._given, self._derived)
 
     def __eq__(self, other):
         return isinstance(other, Parameters) and self.to_dict() == other.to_dict() \
@@ -258,7 +261,7 @@ class Parameters:
 
 
 def _rebuild(options, values, given=None, derived=None):
-    params = Parameters(options, **values)
+    params = Parameters(options, (), **values)
     if given is None:  # pickled by a version that did not record them
         return params
     return params._marked(given, derived or {})

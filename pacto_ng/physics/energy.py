@@ -4,6 +4,7 @@ interpolation of it) with the SIMP modulus of the design field(s), declaring wha
 assembly."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -140,6 +141,24 @@ class MaterialSettings(Settings):
         if self.model not in LAWS + ("linear", "gnl", "neohookean", "wang", "auto"):
             raise InputError(f"model: '{self.model}' cannot be used with material "
                              f"'{self.material}'")
+
+    def check_explicit_E1(self, given: float):
+        """Refuse an E1 given beside a material preset that sets another (the preset's
+        E1 = 2 μ0 (1 + ν) would silently replace it): one line naming both."""
+        if self.material and not math.isclose(float(given), self.E1, rel_tol=1e-12):
+            raise InputError(f"E1: {float(given):g} Pa was given, but material "
+                             f"'{self.material}' sets E1 = 2 μ0 (1 + ν) = {self.E1:.6g} Pa: "
+                             "give one of them")
+
+    def set_by_material(self) -> dict[str, str]:
+        """``{name: how}`` of the values the material preset set (``--show-parameters``)."""
+        if not self.material:
+            return {}
+        how = f"from material '{self.material}'"
+        notes = {"E1": f"{how}: 2 μ0 (1 + ν)", "E0": f"{how}: the case's E0/E1 kept"}
+        if self.nu == PRESETS[self.material].nu:
+            notes["nu"] = f"{how}: its ν"
+        return notes
 
     def check(self):
         if not self.E0 < self.E1:

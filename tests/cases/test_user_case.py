@@ -11,6 +11,8 @@ import pacto_ng as pn
 from pacto_ng.case import available_cases, load_case_file
 from pacto_ng.derive import PRESSURE_DEFAULTS
 from pacto_ng.cli import main
+from pacto_ng.errors import InputError
+from pacto_ng.params import Parameters
 
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
@@ -27,7 +29,7 @@ def finger():
 
 def test_the_user_case_resolves_with_settings_derived_from_it(finger):
     params = finger.resolve(finger.defaults)
-    assert set(params.derived) == {"maxh", "filter_radius", *CONTINUATION}
+    assert set(params.derived) == {"maxh", "filter_radius", "delta_s", *CONTINUATION}
     # 30 elements across the 16 mm height (3 significant digits)
     assert params.maxh == pytest.approx(HEIGHT / 30, rel=5e-3)
     assert params.filter_radius == pytest.approx(HEIGHT / 8, rel=5e-3)  # 1/8 of the height
@@ -106,6 +108,50 @@ def test_show_parameters_says_where_each_derived_value_came_from(capsys):
     assert any(line.split()[:1] == ["objective_ref"] and "derived" in line for line in lines)
 
 
+def test_a_pressure_case_that_gives_no_drainage_depth_gets_one_element(capsys):
+    """Δs follows the mesh (one element size, derive.DRAIN_ELEMENTS), not a length in
+    metres that a case in other units or on another mesh would get wrong."""
+    case = load_case_file(FINGER)
+    params = case.resolve(case.defaults)
+    assert params.delta_s == pytest.approx(params.maxh, rel=1e-3)
+    assert params.derived["delta_s"] == "derived: 1 element size of 0.000533 m"
+    finer = case.resolve(params.with_overrides({"maxh": "0.0004"}))
+    assert finer.delta_s == 0.0004 and "delta_s" in finer.derived
+    given = case.resolve(params.with_overrides({"delta_s": "0.003"}))
+    assert given.delta_s == 0.003 and "delta_s" not in given.derived
+    assert main(["run", str(FINGER), "--show-parameters"]) == 0
+    line = next(line for line in capsys.readouterr().out.splitlines()
+                if line.split()[:1] == ["delta_s"])
+    assert "0.000533" in line and "(derived: 1 element size" in line
+
+
+def test_show_parameters_names_what_the_material_preset_set(capsys):
+    assert main(["run", str(FINGER), "--show-parameters"]) == 0
+    lines = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()
+             if line.strip()}
+    assert "(from material 'dragonskin-30': 2 μ0 (1 + ν))" in lines["E1"]
+    assert "(from material 'dragonskin-30': the case's E0/E1 kept)" in lines["E0"]
+    assert "(from material 'dragonskin-30': its ν)" in lines["nu"]
+
+
+def test_an_E1_given_beside_a_material_preset_that_sets_another_is_refused(capsys):
+    # on the command line: one line naming both, exit 2
+    assert main(["run", str(FINGER), "--set", "E1=5e5", "--show-parameters"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "E1: 500000 Pa was given" in err[0] and "dragonskin-30" in err[0]
+    # in a case's (or a script's) parameters
+    with pytest.raises(InputError, match="E1: 3e\\+09 Pa was given, but material 'dragonskin-30'"):
+        Parameters(model="wang", material="dragonskin-30", E1=3e9)
+    # the preset's own value, a preset chosen over a case's E1, and ν changed under a preset
+    # are no disagreement
+    p = Parameters(model="wang", material="dragonskin-30")
+    assert Parameters(model="wang", material="dragonskin-30", E1=p.E1).E1 == p.E1
+    q = Parameters(model="wang", E1=1e5).with_overrides({"material": "dragonskin-30"})
+    assert q.E1 == p.E1
+    r = p.with_overrides({"nu": "0.42"})
+    assert r.nu == 0.42 and r.E1 == pytest.approx(p.E1 * 1.42 / 1.45, rel=1e-12)
+
+
 def test_a_short_run_of_the_user_case(tmp_path):
     t0 = time.perf_counter()
     result = pn.run(str(FINGER), out=tmp_path / "run", iterations=3, maxh=0.002)
@@ -122,7 +168,8 @@ def test_a_built_in_case_resolves_as_before(case):
     that leave it at 0, whose meaning (3 mesh sizes, pacto_ng.builders) it now records as a
     length, and the continuation of the three set up as a peer code and of mbb and
     cantilever-3d, which give none (derive.PENALTY, PROJECTION, CONTINUATION_OPTIMISER; the
-    peer cases keep their codes' move limit); their set-ups' objective scale is their own."""
+    peer cases keep their codes' move limit); their set-ups' objective scale and their
+    drainage depth are their own."""
     params = case.resolve(case.defaults)
     before = case.defaults.to_dict()  # the resolution before derivations: order only
     if not before["order"] and before["model"] != "auto":
