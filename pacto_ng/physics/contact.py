@@ -67,13 +67,14 @@ def element_scale(mesh) -> float:
 
 
 class SelfContact:
-    """Penalty self-contact of the boundaries ``names`` of the displacement space ``fes``'s
-    mesh (see the module).
+    """Penalty self-contact of the boundaries ``names`` of the space ``fes``'s mesh (see the
+    module).
 
     Parameters
     ----------
     fes : ngsolve FESpace
-        The displacement's space (a ``VectorH1``): its trial function is ``u``.
+        The state's space: the displacement's (a ``VectorH1``) or one holding it (see
+        ``displacement``).
     names : tuple of str
         The candidate boundaries.
     stiffness : float
@@ -88,10 +89,14 @@ class SelfContact:
         The 2D thickness ``t`` (1 in 3D).
     intorder : int, optional
         The quadrature order on the candidate faces (default :data:`INTORDER`).
+    displacement : callable, optional
+        The displacement of a function of ``fes`` where ``fes`` holds more than it (the mixed
+        formulation's state, :meth:`~pacto_ng.physics.mechanics.Mechanics.displacement`);
+        default: ``fes`` is the displacement's space.
     """
 
     def __init__(self, fes, names, stiffness: float, maxdist: float, *, normal=None,
-                 thickness: float = 1.0, intorder: int | None = None):
+                 thickness: float = 1.0, intorder: int | None = None, displacement=None):
         if not stiffness > 0:
             raise ValueError(f"contact: the penalty stiffness must be positive (got {stiffness})")
         mesh = fes.mesh
@@ -105,7 +110,8 @@ class SelfContact:
         self.stiffness = float(stiffness)
         self.cb = ContactBoundary(region, region)
         X = CoefficientFunction((x, y, z)[:mesh.dim])
-        u = fes.TrialFunction()
+        shift = displacement or (lambda w: w)  # the displacement of fes's functions
+        u = shift(fes.TrialFunction())
         gap = (X + u - X.Other() - u.Other()) * self.cb.normal
         # only surfaces that face each other in the reference configuration: normals more
         # than 120° apart (two walls meeting at a corner are not in contact), and the other
@@ -115,6 +121,7 @@ class SelfContact:
                   * IfPos((X.Other() - X) * N + 1e-6 * self.maxdist, 1.0, 0.0))
         self.cb.AddEnergy(facing * IfPos(gap, (0.5 * thickness * self.stiffness) * gap * gap, 0))
         self._state = GridFunction(fes)
+        self._moved = shift(self._state)  # the state's displacement: where the walls are
         # the measures, each its own ContactBoundary and form (energies: t ∫ [g > 0] and
         # t k ∫ max(g, 0) over both walls)
         self._probes = []
@@ -134,14 +141,15 @@ class SelfContact:
 
     @classmethod
     def on_walls(cls, fes, names, *, modulus: float, penalty: float, reach: float,
-                 thickness: float = 1.0) -> "SelfContact":
+                 thickness: float = 1.0, displacement=None) -> "SelfContact":
         """The walls ``names`` of a solid in self-contact: the stiffness ``penalty modulus /
         h`` and pairs sought within ``reach h`` (``h`` the mesh's :func:`element_scale`), the
         walls' outward normals (:func:`~pacto_ng.physics.walls.outward_normal`)."""
         mesh, names = fes.mesh, tuple(names)
         h = element_scale(mesh)
         return cls(fes, names, penalty * float(modulus) / h, reach * h,
-                   normal=outward_normal(mesh, "|".join(names)), thickness=thickness)
+                   normal=outward_normal(mesh, "|".join(names)), thickness=thickness,
+                   displacement=displacement)
 
     def measure(self, vec) -> tuple[float, float, float]:
         """``(area, force, pressure)`` of the contact at the state ``vec``: the area of either
@@ -160,7 +168,7 @@ class SelfContact:
         """The ``k``-th measure's energy at the state ``vec``, paired there."""
         self._state.vec.data = vec
         cb, form = self._probes[k]
-        cb.Update(self._state, form, intorder=self.intorder, maxdist=self.maxdist)
+        cb.Update(self._moved, form, intorder=self.intorder, maxdist=self.maxdist)
         return float(form.Energy(self._state.vec))
 
     def pressures(self, vec) -> tuple[np.ndarray, np.ndarray]:
@@ -172,7 +180,7 @@ class SelfContact:
 
     def _pressures(self) -> np.ndarray:
         """The contact pressure at Γc's vertices at the state ``self._state``."""
-        self._forces.Update(self._state, self._force_form, intorder=self.intorder,
+        self._forces.Update(self._moved, self._force_form, intorder=self.intorder,
                             maxdist=self.maxdist)
         f = self._state.vec.CreateVector()
         self._force_form.Apply(self._state.vec, f)
@@ -183,7 +191,7 @@ class SelfContact:
         """Pair the candidate surface with itself at the state ``vec`` (a vector of ``fes``)
         and register the contact energy with the BilinearForm ``form``."""
         self._state.vec.data = vec
-        self.cb.Update(self._state, form, intorder=self.intorder, maxdist=self.maxdist)
+        self.cb.Update(self._moved, form, intorder=self.intorder, maxdist=self.maxdist)
 
 
 def _vertex_shares(fes, region) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -109,11 +109,10 @@ class Equilibrium:
         """Add the self-contact ``contact`` (:class:`~pacto_ng.physics.contact.SelfContact` on
         this block's displacement space) to the equilibrium, paired at the current state; the
         pairs stay until the caller updates them (:meth:`contact_settled`).  A block on the
-        linear route (a fixed K) or with the mixed formulation takes no contact:
-        ValueError."""
-        if self._lin is not None or self.mixed is not None:
-            raise ValueError("contact needs the displacement formulation on the nonlinear "
-                             "route (build the block with linear=False)")
+        linear route (a fixed K) takes no contact: ValueError."""
+        if self._lin is not None:
+            raise ValueError("contact needs the nonlinear route (build the block with "
+                             "linear=False)")
         self.contact = contact
         contact.update(self.a, self.gfx.vec)
 

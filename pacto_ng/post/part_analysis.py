@@ -201,13 +201,11 @@ class PartAnalysis:
             realcompile=params.newton.compiles(linear and kind != "follower" and not contact,
                                                mesh.ne * SWEEP_NEWTON),
             formulation=self.formulation)
-        if contact and self.formulation != "displacement":
-            raise ValueError(f"contact: the part is analysed with the {self.formulation} "
-                             "formulation (the run's), which takes no contact yet")
         if contact:
             self.mech.use_contact(SelfContact.on_walls(
                 self.mech.space, contact, modulus=params.E1, penalty=contact_penalty,
-                reach=CONTACT_REACH, thickness=self.thickness))
+                reach=CONTACT_REACH, thickness=self.thickness,
+                displacement=self.mech.displacement))
         self._chamber = None if kind == "darcy" or not chamber else (
             outward_normal(mesh, boundary),
             held_planes_origin(mesh, (supports.fix_x, supports.fix_y, supports.fix_z)))

@@ -171,8 +171,8 @@ def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
     """``(entry, (PartAnalysis, SweepPoint))``: where a 2D part's walls pass through each
     other at the solved state (:func:`walls_overlap`), the part solved again with its walls
     in self-contact, whose figures are then the part's (``entry``: the overlap and Δ without
-    contact, and whether the contact's solve converged; with the mixed formulation, which
-    takes no contact, only the overlap).  ``entry`` is None where the walls do not meet, and
+    contact, and whether the contact's solve converged).  ``entry`` is None where the walls
+    do not meet, and
     for a 3D part, whose walls are not probed: one pairing of pneunet-3d's part took 36 s at
     the contact's quadrature (2026-12-06), a minute's run's half (``pacto analyse DIR
     --contact`` analyses a 3D part with contact)."""
@@ -181,12 +181,9 @@ def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
     overlap = walls_overlap(ana, walls) if point.converged and part.dim == 2 else 0.0
     if not overlap > 0.0:
         return None, solved
-    entry = {"overlap_without": overlap, "output_displacement_without": _num(point.delta),
-             "analysed": False}
-    if ana.formulation != "displacement":
-        return entry, solved
     again = _solved(part, problem, loading, contact=walls)
-    entry.update(analysed=True, converged=bool(again[1].converged))
+    entry = {"overlap_without": overlap, "output_displacement_without": _num(point.delta),
+             "analysed": True, "converged": bool(again[1].converged)}
     say(f"its walls pass through each other there (overlap {overlap:.3g} m²): analysed again "
         f"with them in contact" + ("" if again[1].converged else ": no equilibrium"))
     return entry, again if again[1].converged else solved
@@ -209,8 +206,6 @@ def _overlap_warning(contact, path) -> list[str]:
         return []
     overlap = f"its walls pass through each other in this analysis (overlap " \
               f"{contact['overlap_without']:.3g} m²)"
-    if not contact["analysed"]:  # the mixed formulation
-        return [overlap + ", and contact does not yet take the mixed formulation"]
     return [overlap + f": 'pacto analyse {path} --contact' sweeps the pressure up to it with "
                       f"them in contact"]
 
