@@ -108,36 +108,37 @@ class SelfContact:
         self.names, self.maxdist = tuple(names), float(maxdist)
         self.intorder = int(intorder or INTORDER[mesh.dim])
         self.stiffness = float(stiffness)
-        self.cb = ContactBoundary(region, region)
-        X = CoefficientFunction((x, y, z)[:mesh.dim])
         shift = displacement or (lambda w: w)  # the displacement of fes's functions
-        u = shift(fes.TrialFunction())
-        gap = (X + u - X.Other() - u.Other()) * self.cb.normal
+        self._full = GridFunction(fes)  # the state the pairs are sought at (update)
+        self._moved = shift(self._full)  # its displacement: where the walls are
+        ufes = self._moved.space  # the displacement's space: the measures take its vectors
+        X = CoefficientFunction((x, y, z)[:mesh.dim])
         # only surfaces that face each other in the reference configuration: normals more
         # than 120° apart (two walls meeting at a corner are not in contact), and the other
         # point in front of this one, not behind it (the two sides of a thin wall)
         N = specialcf.normal(mesh.dim) if normal is None else normal
         facing = (IfPos(-(N * N.Other()) - FACING, 1.0, 0.0)
                   * IfPos((X.Other() - X) * N + 1e-6 * self.maxdist, 1.0, 0.0))
-        self.cb.AddEnergy(facing * IfPos(gap, (0.5 * thickness * self.stiffness) * gap * gap, 0))
-        self._state = GridFunction(fes)
-        self._moved = shift(self._state)  # the state's displacement: where the walls are
-        # the measures, each its own ContactBoundary and form (energies: t ∫ [g > 0] and
-        # t k ∫ max(g, 0) over both walls)
-        self._probes = []
-        for density in (lambda g: IfPos(g, 0.5 * thickness, 0),
-                        lambda g: IfPos(g, thickness * self.stiffness * g, 0)):
+
+        def contact(density, u):  # a ContactBoundary with the energy density(gap) on Γc
             cb = ContactBoundary(region, region)
-            g = (X + u - X.Other() - u.Other()) * cb.normal
-            cb.AddEnergy(facing * density(g))
-            self._probes.append((cb, BilinearForm(fes)))
-        # the nodal forces: the contact energy alone, on its own ContactBoundary and form
-        self._forces = ContactBoundary(region, region)
-        g = (X + u - X.Other() - u.Other()) * self._forces.normal
-        self._forces.AddEnergy(facing * IfPos(g, (0.5 * thickness * self.stiffness) * g * g, 0))
-        self._force_form = BilinearForm(fes)
+            cb.AddEnergy(facing * density((X + u - X.Other() - u.Other()) * cb.normal))
+            return cb
+
+        half_k = 0.5 * thickness * self.stiffness
+        self.cb = contact(lambda g: IfPos(g, half_k * g * g, 0), shift(fes.TrialFunction()))
+        # the measures on the displacement alone, each its own ContactBoundary and form
+        # (energies: t ∫ [g > 0] and t k ∫ max(g, 0) over both walls; the contact energy,
+        # whose gradient is the nodal forces)
+        w = ufes.TrialFunction()
+        self._state = GridFunction(ufes)
+        self._probes = [(contact(density, w), BilinearForm(ufes))
+                        for density in (lambda g: IfPos(g, 0.5 * thickness, 0),
+                                        lambda g: IfPos(g, thickness * self.stiffness * g, 0))]
+        self._forces = contact(lambda g: IfPos(g, half_k * g * g, 0), w)
+        self._force_form = BilinearForm(ufes)
         self._thickness = float(thickness)
-        self._vertices, self._dofs, self._shares = _vertex_shares(fes, region)
+        self._vertices, self._dofs, self._shares = _vertex_shares(ufes, region)
 
     @classmethod
     def on_walls(cls, fes, names, *, modulus: float, penalty: float, reach: float,
@@ -152,7 +153,8 @@ class SelfContact:
                    displacement=displacement)
 
     def measure(self, vec) -> tuple[float, float, float]:
-        """``(area, force, pressure)`` of the contact at the state ``vec``: the area of either
+        """``(area, force, pressure)`` of the contact at the displacement ``vec`` (a vector of
+        the displacement's space, as the measures below): the area of either
         wall where they overlap (in 2D the length times the thickness), the normal force
         between them, ``2 k ∫ max(g, 0)`` over one wall (times the thickness in 2D), and the
         largest contact pressure, the largest of :meth:`pressures` (0 without contact)."""
@@ -160,27 +162,27 @@ class SelfContact:
         return out[0], out[1], float(self._pressures().max(initial=0.0))
 
     def overlap(self, vec) -> float:
-        """The area of either wall where the walls overlap at the state ``vec`` (in 2D the
+        """The area of either wall where the walls overlap at the displacement ``vec`` (in 2D the
         length times the thickness): :meth:`measure`'s first figure, one pairing."""
         return self._probe(vec, 0)
 
     def _probe(self, vec, k: int) -> float:
-        """The ``k``-th measure's energy at the state ``vec``, paired there."""
+        """The ``k``-th measure's energy at the displacement ``vec``, paired there."""
         self._state.vec.data = vec
         cb, form = self._probes[k]
-        cb.Update(self._moved, form, intorder=self.intorder, maxdist=self.maxdist)
+        cb.Update(self._state, form, intorder=self.intorder, maxdist=self.maxdist)
         return float(form.Energy(self._state.vec))
 
     def pressures(self, vec) -> tuple[np.ndarray, np.ndarray]:
-        """``(points, p)`` at the state ``vec``: the reference positions of Γc's vertices
+        """``(points, p)`` at the displacement ``vec``: the reference positions of Γc's vertices
         (an array ``(n, dim)``) and the contact pressure at each, the hat-weighted mean of
         ``2 k max(g, 0)`` around it (see the module; 0 where the walls do not touch)."""
         self._state.vec.data = vec
         return self._vertices.copy(), self._pressures()
 
     def _pressures(self) -> np.ndarray:
-        """The contact pressure at Γc's vertices at the state ``self._state``."""
-        self._forces.Update(self._moved, self._force_form, intorder=self.intorder,
+        """The contact pressure at Γc's vertices at the displacement ``self._state``."""
+        self._forces.Update(self._state, self._force_form, intorder=self.intorder,
                             maxdist=self.maxdist)
         f = self._state.vec.CreateVector()
         self._force_form.Apply(self._state.vec, f)
@@ -190,7 +192,7 @@ class SelfContact:
     def update(self, form, vec) -> None:
         """Pair the candidate surface with itself at the state ``vec`` (a vector of ``fes``)
         and register the contact energy with the BilinearForm ``form``."""
-        self._state.vec.data = vec
+        self._full.vec.data = vec
         self.cb.Update(self._moved, form, intorder=self.intorder, maxdist=self.maxdist)
 
 

@@ -267,7 +267,7 @@ class PartAnalysis:
         along = tuple(float(np.dot(p.direction, vec)) for p, vec in zip(self.ports, vectors))
         u_v = np.asarray(self.mech.u(self._vertices)).reshape(-1, self.mesh.dim)
         contact = ((None,) * 3 if self.mech.contact is None
-                   else self.mech.contact.measure(x))  # area, force, largest pressure
+                   else self.mech.contact.measure(self.mech.u.vec))  # area, force, pressure
         return SweepPoint(pressure, float(delta_form.InnerProduct(x)),
                           float(np.max(np.linalg.norm(u_v, axis=1))),
                           float(np.min(self._J(self._qpoints))), int(iterations), True, 1.0,

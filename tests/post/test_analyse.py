@@ -163,21 +163,25 @@ def test_contact_changes_nothing_where_no_walls_touch(edge_run, tmp_path):
                                      for k in ("darcy", "fixed", "follower")}
 
 
-def test_contact_is_reported_where_walls_touch(tmp_path):
+@pytest.mark.parametrize("model", [[], ["--model", "neohookean", "--set", "nu=0.49"]],
+                         ids=["linear", "mixed"])
+def test_contact_is_reported_where_walls_touch(tmp_path, model):
     """``--contact`` on a part whose walls meet: tests/post/cases/slotted_block.py as built
     (a slotted block squeezed by a pressure on its top and bottom, 264 elements), at 500,
     1500 and 3000 Pa.  The slot is open at 500 Pa and shut at 1500 Pa: analysis.json records
     per pressure and kind the contact's area, force and largest pressure (0 where the walls do
     not touch, growing with the load where they do), and per kind the first swept pressure
     with contact and the one before it; report.md tabulates them; deformed.png marks the
-    walls' vertices in contact in red."""
+    walls' vertices in contact in red.  Also near-incompressible (ν = 0.49), where the part is
+    analysed with the mixed formulation."""
     from matplotlib.image import imread
 
     out = tmp_path / "slot"
     assert main(["analyse", str(Path(__file__).parent / "cases" / "slotted_block.py"),
                  "--as-built", "--pressures", "500,1500,3000", "--contact", "--out", str(out),
-                 "--quiet"]) == 0
+                 "--quiet", *model]) == 0
     data = json.loads((out / "analysis.json").read_text())
+    assert model == [] or data["settings"]["formulation"] == "mixed"
     kinds = data["settings"]["kinds"]
     assert kinds == ["fixed", "follower"] and {"contact", "first_contact"} <= set(
         data["definitions"])
