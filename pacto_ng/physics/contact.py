@@ -142,7 +142,8 @@ class SelfContact:
 
     @classmethod
     def on_walls(cls, fes, names, *, modulus: float, penalty: float, reach: float,
-                 thickness: float = 1.0, displacement=None) -> "SelfContact":
+                 thickness: float = 1.0, displacement=None,
+                 intorder: int | None = None) -> "SelfContact":
         """The walls ``names`` of a solid in self-contact: the stiffness ``penalty modulus /
         h`` and pairs sought within ``reach h`` (``h`` the mesh's :func:`element_scale`), the
         walls' outward normals (:func:`~pacto_ng.physics.walls.outward_normal`)."""
@@ -150,7 +151,7 @@ class SelfContact:
         h = element_scale(mesh)
         return cls(fes, names, penalty * float(modulus) / h, reach * h,
                    normal=outward_normal(mesh, "|".join(names)), thickness=thickness,
-                   displacement=displacement)
+                   displacement=displacement, intorder=intorder)
 
     def measure(self, vec) -> tuple[float, float, float]:
         """``(area, force, pressure)`` of the contact at the displacement ``vec`` (a vector of
@@ -165,6 +166,12 @@ class SelfContact:
         """The area of either wall where the walls overlap at the displacement ``vec`` (in 2D the
         length times the thickness): :meth:`measure`'s first figure, one pairing."""
         return self._probe(vec, 0)
+
+    def depth(self, vec) -> float:
+        """The mean depth over which the walls overlap at the displacement ``vec`` (0 where
+        they do not): ``∫ max(g, 0) / ∫ [g > 0]`` over the walls, two pairings."""
+        area = self._probe(vec, 0)
+        return self._probe(vec, 1) / (2.0 * self.stiffness * area) if area > 0 else 0.0
 
     def _probe(self, vec, k: int) -> float:
         """The ``k``-th measure's energy at the displacement ``vec``, paired there."""

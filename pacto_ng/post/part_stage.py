@@ -167,23 +167,43 @@ def _solved(part: Part, problem, loading: tuple, contact: tuple = ()):
     return ana, ana.solve(load)
 
 
+#: the quadrature order of the walls' probe (:func:`walls_overlap`) on a 3D part's faces: one
+#: point per face.  On the slotted slab squeezed shut (tests/contact_parts.py, 6098
+#: tetrahedra) it found an overlap of 0.0875 m² in 1.0 s against 0.0836 m² in 11.4 s at the
+#: contact's order 6; order 2 reported spurious overlaps of 1e-6 m² on the undeformed
+#: pneunet-3d part, orders 1 and 6 none (2026-12-06)
+PROBE_INTORDER_3D = 1
+#: ... and the walls of a 3D part are said to pass through each other where they overlap
+#: deeper, on the mean, than this share of the part's largest displacement: pa-inverter-3d's
+#: part, whose walls touch as made, overlaps 3.2e-6 m² to 0.11 % of its motion at its load
+#: and at three times it (the same area, pressed in with the load: not walls that close);
+#: the squeezed slotted slab (tests/contact_parts.py, 1213 tetrahedra, 3 kPa) to 54 % of it
+PROBE_DEPTH_3D = 0.01
+
+
 def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
-    """``(entry, (PartAnalysis, SweepPoint))``: where a 2D part's walls pass through each
-    other at the solved state (:func:`walls_overlap`), the part solved again with its walls
+    """``(entry, (PartAnalysis, SweepPoint))``: where the part's walls pass through each
+    other at the solved state (:func:`walls_overlap`), a 2D part solved again with its walls
     in self-contact, whose figures are then the part's (``entry``: the overlap and Δ without
-    contact, and whether the contact's solve converged).  ``entry`` is None where the walls
-    do not meet, and
-    for a 3D part, whose walls are not probed: one pairing of pneunet-3d's part took 36 s at
-    the contact's quadrature (2026-12-06), a minute's run's half (``pacto analyse DIR
-    --contact`` analyses a 3D part with contact)."""
+    contact, whether the part was analysed in contact and whether that solve converged).  A
+    3D part is probed and not analysed again: contact costs 20-40 times a Newton iteration
+    there, minutes to an hour on a built-in part, so the last line points to ``pacto analyse
+    DIR --contact``.  ``entry`` is None where the walls do not meet."""
     ana, point = solved
-    walls = solid_boundaries(part.mesh)
-    overlap = walls_overlap(ana, walls) if point.converged and part.dim == 2 else 0.0
+    walls, u = solid_boundaries(part.mesh), ana.mech.u.vec
+    probe = walls_probe(ana, walls) if point.converged else None
+    overlap = probe.overlap(u) if probe is not None else 0.0
+    if part.dim == 3 and overlap > 0.0 and probe.depth(u) <= PROBE_DEPTH_3D * point.max_u:
+        overlap = 0.0  # walls that touch as made, pressed a little into each other
     if not overlap > 0.0:
         return None, solved
-    again = _solved(part, problem, loading, contact=walls)
     entry = {"overlap_without": overlap, "output_displacement_without": _num(point.delta),
-             "analysed": True, "converged": bool(again[1].converged)}
+             "analysed": part.dim == 2}
+    if part.dim == 3:
+        say(f"its walls pass through each other there (overlap {overlap:.3g} m²)")
+        return entry, solved
+    again = _solved(part, problem, loading, contact=walls)
+    entry["converged"] = bool(again[1].converged)
     say(f"its walls pass through each other there (overlap {overlap:.3g} m²): analysed again "
         f"with them in contact" + ("" if again[1].converged else ": no equilibrium"))
     return entry, again if again[1].converged else solved
@@ -193,11 +213,17 @@ def walls_overlap(ana: PartAnalysis, walls) -> float:
     """The area (in 2D length times thickness) over which the part's ``walls`` (the
     boundaries of its solid) overlap in the analysis ``ana``'s current state: one pairing of
     them with themselves (:meth:`~pacto_ng.physics.contact.SelfContact.overlap`; the
-    stiffness plays no part in it)."""
-    u = ana.mech.u  # the displacement (of the mixed state too)
-    probe = SelfContact.on_walls(u.space, walls, modulus=1.0, penalty=1.0, reach=CONTACT_REACH,
-                                 thickness=ana.thickness)
-    return probe.overlap(u.vec)
+    stiffness plays no part in it), on a 3D part at :data:`PROBE_INTORDER_3D`."""
+    return walls_probe(ana, walls).overlap(ana.mech.u.vec)
+
+
+def walls_probe(ana: PartAnalysis, walls) -> SelfContact:
+    """The walls' self-contact that probes them (no stiffness of its own: 1 / h), on the
+    displacement's space (of the mixed state too), on a 3D part at :data:`PROBE_INTORDER_3D`."""
+    space = ana.mech.u.space
+    return SelfContact.on_walls(space, walls, modulus=1.0, penalty=1.0, reach=CONTACT_REACH,
+                                thickness=ana.thickness,
+                                intorder=PROBE_INTORDER_3D if space.mesh.dim == 3 else None)
 
 
 def _overlap_warning(contact, path) -> list[str]:
@@ -206,6 +232,9 @@ def _overlap_warning(contact, path) -> list[str]:
         return []
     overlap = f"its walls pass through each other in this analysis (overlap " \
               f"{contact['overlap_without']:.3g} m²)"
+    if not contact["analysed"]:
+        return [overlap + f", not analysed in contact (a 3D part): 'pacto analyse {path} "
+                          f"--contact' does, over minutes to an hour"]
     return [overlap + f": 'pacto analyse {path} --contact' sweeps the pressure up to it with "
                       f"them in contact"]
 
