@@ -3,9 +3,10 @@
 Every rank computes the summary's figures together (reductions over the ranks); rank 0 writes
 history.csv, summary.json and design.vtu: the design variables ``x`` and the densities ρ̄
 gathered per element, and the displacement ``u`` and the pressure ``p`` at the vertices, onto
-the serial mesh it meshed.  Not yet written on a distributed mesh: the strain and stress fields
-and the pictures of :func:`pacto_ng.outputs.write_outputs` (``pacto evaluate RUN`` of the run's
-checkpoint, serially, writes them).
+the serial mesh it meshed, and design.png and convergence.png drawn on it.  Not yet written on
+a distributed mesh: the strain and stress fields, pressure.png and materials.png of
+:func:`pacto_ng.outputs.write_outputs` (``pacto evaluate RUN`` of the run's checkpoint,
+serially, writes them).
 """
 from __future__ import annotations
 
@@ -40,8 +41,20 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
         return summ
     write_history(path / "history.csv", history, problem)
     _write_vtu(path / "design.vtu", numbering, {"rho_bar": rho, "x": xs}, points)
+    _pictures(path, numbering, rho, history, problem, summ["volume_fraction"])
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ
+
+
+def _pictures(path: Path, numbering, rho, history: list, problem, volume: float) -> None:
+    """design.png and convergence.png, drawn by rank 0 on the serial mesh (the serial run's
+    pictures, :func:`pacto_ng.outputs.write_outputs`, but for the symmetry line's mirror)."""
+    from .post.plots import convergence_png, design_png  # matplotlib and pyvista: loaded here
+
+    design_png(path / "design.png", numbering.serial_points, numbering.serial_cells, rho,
+               f"{problem.case.name} - {problem.params.model}, volume {volume:.3f}")
+    if history:
+        convergence_png(path / "convergence.png", history, problem.objective)
 
 
 def _vertex_field(numbering, mesh, gf, comps: int) -> np.ndarray | None:
@@ -75,7 +88,10 @@ def _write_vtu(target: Path, numbering, fields: dict, points: dict) -> None:
     kind = {(3, 4): "tetra", (3, 8): "hexahedron", (2, 3): "triangle",
             (2, 4): "quad"}[(numbering.serial_points.shape[1], cells.shape[1])]
     data = {name: [arr] for name, arr in fields.items() if arr is not None}
-    mesh = meshio.Mesh(numbering.serial_points, [(kind, cells)], cell_data=data,
+    xyz = numbering.serial_points
+    if xyz.shape[1] == 2:  # VTU's points are 3D
+        xyz = np.c_[xyz, np.zeros(len(xyz))]
+    mesh = meshio.Mesh(xyz, [(kind, cells)], cell_data=data,
                        point_data={name: arr for name, arr in points.items()})
     with atomic_path(target) as tmp:
         meshio.write(str(tmp), mesh, file_format="vtu")

@@ -15,6 +15,7 @@ import numpy as np
 from ..files import atomic_path
 from .domain import Line, symmetry_line
 from .domain import mirror as reflect
+from .grid import arrays_to_pyvista, mesh_to_pyvista
 from .plots3d import design_picture, pressure_picture
 
 
@@ -80,15 +81,34 @@ def density_png(path, problem, field_name: str | None = None, title: str | None 
                 mirror=True):
     rho = problem.design_density() if field_name is None else np.asarray(problem.values[field_name])
     if problem.mesh.dim == 3:
-        design_picture(path, problem.mesh, rho, title=title or _title_3d(problem))
+        design_picture(path, mesh_to_pyvista(problem.mesh), rho,
+                       title=title or _title_3d(problem))
         return
+    polys, rho, line = picture_polygons(problem.mesh, rho, mirror)
+    density_polygons_png(path, polys, rho, title or (
+        f"{problem.case.name} — {problem.params.model}, ρ̄ (volume "
+        f"{problem.volume_fraction():.3f})"
+        + ("" if line is None else ", mirrored about the symmetry line")))
+
+
+def design_png(path, points: np.ndarray, cells: np.ndarray, rho, title: str) -> None:
+    """design.png of a mesh given as arrays (the serial mesh a distributed run's rank 0
+    writes, :class:`~pacto_ng.parallel.Numbering`): ``points`` (n, d), ``cells`` (one kind,
+    0-based vertex numbers per element) and ``rho`` one value per cell."""
+    if points.shape[1] == 3:
+        design_picture(path, arrays_to_pyvista(points, cells), rho, title=title)
+    else:
+        density_polygons_png(path, list(points[cells]), np.asarray(rho), title)
+
+
+def density_polygons_png(path, polys, rho, title: str) -> None:
+    """The densities ``rho`` of the element polygons ``polys`` (2D), grey from 0 to 1."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
 
-    polys, rho, line = picture_polygons(problem.mesh, rho, mirror)
     allpts = np.concatenate(polys)
     fig, ax = plt.subplots(figsize=_size(allpts))
     pc = PolyCollection(polys, array=rho, cmap="gray_r", edgecolors="face", linewidths=0.1)
@@ -97,9 +117,7 @@ def density_png(path, problem, field_name: str | None = None, title: str | None 
     ax.set_xlim(allpts[:, 0].min(), allpts[:, 0].max())
     ax.set_ylim(allpts[:, 1].min(), allpts[:, 1].max())
     ax.set_aspect("equal")
-    ax.set_title(title or f"{problem.case.name} — {problem.params.model}, ρ̄ "
-                 f"(volume {problem.volume_fraction():.3f})"
-                 + ("" if line is None else ", mirrored about the symmetry line"))
+    ax.set_title(title)
     fig.colorbar(pc, ax=ax, fraction=0.03)
     fig.tight_layout()
     with atomic_path(path) as tmp:

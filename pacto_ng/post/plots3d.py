@@ -135,10 +135,10 @@ def _screenshot(plotter, path):
     plotter.close()
 
 
-def design_picture(path, mesh, rho, title: str = "") -> None:
+def design_picture(path, grid, rho, title: str = "") -> None:
     """design.png of a 3D design: the ρ̄ = 0.5 iso-surface and the mid-depth cut coloured by
-    ρ̄ (module docstring); ``rho`` one value per element in NGSolve's order."""
-    grid = mesh_to_pyvista(mesh)
+    ρ̄ (module docstring); ``grid`` the mesh as a pyvista grid
+    (:func:`~pacto_ng.post.grid.mesh_to_pyvista`), ``rho`` one value per cell."""
     rho = np.clip(np.asarray(rho, dtype=float), 0.0, 1.0)
     grid.point_data["rho_nodal"] = nodal_field(grid, rho)
     grid.cell_data["rho_bar"] = rho  # the cut shows the elements' own values, not an average

@@ -105,6 +105,12 @@ def test_mpi_run_and_resume_across_rank_counts(tmp_path):
     u_ref = ref_vtu.point_data["u"]
     assert np.abs(got.point_data["u"] - u_ref[at]).max() <= 1e-8 * np.abs(u_ref).max()
     assert len(got.cell_data["rho_bar"][0]) == summary["mesh"]["elements"]
+    # the pictures, drawn by rank 0 on the serial mesh
+    from matplotlib.image import imread
+
+    for name in ("design.png", "convergence.png"):
+        rgb = imread(dist / name)[..., :3]
+        assert rgb.shape[0] > 200 and rgb.std() > 0.05, name  # a picture, not a blank
     x_ref = np.load(serial / "checkpoint.npz")["x"]
     for first, then, name in ((3, 0, "d2s"), (0, 3, "s2d")):
         out = tmp_path / name
