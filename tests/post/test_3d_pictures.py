@@ -4,6 +4,7 @@ as a coordinate), and the pictures are drawn (off-screen pyvista)."""
 import numpy as np
 import pytest
 
+from pacto_ng.post.grid import mesh_to_pyvista
 from pacto_ng.post.plots3d import (WINDOW, coordinate_text, cut_title, deformed_picture,
                                    design_picture, plotter, pressure_picture, render,
                                    rounded_bounds, show_axes)
@@ -52,8 +53,6 @@ def _picture(path):
 
 
 def test_a_cut_through_a_box_around_zero_is_titled_z_0(box_mesh):
-    from pacto_ng.post.grid import mesh_to_pyvista
-
     grid = mesh_to_pyvista(box_mesh)
     grid.points[:, 2] += 5.384e-08  # the box's mid-depth: round-off
     assert cut_title(grid) == "cut at z = 0 m"
@@ -82,7 +81,7 @@ def test_the_design_pressure_and_deformed_pictures_are_drawn(box_mesh, tmp_path)
 
     c = _centroids(box_mesh)
     rho = np.where((c[:, 0] < 0.02) | (c[:, 1] < 0.005), 1.0, 0.0)
-    design_picture(tmp_path / "design.png", box_mesh, rho, title="a box")
+    design_picture(tmp_path / "design.png", mesh_to_pyvista(box_mesh), rho, title="a box")
     x = np.asarray(box_mesh.ngmesh.Coordinates())[:, 0]
     pressure_picture(tmp_path / "pressure.png", box_mesh, 1.0 - x / 0.04, rho, title="a box")
     u = ngsolve.CoefficientFunction((0, 0.05 * ngsolve.x, 0))
