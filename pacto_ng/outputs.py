@@ -249,6 +249,20 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
     return summ
 
 
+def measure_fields(problem: Problem) -> dict[str, np.ndarray]:
+    """The model's strain and stress measures (:func:`~pacto_ng.measures.strain_stress_measures`)
+    as element means, one array per component (``stress_xy``, ...), over this rank's
+    elements."""
+    from ngsolve import GridFunction
+
+    out, gf = {}, GridFunction(problem.mech.l2)
+    for name, cf in strain_stress_measures(problem).items():
+        for (i, j), comp in tensor_components(problem.mesh.dim):
+            gf.Set(cf[i, j])  # element mean (P0 projection)
+            out[f"{name}_{comp}"] = gf.vec.FV().NumPy().copy()
+    return out
+
+
 def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
     """``stem``.vtu (atomically): x, ρ̄, u (and p) and the strain and stress measures."""
     from ngsolve import GridFunction, VTKOutput
@@ -277,11 +291,8 @@ def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
         _finite("p", pg.vec.FV().NumPy())
         coefs.append(pg)
         names.append("p")
-    for name, cf in strain_stress_measures(problem).items():
-        for (i, j), comp in tensor_components(problem.mesh.dim):
-            gf = GridFunction(mech.l2)
-            gf.Set(cf[i, j])  # element mean (P0 projection)
-            add_l2(f"{name}_{comp}", gf.vec.FV().NumPy().copy())
+    for name, arr in measure_fields(problem).items():
+        add_l2(name, arr)
     target = Path(stem).with_name(Path(stem).name + ".vtu")
     with atomic_path(target) as tmp:
         VTKOutput(problem.mesh, coefs=coefs, names=names, filename=str(tmp.with_suffix("")),

@@ -3,8 +3,9 @@
 Every rank computes the summary's figures together (reductions over the ranks); rank 0 writes
 history.csv, summary.json and design.vtu: the design variables ``x`` and the densities ρ̄
 gathered per element, and the displacement ``u`` and the pressure ``p`` at the vertices, onto
-the serial mesh it meshed, and design.png and convergence.png drawn on it.  Not yet written on
-a distributed mesh: the strain and stress fields, pressure.png and materials.png of
+the serial mesh it meshed, with the model's strain and stress measures per element
+(:func:`pacto_ng.outputs.measure_fields`), and design.png and convergence.png drawn on it.
+Not yet written on a distributed mesh: pressure.png and materials.png of
 :func:`pacto_ng.outputs.write_outputs` (``pacto evaluate RUN`` of the run's checkpoint,
 serially, writes them).
 """
@@ -16,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .files import atomic_path, atomic_write_text
-from .outputs import run_summary, write_history
+from .outputs import measure_fields, run_summary, write_history
 
 
 def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list, result,
@@ -33,6 +34,8 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
     xs = None
     if problem.n_design_fields == 1:
         xs = numbering.gather(problem.field.full(problem.design_numbering.local(x)))
+    cells = {"rho_bar": rho, "x": xs}
+    cells.update({name: numbering.gather(arr) for name, arr in measure_fields(problem).items()})
     mech, points = problem.mech, {}
     points["u"] = _vertex_field(numbering, problem.mesh, mech.u, problem.mesh.dim)
     if problem.pressure_block is not None:
@@ -40,7 +43,7 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
     if not write:
         return summ
     write_history(path / "history.csv", history, problem)
-    _write_vtu(path / "design.vtu", numbering, {"rho_bar": rho, "x": xs}, points)
+    _write_vtu(path / "design.vtu", numbering, cells, points)
     _pictures(path, numbering, rho, history, problem, summ["volume_fraction"])
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ

@@ -87,7 +87,7 @@ RUN = ("cantilever-3d", "--maxh", "0.06", "--quiet")
 
 def test_mpi_run_and_resume_across_rank_counts(tmp_path):
     """``mpirun -n 3 pacto run`` (two ranks holding elements) gives the serial run's objective
-    history to 1e-8, and its design.vtu the serial run's displacement; a run of 3 iterations on 3 ranks resumed serially, and one of 3 serial
+    history to 1e-8, and its design.vtu the serial run's displacement and element fields; a run of 3 iterations on 3 ranks resumed serially, and one of 3 serial
     iterations resumed on 3 ranks, end with the uninterrupted run's design."""
     serial, dist = tmp_path / "serial", tmp_path / "dist"
     pacto(0, "run", *RUN, "--iterations", "6", "--out", serial)
@@ -105,6 +105,15 @@ def test_mpi_run_and_resume_across_rank_counts(tmp_path):
     u_ref = ref_vtu.point_data["u"]
     assert np.abs(got.point_data["u"] - u_ref[at]).max() <= 1e-8 * np.abs(u_ref).max()
     assert len(got.cell_data["rho_bar"][0]) == summary["mesh"]["elements"]
+    # the element fields (ρ̄, x, the strain and stress measures), the serial run's: its
+    # design.vtu (NGSolve's VTKOutput at order 1) holds them at each cell's own points
+    first = ref_vtu.cells[0].data[:, 0]
+    assert len(first) == len(got.cells[0].data)
+    names = sorted(got.cell_data)
+    assert {"rho_bar", "x", "stress_xy", "strain_zz"} <= set(names)
+    for name in names:
+        want = np.ravel(ref_vtu.point_data[name][first])
+        assert np.abs(np.ravel(got.cell_data[name][0]) - want).max() <= 1e-8 * np.abs(want).max()
     # the pictures, drawn by rank 0 on the serial mesh
     from matplotlib.image import imread
 
