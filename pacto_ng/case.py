@@ -26,7 +26,7 @@ from typing import Callable
 from .builders import Builder, standard_chain
 from .derive import MECHANISM_RATIO, derive_settings, domain_size
 from .errors import InputError
-from .geometry import bounding_sides
+from .geometry_kinds import bounding_sides
 from .meshing import mesh_geometry
 from .parallel import DesignNumbering, distribute
 from .params import Parameters

@@ -11,8 +11,8 @@ params.json is never derived.
 """
 from __future__ import annotations
 
-from .geometry import bounding_sides
-from .meshing import derived_maxh, element_size
+from .geometry_kinds import kind_of
+from .meshing import derived_maxh
 from .params import Parameters
 
 
@@ -134,21 +134,25 @@ def derive_settings(case, params: Parameters) -> Parameters:
     needs_geometry = ((params.unset("maxh") and params.nelx == 0)
                       or (params.unset("filter_radius") and not case.analysis_only)
                       or (drains and params.unset("delta_s")))
-    geometry = case.make_geometry(params) if needs_geometry else None
+    kind = kind_of(case.make_geometry(params)) if needs_geometry else None
     if params.unset("maxh") and params.nelx == 0:
-        params = _derive_maxh(geometry, params)
+        params = _derive_maxh(kind, params)
     if case.analysis_only:
         return params
     if params.unset("filter_radius"):
-        params = _derive_filter(geometry, params)
+        params = _derive_filter(kind, params)
     if drains and params.unset("delta_s"):
-        params = _derive_drainage(geometry, params)
+        params = _derive_drainage(kind, params)
     return _derive_continuation(params)
 
 
-def _derive_drainage(geometry, params: Parameters) -> Parameters:
-    h = element_size(geometry, maxh=params.maxh, nelx=params.nelx, nely=params.nely,
-                     nelz=params.nelz)
+def _element_size(kind, params: Parameters) -> float | None:
+    """The element size the mesh options of ``params`` give the geometry's ``kind``."""
+    return kind.element_size(params.maxh, (params.nelx, params.nely, params.nelz))
+
+
+def _derive_drainage(kind, params: Parameters) -> Parameters:
+    h = _element_size(kind, params)
     if h is None:
         return params
     return params.derive({"delta_s": float(f"{DRAIN_ELEMENTS * h:.4g}")},
@@ -173,13 +177,12 @@ def _derive_continuation(params: Parameters) -> Parameters:
     return params.derive({**values, **more}, why)
 
 
-def _derive_filter(geometry, params: Parameters) -> Parameters:
-    h = element_size(geometry, maxh=params.maxh, nelx=params.nelx, nely=params.nely,
-                     nelz=params.nelz)
+def _derive_filter(kind, params: Parameters) -> Parameters:
+    h = _element_size(kind, params)
     if h is None:
         return params
     radius, how = FILTER_ELEMENTS * h, f"derived: {FILTER_ELEMENTS:g} element sizes of {h:.3g} m"
-    sides = bounding_sides(geometry) if "maxh" in params.derived else None
+    sides = kind.sides if "maxh" in params.derived else None
     if sides and FILTER_SHARE * min(sides) > radius:
         radius = FILTER_SHARE * min(sides)
         how = f"derived: {FILTER_SHARE:.3g} of the smallest side {min(sides):.3g} m"
@@ -187,9 +190,9 @@ def _derive_filter(geometry, params: Parameters) -> Parameters:
                          inputs=("maxh", "nelx", "nely", "nelz"))
 
 
-def _derive_maxh(geometry, params: Parameters) -> Parameters:
+def _derive_maxh(kind, params: Parameters) -> Parameters:
     given_radius = params.filter_radius if "filter_radius" in params.given else 0.0
-    found = derived_maxh(geometry, filter_radius=given_radius)
+    found = derived_maxh(kind, filter_radius=given_radius)
     if found is None:
         return params
     maxh, how = found

@@ -20,8 +20,9 @@ The dimension comes from the geometry.  A case's ``geometry(params)`` returns on
 * a **mesh file** (Gmsh ``.msh`` with physical groups as names, or Netgen ``.vol``; 2D or 3D),
   or an ``ngsolve.Mesh``: used as it is (``maxh`` does not apply).
 
-This module tells these kinds apart and reads CAD and mesh files (:func:`load_cad`,
-:func:`load_mesh`); :func:`pacto_ng.meshing.mesh_geometry` turns any of them into a
+This module reads CAD and mesh files (:func:`load_cad`, :func:`load_mesh`); each kind knows
+its size and meshes itself (:mod:`pacto_ng.geometry_kinds`), and
+:func:`pacto_ng.meshing.mesh_geometry` turns any of them into a
 :class:`~pacto_ng.mesh.Meshed` domain; the case's set-up then refers to the names, and
 :func:`pacto_ng.setup_names.check_setup_names` says which name is missing and which exist.
 """
@@ -30,9 +31,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .box import Box
 from .errors import InputError
-from .mesh import Layout
 
 CAD_SUFFIXES = (".step", ".stp", ".brep", ".iges", ".igs")
 MESH_SUFFIXES = (".msh", ".vol", ".vol.gz")
@@ -97,24 +96,3 @@ def is_occ_shape(obj) -> bool:
 def is_solid(shape) -> bool:
     """A 3D shape: it holds solids (a 2D one holds faces only)."""
     return len(shape.solids) > 0
-
-
-def extent(geometry) -> float | None:
-    """The smallest side of the geometry's bounding box (None for a mesh or a mesh file)."""
-    sides = bounding_sides(geometry)
-    return None if sides is None else min(sides)
-
-
-def bounding_sides(geometry) -> tuple[float, ...] | None:
-    """The sides of the bounding box of a geometry that Netgen meshes (two in 2D, three in
-    3D), None for a mesh or a mesh file."""
-    if isinstance(geometry, (str, os.PathLike)) and str(geometry).lower().endswith(CAD_SUFFIXES):
-        geometry = load_cad(geometry)
-    if isinstance(geometry, Layout):
-        return (float(geometry.width), float(geometry.height))
-    if isinstance(geometry, Box):
-        return tuple(float(v) for v in geometry.size)
-    if is_occ_shape(geometry):
-        lo, hi = geometry.bounding_box
-        return tuple(float(hi[a] - lo[a]) for a in range(3 if is_solid(geometry) else 2))
-    return None

@@ -12,7 +12,7 @@ import numpy as np
 
 from .case import build_problem
 from .core import check_gradient
-from .geometry import extent
+from .geometry_kinds import extent
 
 
 #: the projection's β of a robust chain's check (:func:`check_case`)

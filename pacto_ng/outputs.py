@@ -229,24 +229,37 @@ def write_history(target: Path, history: list, problem: Problem) -> None:
 def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, result,
                   wall: float) -> dict:
     """Write the run's results into ``path``; returns the summary (summary.json)."""
-    # the post package loads matplotlib and pyvista at its import (0.5 s): only here
-    from .post.plots import convergence_png, density_png, materials_png, pressure_png
-
     summ = summary_dict(problem, history, result, wall)
     for key in ("objective", "volume_fraction"):
         if summ[key] is not None and not np.isfinite(summ[key]):
             raise RuntimeError(f"{key} is not finite: nothing written")
     write_history(path / "history.csv", history, problem)
     write_vtu(path / "design", problem, x)
-    density_png(path / "design.png", problem)  # the pictures are written atomically too
-    if problem.pressure_block is not None:
-        pressure_png(path / "pressure.png", problem, leak=summ["leak"])
-    if problem.n_design_fields == 2 and problem.mesh.dim == 2:
-        materials_png(path / "materials.png", problem)
-    if history:
-        convergence_png(path / "convergence.png", history, problem.objective)
+    write_pictures(path, problem, history, leak=summ.get("leak"))
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ
+
+
+def write_pictures(path: Path, problem: Problem, history: list, *, leak=None,
+                   gathered: tuple | None = None) -> None:
+    """design.png, convergence.png, and pressure.png and materials.png where they apply (each
+    written atomically).  ``gathered``: ``(points, cells, rho, title)``, a distributed run's
+    serial mesh and densities on rank 0 (:mod:`pacto_ng.parallel_outputs`), which draws
+    design.png and convergence.png only."""
+    # the post package loads matplotlib and pyvista at its import (0.5 s): only here
+    from .post.plots import (convergence_png, density_png, design_png, materials_png,
+                             pressure_png)
+
+    if gathered is not None:
+        design_png(path / "design.png", *gathered)
+    else:
+        density_png(path / "design.png", problem)
+        if problem.pressure_block is not None:
+            pressure_png(path / "pressure.png", problem, leak=leak)
+        if problem.n_design_fields == 2 and problem.mesh.dim == 2:
+            materials_png(path / "materials.png", problem)
+    if history:
+        convergence_png(path / "convergence.png", history, problem.objective)
 
 
 def measure_fields(problem: Problem) -> dict[str, np.ndarray]:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .files import atomic_path, atomic_write_text
-from .outputs import measure_fields, run_summary, write_history
+from .outputs import measure_fields, run_summary, write_history, write_pictures
 
 
 def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list, result,
@@ -44,20 +44,11 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
         return summ
     write_history(path / "history.csv", history, problem)
     _write_vtu(path / "design.vtu", numbering, cells, points)
-    _pictures(path, numbering, rho, history, problem, summ["volume_fraction"])
+    title = f"{problem.case.name} - {problem.params.model}, volume {summ['volume_fraction']:.3f}"
+    write_pictures(path, problem, history,  # on the serial mesh, not mirrored
+                   gathered=(numbering.serial_points, numbering.serial_cells, rho, title))
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ
-
-
-def _pictures(path: Path, numbering, rho, history: list, problem, volume: float) -> None:
-    """design.png and convergence.png, drawn by rank 0 on the serial mesh (the serial run's
-    pictures, :func:`pacto_ng.outputs.write_outputs`, but for the symmetry line's mirror)."""
-    from .post.plots import convergence_png, design_png  # matplotlib and pyvista: loaded here
-
-    design_png(path / "design.png", numbering.serial_points, numbering.serial_cells, rho,
-               f"{problem.case.name} - {problem.params.model}, volume {volume:.3f}")
-    if history:
-        convergence_png(path / "convergence.png", history, problem.objective)
 
 
 def _vertex_field(numbering, mesh, gf, comps: int) -> np.ndarray | None:

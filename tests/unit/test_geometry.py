@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import pacto_ng as pn
-from pacto_ng.geometry import extent
+from pacto_ng.geometry_kinds import extent
 from pacto_ng.meshing import mesh_geometry
 from pacto_ng.params import InputError
 

@@ -79,7 +79,7 @@ def test_maxh_checks_all_three_axes():
     thin = occ.Box((0, 0, 0), (1, 1, 0.1))
     with pytest.raises(InputError, match="maxh: 0.2 is too coarse for a domain 0.1 across"):
         mesh_geometry(thin, maxh=0.2)
-    assert pn.geometry.extent(thin) == pytest.approx(0.1, rel=1e-5)  # OCC pads its boxes
+    assert pn.geometry_kinds.extent(thin) == pytest.approx(0.1, rel=1e-5)  # OCC pads its boxes
 
 
 def test_a_step_file_and_a_vol_file_load_in_3d(tmp_path):

@@ -26,17 +26,17 @@ def no_meshing(monkeypatch):
     """Meshing must not start: every mesh builder raises MeshingStarted."""
     from netgen import occ
 
-    import pacto_ng.meshing as meshing
+    import pacto_ng.geometry_kinds as kinds
 
     def started(*args, **kwargs):
         raise MeshingStarted
 
     import pacto_ng.studies as studies
 
-    monkeypatch.setattr(meshing, "structured_mesh", started)
-    monkeypatch.setattr(meshing, "netgen_mesh", started)
-    monkeypatch.setattr(meshing, "structured_box", started)  # a Box's hexahedra
-    monkeypatch.setattr(meshing, "netgen_box_mesh", started)
+    monkeypatch.setattr(kinds, "structured_mesh", started)
+    monkeypatch.setattr(kinds, "netgen_mesh", started)
+    monkeypatch.setattr(kinds, "structured_box", started)  # a Box's hexahedra
+    monkeypatch.setattr(kinds, "netgen_box_mesh", started)
     monkeypatch.setattr(studies, "structured_mesh", started)  # the C-beam analysis's mesher
     monkeypatch.setattr(studies, "netgen_mesh", started)
     monkeypatch.setattr(occ, "OCCGeometry", started)

@@ -67,14 +67,14 @@ def test_3d_memory_is_above_2d_at_the_same_dofs():
 def no_meshing(monkeypatch):
     from netgen import occ
 
-    import pacto_ng.meshing as meshing
+    import pacto_ng.geometry_kinds as kinds
 
     def started(*args, **kwargs):
         raise AssertionError("meshing started")
 
     monkeypatch.setattr(occ, "OCCGeometry", started)
-    monkeypatch.setattr(meshing, "netgen_box_mesh", started)
-    monkeypatch.setattr(meshing, "structured_box", started)
+    monkeypatch.setattr(kinds, "netgen_box_mesh", started)
+    monkeypatch.setattr(kinds, "structured_box", started)
 
 
 @pytest.mark.parametrize("geometry, kwargs, words", [
