@@ -62,7 +62,10 @@ Its chain (``pacto run jaw-gripper --show-chain``)::
     Volume               rho_bar_d -> volume_d
     VolumeFraction       rho_bar -> vol_i
     VolumeFraction       rho_bar_d -> vol_d
-    objective: worst_case; constraints (<= 0): volume_d; reported: delta, se, delta_top_jaw, delta_bottom_jaw, delta_e, se_e, delta_top_jaw_e, delta_bottom_jaw_e, delta_d, se_d, delta_top_jaw_d, delta_bottom_jaw_d, objective_e, objective_i, objective_d, vol_i, vol_d
+    objective: worst_case; constraints (<= 0): volume_d; reported: delta, se, delta_top_jaw,
+        delta_bottom_jaw, delta_e, se_e, delta_top_jaw_e, delta_bottom_jaw_e, delta_d, se_d,
+        delta_top_jaw_d, delta_bottom_jaw_d, objective_e, objective_i, objective_d, vol_i,
+        vol_d
 """
 from __future__ import annotations
 

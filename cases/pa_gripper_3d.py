@@ -50,7 +50,8 @@ Its chain (``pacto run pa-gripper-3d --show-chain``)::
     Volume               rho_bar_d -> volume_d
     VolumeFraction       rho_bar -> vol_i
     VolumeFraction       rho_bar_d -> vol_d
-    objective: worst_case; constraints (<= 0): volume_d; reported: delta, se, delta_e, se_e, delta_d, se_d, objective_e, objective_i, objective_d, vol_i, vol_d
+    objective: worst_case; constraints (<= 0): volume_d; reported: delta, se, delta_e, se_e,
+        delta_d, se_d, objective_e, objective_i, objective_d, vol_i, vol_d
 """
 from __future__ import annotations
 

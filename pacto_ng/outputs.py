@@ -243,15 +243,16 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
 def write_pictures(path: Path, problem: Problem, history: list, *, leak=None,
                    gathered: tuple | None = None) -> None:
     """design.png, convergence.png, and pressure.png and materials.png where they apply (each
-    written atomically).  ``gathered``: ``(points, cells, rho, title)``, a distributed run's
-    serial mesh and densities on rank 0 (:mod:`pacto_ng.parallel_outputs`), which draws
-    design.png and convergence.png only."""
+    written atomically).  ``gathered``: ``(points, cells, rho, title, p_rel)``, a distributed
+    run's serial mesh, densities and p / P_in (or None) on rank 0
+    (:mod:`pacto_ng.parallel_outputs`), which draws design.png, convergence.png and in 3D
+    pressure.png."""
     # the post package loads matplotlib and pyvista at its import (0.5 s): only here
-    from .post.plots import (convergence_png, density_png, design_png, materials_png,
+    from .post.plots import (convergence_png, density_png, materials_png, pictures_of_arrays,
                              pressure_png)
 
     if gathered is not None:
-        design_png(path / "design.png", *gathered)
+        pictures_of_arrays(path, *gathered)
     else:
         density_png(path / "design.png", problem)
         if problem.pressure_block is not None:

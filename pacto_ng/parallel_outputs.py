@@ -4,10 +4,10 @@ Every rank computes the summary's figures together (reductions over the ranks); 
 history.csv, summary.json and design.vtu: the design variables ``x`` and the densities ρ̄
 gathered per element, and the displacement ``u`` and the pressure ``p`` at the vertices, onto
 the serial mesh it meshed, with the model's strain and stress measures per element
-(:func:`pacto_ng.outputs.measure_fields`), and design.png and convergence.png drawn on it.
-Not yet written on a distributed mesh: pressure.png and materials.png of
-:func:`pacto_ng.outputs.write_outputs` (``pacto evaluate RUN`` of the run's checkpoint,
-serially, writes them).
+(:func:`pacto_ng.outputs.measure_fields`), and design.png, convergence.png and (3D) pressure.png
+drawn on it.  Not yet written on a distributed mesh: pressure.png in 2D, materials.png and the
+summary's leak figures of :func:`pacto_ng.outputs.write_outputs` (``pacto evaluate RUN`` of the
+run's checkpoint, serially, writes them).
 """
 from __future__ import annotations
 
@@ -45,8 +45,10 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
     write_history(path / "history.csv", history, problem)
     _write_vtu(path / "design.vtu", numbering, cells, points)
     title = f"{problem.case.name} - {problem.params.model}, volume {summ['volume_fraction']:.3f}"
+    p_rel = None if "p" not in points else points["p"].ravel() / (problem.pressure_block.p_in
+                                                                 or 1.0)
     write_pictures(path, problem, history,  # on the serial mesh, not mirrored
-                   gathered=(numbering.serial_points, numbering.serial_cells, rho, title))
+                   gathered=(numbering.serial_points, numbering.serial_cells, rho, title, p_rel))
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ
 

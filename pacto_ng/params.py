@@ -95,7 +95,10 @@ class Parameters:
     ``Parameters(E1=1e8, maxh=0.002, ...)`` builds every part with those values (the rest at
     their defaults), each part checking its own values; ``options`` is the case's own part
     (a :class:`~pacto_ng.settings.Settings` instance), if it has one.  Immutable: use
-    :meth:`replace` or :meth:`with_overrides` for a changed copy.
+    :meth:`replace` or :meth:`with_overrides` for a changed copy.  An ``E1`` given beside a
+    material preset that sets another is an error naming both
+    (:meth:`~pacto_ng.physics.energy.MaterialSettings.check_explicit_E1`); the copies this
+    class makes pass ``_explicit``, the names given anew (all of ``values`` by default).
     """
 
     __slots__ = ("_parts", "_index", "_given", "_derived")

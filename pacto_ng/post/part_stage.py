@@ -167,7 +167,7 @@ def _solved(part: Part, problem, loading: tuple, contact: tuple = ()):
     return ana, ana.solve(load)
 
 
-#: the quadrature order of the walls' probe (:func:`walls_overlap`) on a 3D part's faces: one
+#: the quadrature order of the walls' probe (:func:`walls_probe`) on a 3D part's faces: one
 #: point per face.  On the slotted slab squeezed shut (tests/contact_parts.py, 6098
 #: tetrahedra) it found an overlap of 0.0875 m² in 1.0 s against 0.0836 m² in 11.4 s at the
 #: contact's order 6; order 2 reported spurious overlaps of 1e-6 m² on the undeformed
@@ -183,7 +183,7 @@ PROBE_DEPTH_3D = 0.01
 
 def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
     """``(entry, (PartAnalysis, SweepPoint))``: where the part's walls pass through each
-    other at the solved state (:func:`walls_overlap`), a 2D part solved again with its walls
+    other at the solved state (:func:`walls_probe`), a 2D part solved again with its walls
     in self-contact, whose figures are then the part's (``entry``: the overlap and Δ without
     contact, whether the part was analysed in contact and whether that solve converged).  A
     3D part is probed and not analysed again: contact costs 20-40 times a Newton iteration
@@ -209,17 +209,12 @@ def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
     return entry, again if again[1].converged else solved
 
 
-def walls_overlap(ana: PartAnalysis, walls) -> float:
-    """The area (in 2D length times thickness) over which the part's ``walls`` (the
-    boundaries of its solid) overlap in the analysis ``ana``'s current state: one pairing of
-    them with themselves (:meth:`~pacto_ng.physics.contact.SelfContact.overlap`; the
-    stiffness plays no part in it), on a 3D part at :data:`PROBE_INTORDER_3D`."""
-    return walls_probe(ana, walls).overlap(ana.mech.u.vec)
-
-
 def walls_probe(ana: PartAnalysis, walls) -> SelfContact:
-    """The walls' self-contact that probes them (no stiffness of its own: 1 / h), on the
-    displacement's space (of the mixed state too), on a 3D part at :data:`PROBE_INTORDER_3D`."""
+    """The self-contact of the part's ``walls`` (the boundaries of its solid) that probes them
+    in the analysis ``ana``: its :meth:`~pacto_ng.physics.contact.SelfContact.overlap` and
+    :meth:`~pacto_ng.physics.contact.SelfContact.depth` of ``ana.mech.u.vec``, one pairing
+    each (a stiffness of 1 / h, which plays no part in them); on the displacement's space (of
+    the mixed state too), on a 3D part at :data:`PROBE_INTORDER_3D`."""
     space = ana.mech.u.space
     return SelfContact.on_walls(space, walls, modulus=1.0, penalty=1.0, reach=CONTACT_REACH,
                                 thickness=ana.thickness,

@@ -91,14 +91,19 @@ def density_png(path, problem, field_name: str | None = None, title: str | None 
         + ("" if line is None else ", mirrored about the symmetry line")))
 
 
-def design_png(path, points: np.ndarray, cells: np.ndarray, rho, title: str) -> None:
-    """design.png of a mesh given as arrays (the serial mesh a distributed run's rank 0
-    writes, :class:`~pacto_ng.parallel.Numbering`): ``points`` (n, d), ``cells`` (one kind,
+def pictures_of_arrays(path, points: np.ndarray, cells: np.ndarray, rho, title: str,
+                       p_rel=None) -> None:
+    """``path``/design.png, and of a 3D mesh with ``p_rel`` (p / P_in at the points)
+    ``path``/pressure.png, of a mesh given as arrays (the serial mesh a distributed run's rank
+    0 writes, :class:`~pacto_ng.parallel.Numbering`): ``points`` (n, d), ``cells`` (one kind,
     0-based vertex numbers per element) and ``rho`` one value per cell."""
-    if points.shape[1] == 3:
-        design_picture(path, arrays_to_pyvista(points, cells), rho, title=title)
-    else:
-        density_polygons_png(path, list(points[cells]), np.asarray(rho), title)
+    if points.shape[1] == 2:
+        density_polygons_png(path / "design.png", list(points[cells]), np.asarray(rho), title)
+        return
+    grid = arrays_to_pyvista(points, cells)
+    design_picture(path / "design.png", grid, rho, title=title)
+    if p_rel is not None:
+        pressure_picture(path / "pressure.png", grid, p_rel, rho, title=title)
 
 
 def density_polygons_png(path, polys, rho, title: str) -> None:
@@ -191,8 +196,8 @@ def pressure_png(path, problem, title: str | None = None, leak: float | None = N
     pv = block.pressure.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
     quoted = "" if leak is None else f"leak Q/(Kv P_in) = {leak:.3g}"
     if mesh.dim == 3:
-        pressure_picture(path, mesh, pv, rho, title=title or f"{problem.case.name} (P_in = "
-                         f"{p_in:g} Pa)" + (f", {quoted}" if quoted else ""))
+        pressure_picture(path, mesh_to_pyvista(mesh), pv, rho, title=title or (
+            f"{problem.case.name} (P_in = {p_in:g} Pa)" + (f", {quoted}" if quoted else "")))
         return
     import matplotlib
 

@@ -165,10 +165,10 @@ def design_picture(path, grid, rho, title: str = "") -> None:
     _screenshot(p, path)
 
 
-def pressure_picture(path, mesh, p_rel, rho, title: str = "") -> None:
-    """pressure.png of a 3D design: ``p_rel`` (p / P_in at the mesh's vertices) on the
-    mid-depth cut, with the cut's ρ̄ = 0.5 line (``rho`` per element)."""
-    grid = mesh_to_pyvista(mesh)
+def pressure_picture(path, grid, p_rel, rho, title: str = "") -> None:
+    """pressure.png of a 3D design: ``p_rel`` (p / P_in at the vertices of ``grid``, the mesh
+    as a pyvista grid) on the mid-depth cut, with the cut's ρ̄ = 0.5 line (``rho`` per
+    cell)."""
     grid.point_data["p"] = np.asarray(p_rel, dtype=float)
     grid.point_data["rho_bar"] = nodal_field(grid, np.clip(np.asarray(rho, dtype=float), 0, 1))
     cut = _cut(grid)

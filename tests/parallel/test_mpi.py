@@ -129,6 +129,23 @@ def test_mpi_run_and_resume_across_rank_counts(tmp_path):
         assert np.allclose(np.load(out / "checkpoint.npz")["x"], x_ref, rtol=0, atol=1e-8)
 
 
+@pytest.mark.slow
+def test_a_distributed_pressure_run_draws_its_pressure(tmp_path):
+    """A 3D pressure case on 3 ranks: design.vtu holds p at the serial mesh's vertices, and
+    rank 0 draws pressure.png with design.png (about 40 s)."""
+    from matplotlib.image import imread
+
+    out = tmp_path / "p"
+    pacto(3, "run", "pneunet-3d", "--maxh", "0.007", "--iterations", "2", "--quiet", "--out",
+          out)
+    vtu = meshio.read(out / "design.vtu")
+    p = np.ravel(vtu.point_data["p"])
+    assert np.all(np.isfinite(p)) and p.max() == pytest.approx(1e5, rel=1e-6)
+    for name in ("design.png", "pressure.png", "convergence.png"):
+        rgb = imread(out / name)[..., :3]
+        assert rgb.shape[0] > 200 and rgb.std() > 0.05, name
+
+
 def test_mpi_nonlinear_run_chooses_its_load_ramp_as_the_serial_run(tmp_path):
     """A Neo-Hookean pneunet-3d run: the load ramp chosen from the first linear analysis (the
     99th percentile of the material's strain, here over both parts) and the objective history

@@ -83,7 +83,8 @@ def test_the_design_pressure_and_deformed_pictures_are_drawn(box_mesh, tmp_path)
     rho = np.where((c[:, 0] < 0.02) | (c[:, 1] < 0.005), 1.0, 0.0)
     design_picture(tmp_path / "design.png", mesh_to_pyvista(box_mesh), rho, title="a box")
     x = np.asarray(box_mesh.ngmesh.Coordinates())[:, 0]
-    pressure_picture(tmp_path / "pressure.png", box_mesh, 1.0 - x / 0.04, rho, title="a box")
+    pressure_picture(tmp_path / "pressure.png", mesh_to_pyvista(box_mesh), 1.0 - x / 0.04, rho,
+                     title="a box")
     u = ngsolve.CoefficientFunction((0, 0.05 * ngsolve.x, 0))
     deformed_picture(tmp_path / "deformed.png", box_mesh, u, title="a box")
     for name in ("design.png", "pressure.png", "deformed.png"):

@@ -18,7 +18,7 @@ from pacto_ng.physics.loads import Port
 from pacto_ng.physics.mechanics import Supports
 from pacto_ng.physics.walls import solid_boundaries
 from pacto_ng.post.part_analysis import PartAnalysis
-from pacto_ng.post.part_stage import _overlap_warning, _with_contact, walls_overlap, walls_probe
+from pacto_ng.post.part_stage import _overlap_warning, _with_contact, walls_probe
 from contact_parts import slotted_block, slotted_slab
 
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
@@ -56,7 +56,7 @@ def test_the_refinement_with_contact_sees_the_walls_touch(run):
 
 @pytest.mark.parametrize("formulation", ["displacement", "mixed"])
 def test_the_walls_overlap_is_measured_on_the_displacement(formulation):
-    """walls_overlap reads the displacement of either formulation (the mixed state holds
+    """The walls' probe reads the displacement of either formulation (the mixed state holds
     (u, ϑ, p̃)): the slotted block's walls overlap at 3 kPa and not at 300 Pa."""
     mesh = slotted_block(0.1)
     params = Parameters(model="neohookean", E1=1e6, E0=1.0, nu=0.45, plane="strain",
@@ -67,7 +67,7 @@ def test_the_walls_overlap_is_measured_on_the_displacement(formulation):
     overlaps = []
     for pressure in (300.0, 3000.0):
         assert ana.solve(pressure).converged
-        overlaps.append(walls_overlap(ana, solid_boundaries(mesh)))
+        overlaps.append(walls_probe(ana, solid_boundaries(mesh)).overlap(ana.mech.u.vec))
     assert overlaps[0] == 0.0 and overlaps[1] > 0.1
 
 
@@ -88,9 +88,9 @@ def test_a_3d_part_s_walls_are_probed_and_the_user_pointed_to_the_contact_analys
                        supports=Supports(clamp=("left",), fix_z=("front", "back")),
                        ports=Port("corner", (0.0, -1.0, 0.0)))
     walls = solid_boundaries(mesh)
-    assert ana.solve(500.0).converged and walls_overlap(ana, walls) == 0.0
+    assert ana.solve(500.0).converged and walls_probe(ana, walls).overlap(ana.mech.u.vec) == 0
     point = ana.solve(3000.0)
-    found = walls_overlap(ana, walls)
+    found = walls_probe(ana, walls).overlap(ana.mech.u.vec)
     full = SelfContact.on_walls(ana.mech.u.space, walls, modulus=1.0, penalty=1.0,
                                 reach=CONTACT_REACH).overlap(ana.mech.u.vec)
     assert full > 0.05 and found == pytest.approx(full, rel=0.15)
