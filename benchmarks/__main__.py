@@ -8,8 +8,9 @@
 Each study writes one marked block of the report (``<!-- BEGIN name -->`` ... ``<!-- END name
 -->``); the rest of the file (other engineers' sections) is kept as it is.  The default run
 writes docs/studies.md and docs/*.png and takes 10-25 minutes on 2 cores; ``--quick`` (the
-CI smoke run, ~2 minutes) runs every study on its smallest set-up and writes to a file in the
-temp folder unless ``--out`` is given, so that it never replaces the full numbers.
+smoke run of ``pytest -m slow``, ~2 minutes) runs every study on its smallest set-up and
+writes to a file in the temp folder unless ``--out`` is given, so that it never replaces the
+full numbers.
 """
 from __future__ import annotations
 
