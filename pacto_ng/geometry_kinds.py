@@ -64,9 +64,7 @@ class LayoutKind:
 
     def mesh(self, maxh: float, nel: tuple, order: int, checks: Checks) -> Meshed:
         (nelx, nely, nelz), layout = nel, self.layout
-        if nelz > 0:
-            raise InputError("nelz: structured hexahedra need a box domain (a Box); this case's "
-                             "geometry is not one (give --maxh instead)")
+        _refuse_hexahedra(nelz)
         if nelx > 0:
             checks.fits(resources.estimate_grid((nelx, nely), order, solver=checks.solver),
                         f"nelx x nely = {nelx} x {nely}", "give a smaller nelx, nely or order")
@@ -196,10 +194,14 @@ def extent(geometry) -> float | None:
     return None if sides is None else min(sides)
 
 
-def _refuse_grid(nel: tuple) -> None:
-    if nel[2] > 0:
+def _refuse_hexahedra(nelz: int) -> None:
+    if nelz > 0:
         raise InputError("nelz: structured hexahedra need a box domain (a Box); this case's "
                          "geometry is not one (give --maxh instead)")
+
+
+def _refuse_grid(nel: tuple) -> None:
+    _refuse_hexahedra(nel[2])
     if nel[0] > 0:
         raise InputError("nelx, nely: structured quads need a rectangular domain (a Layout); "
                          "this case's geometry is not one (give --maxh instead)")

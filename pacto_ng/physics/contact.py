@@ -167,11 +167,12 @@ class SelfContact:
         length times the thickness): :meth:`measure`'s first figure, one pairing."""
         return self._probe(vec, 0)
 
-    def depth(self, vec) -> float:
-        """The mean depth over which the walls overlap at the displacement ``vec`` (0 where
-        they do not): ``∫ max(g, 0) / ∫ [g > 0]`` over the walls, two pairings."""
+    def overlap_depth(self, vec) -> tuple[float, float]:
+        """``(area, depth)``: :meth:`overlap`, and the mean depth over which the walls overlap
+        at the displacement ``vec`` (0 where they do not), ``∫ max(g, 0) / ∫ [g > 0]`` over
+        the walls; two pairings."""
         area = self._probe(vec, 0)
-        return self._probe(vec, 1) / (2.0 * self.stiffness * area) if area > 0 else 0.0
+        return area, (self._probe(vec, 1) / (2.0 * self.stiffness * area) if area > 0 else 0.0)
 
     def _probe(self, vec, k: int) -> float:
         """The ``k``-th measure's energy at the displacement ``vec``, paired there."""

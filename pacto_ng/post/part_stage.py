@@ -190,11 +190,16 @@ def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
     there, minutes to an hour on a built-in part, so the last line points to ``pacto analyse
     DIR --contact``.  ``entry`` is None where the walls do not meet."""
     ana, point = solved
+    if not point.converged:
+        return None, solved
     walls, u = solid_boundaries(part.mesh), ana.mech.u.vec
-    probe = walls_probe(ana, walls) if point.converged else None
-    overlap = probe.overlap(u) if probe is not None else 0.0
-    if part.dim == 3 and overlap > 0.0 and probe.depth(u) <= PROBE_DEPTH_3D * point.max_u:
-        overlap = 0.0  # walls that touch as made, pressed a little into each other
+    probe = walls_probe(ana, walls)
+    if part.dim == 2:
+        overlap = probe.overlap(u)
+    else:
+        overlap, depth = probe.overlap_depth(u)
+        if depth <= PROBE_DEPTH_3D * point.max_u:
+            overlap = 0.0  # walls that touch as made, pressed a little into each other
     if not overlap > 0.0:
         return None, solved
     entry = {"overlap_without": overlap, "output_displacement_without": _num(point.delta),
@@ -211,10 +216,10 @@ def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
 
 def walls_probe(ana: PartAnalysis, walls) -> SelfContact:
     """The self-contact of the part's ``walls`` (the boundaries of its solid) that probes them
-    in the analysis ``ana``: its :meth:`~pacto_ng.physics.contact.SelfContact.overlap` and
-    :meth:`~pacto_ng.physics.contact.SelfContact.depth` of ``ana.mech.u.vec``, one pairing
-    each (a stiffness of 1 / h, which plays no part in them); on the displacement's space (of
-    the mixed state too), on a 3D part at :data:`PROBE_INTORDER_3D`."""
+    in the analysis ``ana``: its :meth:`~pacto_ng.physics.contact.SelfContact.overlap` (one
+    pairing) or :meth:`~pacto_ng.physics.contact.SelfContact.overlap_depth` (two) of
+    ``ana.mech.u.vec`` (a stiffness of 1 / h, which plays no part in them); on the
+    displacement's space (of the mixed state too), on a 3D part at :data:`PROBE_INTORDER_3D`."""
     space = ana.mech.u.space
     return SelfContact.on_walls(space, walls, modulus=1.0, penalty=1.0, reach=CONTACT_REACH,
                                 thickness=ana.thickness,

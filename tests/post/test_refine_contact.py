@@ -94,7 +94,8 @@ def test_a_3d_part_s_walls_are_probed_and_the_user_pointed_to_the_contact_analys
     full = SelfContact.on_walls(ana.mech.u.space, walls, modulus=1.0, penalty=1.0,
                                 reach=CONTACT_REACH).overlap(ana.mech.u.vec)
     assert full > 0.05 and found == pytest.approx(full, rel=0.15)
-    depth = walls_probe(ana, walls).depth(ana.mech.u.vec)
+    area, depth = walls_probe(ana, walls).overlap_depth(ana.mech.u.vec)
+    assert area == found
     assert depth > 0.2 * point.max_u  # passing through each other, not touching as made
     said = []
     part = SimpleNamespace(mesh=mesh, dim=3)
