@@ -32,6 +32,7 @@ from .initial import initial_design
 from .parallel import largest as rank_max
 from .parallel import total, union
 from .physics.materials import green_lagrange
+from .physics.quadrature import integration_rules
 
 STRAIN_THRESHOLD = 0.01
 
@@ -109,13 +110,14 @@ def choose_ramp(strain: float, schedule, iterations: int) -> tuple[int, str]:
 
 
 def displacement_ratio(mech) -> float:
-    """The largest displacement ``max |u|`` at the quadrature points of ``mech`` (void
-    included) over the domain's size, the largest side of the mesh's bounding box.  On a
-    distributed mesh over every rank's part."""
+    """The largest displacement ``max |u|`` at the points of the degree-``2 order`` rule on
+    ``mech``'s elements (void included) over the domain's size, the largest side of the mesh's
+    bounding box.  On a distributed mesh over every rank's part."""
     from ngsolve import VOL
 
     mesh = mech.mesh
-    u = np.asarray(mech.u(mesh.MapToAllElements(mech.rules, VOL))).reshape(-1, mesh.dim)
+    points = mesh.MapToAllElements(integration_rules(2 * mech.order), VOL)
+    u = np.asarray(mech.u(points)).reshape(-1, mesh.dim)
     u_max = max(rank_max(mesh, np.linalg.norm(u, axis=1)), 0.0)
     pts = np.array([v.point for v in mesh.vertices]).reshape(-1, mesh.dim)
     hi = [rank_max(mesh, pts[:, a]) for a in range(mesh.dim)]

@@ -46,19 +46,18 @@ the backward pass.
 """
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from netgen.meshing import NgException
 
 from .adjoint import Adjoint
 from .body_coupling import BodyCoupling
+from .compiled import compiled, symbolic_linearisation
 from .equilibrium import Equilibrium
 from .linear_system import LinearSystem
 from .newton import NewtonSettings
-from .quadrature import integration_rules
+from .quadrature import integration_rules, mechanics_rules
 from .spaces import block_spaces
 from .traits import EnergyTraits, traits_of
 
@@ -225,8 +224,9 @@ class Mechanics(Equilibrium, Adjoint):
         self.one.vec[:] = 1.0
         self.load = Parameter(1.0)
         self.target = 1.0  # load factor of the next forward pass (continuation over iterations)
-        # (the mixed formulation's bubble on simplices is of order + 1)
-        self.rules = integration_rules(intorder or 2 * (order + ("orderinner" in kw)))
+        # one rule for every form: degree 1 on order-1 simplices, else 2 (order + bubble)
+        self.rules = (integration_rules(intorder) if intorder else
+                      mechanics_rules(order, bubble="orderinner" in kw))
         self.DX = dx(intrules=self.rules)
         self._declare(energy, body, residual_density)
         self.loads, self.springs = tuple(loads), tuple(springs)
@@ -258,7 +258,9 @@ class Mechanics(Equilibrium, Adjoint):
         # the mixed formulation's element fields are condensed out of the tangent
         self.a = BilinearForm(self.space, symmetric=self.symmetric,
                               condense=self.mixed is not None)
-        self.a += Variation(self.potential(x))
+        symbolic = self.mesh.dim == 3 and self.mixed is None  # where it pays (compiled.py)
+        with symbolic_linearisation(symbolic):
+            self.a += Variation(self.potential(x))
         # the body force is linear in u: its residual is a LinearForm, assembled once per design,
         # not re-evaluated (and differentiated twice) in every Newton iteration (measured: the
         # Darcy body term doubled the cost of AssembleLinearization of a Neo-Hookean form)
@@ -274,10 +276,11 @@ class Mechanics(Equilibrium, Adjoint):
             field = self._coupled_field(body)
             if field is not None:
                 self._coupling = BodyCoupling.build(self, field, self._fbody)
-        if residual_density is not None:
-            self.a += self.hot(self.residual_density(u, v)) * self.DX
-        if residual_terms is not None:
-            self.a += residual_terms(u, v, self.load)
+        with symbolic_linearisation(symbolic):
+            if residual_density is not None:
+                self.a += self.hot(self.residual_density(u, v)) * self.DX
+            if residual_terms is not None:
+                self.a += residual_terms(u, v, self.load)
 
     def _start_routes(self, guard, linear: bool, body, residual_terms) -> None:
         """The assembly routes (the linear system of a linear, conservative block with a
@@ -383,17 +386,10 @@ class Mechanics(Equilibrium, Adjoint):
             self._lin.expect_many_designs()
 
     def hot(self, cf):
-        """``cf`` compiled for a form that Newton assembles in every iteration: to machine code
-        with :attr:`realcompile`, unless the compiler behind NGSolve's ``ngscxx`` fails (no
-        C++ compiler on the machine: said once, and the forms run as compiled expressions)."""
-        if self.realcompile:
-            try:
-                return cf.Compile(realcompile=True, wait=True)
-            except NgException as err:
-                self.realcompile = False
-                print(f"pacto: warning: the Newton forms are not compiled to machine code "
-                      f"({err}); they assemble about 2x slower", file=sys.stderr, flush=True)
-        return cf.Compile()
+        """``cf`` compiled for a form that Newton assembles in every iteration
+        (:func:`~pacto_ng.physics.compiled.compiled`, to machine code with :attr:`realcompile`)."""
+        cf, self.realcompile = compiled(cf, self.realcompile)
+        return cf
 
     def displacement(self, x):
         """The displacement of a state ``x`` (a trial or test function or a GridFunction of

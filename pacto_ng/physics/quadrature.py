@@ -38,6 +38,22 @@ def integration_rules(order: int):
     return {et: IntegrationRule(et, order) for et, _ in _types()}
 
 
+def mechanics_rules(order: int, bubble: bool = False):
+    """The rule of a mechanics block whose displacement is of order ``order`` (``bubble``: the
+    mixed formulation's bubble of ``order + 1``): degree ``2 (order + bubble)``, except on
+    triangles and tetrahedra at order 1 without the bubble.  There ``∇u`` is constant on each
+    (straight-sided) element, and with it every energy density of ``∇u`` and of element-wise
+    fields; a term linear in an order-1 field and in ``v`` or ``∇v`` (the Darcy pressure's
+    fixed or follower load) is affine: the rule of degree 1, one point, integrates them
+    exactly (instead of 3 points on a triangle, 4 on a tetrahedron)."""
+    from ngsolve import TET, TRIG, IntegrationRule
+
+    rules = integration_rules(2 * (order + bubble))
+    if order == 1 and not bubble:
+        rules.update({et: IntegrationRule(et, 1) for et in (TRIG, TET)})
+    return rules
+
+
 def stiffness_rules(order: int, rules):
     """The rules of a stiffness ``∫ (C ∇u) : ∇v`` with ``C`` constant on each element and a
     displacement of order ``order``: on triangles and tetrahedra (straight-sided, so affine)
