@@ -30,6 +30,7 @@ from .errors import InputError
 from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
 from .parallel import bounding_box
 from .physics import darcy_load
+from .physics.compiled import symbolic_tangent
 from .physics.darcy_leakage import Outflow
 from .physics.energy import make_energy
 from .physics.loads import PointLoad
@@ -256,7 +257,8 @@ class Builder:
                              residual_density=pressure.follower,
                              realcompile=params.newton.compiles(
                                  model.linear, self.mesh.ne * params.iterations
-                                 * NEWTON_PER_ITERATION),
+                                 * NEWTON_PER_ITERATION,
+                                 symbolic=symbolic_tangent(self.mesh.dim, formulation)),
                              output="u" + suffix, formulation=formulation)
         except ValueError as err:
             raise InputError(str(err)) from None

@@ -30,6 +30,12 @@ from netgen.meshing import NgException
 from ngsolve import ngsglobals
 
 
+def symbolic_tangent(dim: int, formulation: str) -> bool:
+    """Whether a mechanics block's tangent comes from symbolic derivatives: in 3D with the
+    displacement formulation, where it pays (the module's table)."""
+    return dim == 3 and formulation == "displacement"
+
+
 @contextmanager
 def symbolic_linearisation(on: bool = True):
     """With ``on``, forms built inside get their tangent (``AssembleLinearization``) from

@@ -53,7 +53,7 @@ import numpy as np
 
 from .adjoint import Adjoint
 from .body_coupling import BodyCoupling
-from .compiled import compiled, symbolic_linearisation
+from .compiled import compiled, symbolic_linearisation, symbolic_tangent
 from .equilibrium import Equilibrium
 from .linear_system import LinearSystem
 from .newton import NewtonSettings
@@ -258,7 +258,7 @@ class Mechanics(Equilibrium, Adjoint):
         # the mixed formulation's element fields are condensed out of the tangent
         self.a = BilinearForm(self.space, symmetric=self.symmetric,
                               condense=self.mixed is not None)
-        symbolic = self.mesh.dim == 3 and self.mixed is None  # where it pays (compiled.py)
+        symbolic = symbolic_tangent(self.mesh.dim, self.formulation)
         with symbolic_linearisation(symbolic):
             self.a += Variation(self.potential(x))
         # the body force is linear in u: its residual is a LinearForm, assembled once per design,

@@ -89,6 +89,12 @@ class NewtonSettings:
 #: Wang, the mixed formulation) an optimisation iteration of 3 Newton iterations fell from
 #: 1.24 to 0.60 s, 89 µs, paying after 7e4
 COMPILE_PAYS = 3e5
+#: the same where the tangent comes from symbolic derivatives (3D, the displacement
+#: formulation: compiled.py), whose compiled code is larger: on pneunet-3d (18,473
+#: tetrahedra, Neo-Hookean, 1 thread, 2026-12-06) the problem was built in 19.3 s (fixed
+#: pressure) and 48.4 s (follower) compiled, 2.6 and 2.2 s not, and an iteration took 1.78 s
+#: against 2.37 s, 8 µs per element and Newton iteration: the follower's 46 s pay after 6e6
+COMPILE_PAYS_SYMBOLIC = 6e6
 #: Newton iterations per optimisation iteration, for that estimate (warm-started at the
 #: direct route's tolerance: 4 on the same run)
 NEWTON_PER_ITERATION = 4
@@ -111,9 +117,10 @@ class NewtonParameters(Settings):
                                           "Newton gives up (fraction)", range="(0, 1]")
     realcompile: int = setting(-1, "", "compile the Newton forms to machine code: 1 on, 0 "
                                "off, -1 where it pays: a nonlinear model whose elements times "
-                               f"Newton iterations expected reach {COMPILE_PAYS:.0e}, with "
-                               "NGSolve's compiler wrapper ngscxx on PATH (about 6 s once; the "
-                               "tangent assembles 2x and the residual 2.4x faster)",
+                               f"Newton iterations expected reach {COMPILE_PAYS:.0e} "
+                               f"({COMPILE_PAYS_SYMBOLIC:.0e} in 3D), with NGSolve's compiler "
+                               "wrapper ngscxx on PATH (6-50 s once; an iteration 1.3x (3D) "
+                               "to 2x faster)",
                                range="[-1, 1]")
     solver: str = setting("auto", "", "linear solver of the tangent: auto (sparse direct in "
                           f"2D, and in 3D at order 1 or up to {DIRECT_MAX_DOFS_3D:,} dofs; else "
@@ -126,13 +133,15 @@ class NewtonParameters(Settings):
         if self.newton_min_increment > self.newton_increment:
             raise InputError("newton_min_increment: must lie in (0, newton_increment]")
 
-    def compiles(self, linear: bool, work: float) -> bool:
+    def compiles(self, linear: bool, work: float, symbolic: bool = False) -> bool:
         """Whether the Newton forms of a model (``linear``: no Newton forms to speed up) are
         compiled, for ``work`` elements times Newton iterations expected: ``realcompile`` 1
-        or 0, or with -1 where :data:`COMPILE_PAYS` says it pays and ``ngscxx`` is found."""
+        or 0, or with -1 where :data:`COMPILE_PAYS` (``symbolic``: the tangent from symbolic
+        derivatives, :data:`COMPILE_PAYS_SYMBOLIC`) says it pays and ``ngscxx`` is found."""
         if self.realcompile >= 0:
             return bool(self.realcompile)
-        return not linear and work >= COMPILE_PAYS and shutil.which("ngscxx") is not None
+        pays = COMPILE_PAYS_SYMBOLIC if symbolic else COMPILE_PAYS
+        return not linear and work >= pays and shutil.which("ngscxx") is not None
 
     def settings(self) -> NewtonSettings:
         """The Newton settings of these parameters."""

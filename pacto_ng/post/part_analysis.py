@@ -57,6 +57,7 @@ import numpy as np
 from ngsolve import VOL, Grad, InnerProduct, LinearForm, Parameter
 
 from ..errors import InputError
+from ..physics.compiled import symbolic_tangent
 from ..physics.contact import SelfContact
 from ..physics.energy import make_energy
 from ..physics.equilibrium import NewtonFailure, WarmState
@@ -198,8 +199,9 @@ class PartAnalysis:
             thickness=self.thickness, guard=guard,
             linear=linear and kind != "follower" and not contact,
             newton=self._newton(params, contact), residual_terms=terms,
-            realcompile=params.newton.compiles(linear and kind != "follower" and not contact,
-                                               mesh.ne * SWEEP_NEWTON),
+            realcompile=params.newton.compiles(
+                linear and kind != "follower" and not contact, mesh.ne * SWEEP_NEWTON,
+                symbolic=symbolic_tangent(mesh.dim, self.formulation)),
             formulation=self.formulation)
         if contact:
             self.mech.use_contact(SelfContact.on_walls(

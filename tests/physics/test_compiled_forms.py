@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pacto_ng.case import build_problem, get_case
-from pacto_ng.physics.newton import COMPILE_PAYS, NewtonParameters
+from pacto_ng.physics.newton import COMPILE_PAYS, COMPILE_PAYS_SYMBOLIC, NewtonParameters
 
 
 def test_the_forms_are_compiled_where_the_work_pays_for_the_compiler(monkeypatch):
@@ -17,6 +17,10 @@ def test_the_forms_are_compiled_where_the_work_pays_for_the_compiler(monkeypatch
     assert on.compiles(True, 1.0) and not off.compiles(False, 1e12)
     monkeypatch.setattr(shutil, "which", lambda name: "/bin/" + name)
     assert auto.compiles(False, COMPILE_PAYS) and not auto.compiles(False, 0.99 * COMPILE_PAYS)
+    # the symbolic 3D tangent's compiled code is larger: it pays later
+    assert COMPILE_PAYS_SYMBOLIC > COMPILE_PAYS
+    assert not auto.compiles(False, 0.99 * COMPILE_PAYS_SYMBOLIC, symbolic=True)
+    assert auto.compiles(False, COMPILE_PAYS_SYMBOLIC, symbolic=True)
     assert not auto.compiles(True, 1e12)  # a linear model has no Newton forms to speed up
     monkeypatch.setattr(shutil, "which", lambda name: None)
     assert not auto.compiles(False, 1e12)  # no compiler wrapper: not compiled
