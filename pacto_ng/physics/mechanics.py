@@ -258,9 +258,12 @@ class Mechanics(Equilibrium, Adjoint):
         # the mixed formulation's element fields are condensed out of the tangent
         self.a = BilinearForm(self.space, symmetric=self.symmetric,
                               condense=self.mixed is not None)
-        symbolic = symbolic_tangent(self.mesh.dim, self.formulation)
-        with symbolic_linearisation(symbolic):
+        with symbolic_linearisation(symbolic_tangent(self.mesh.dim, self.formulation)):
             self.a += Variation(self.potential(x))
+            if residual_density is not None:
+                self.a += self.hot(self.residual_density(u, v)) * self.DX
+            if residual_terms is not None:
+                self.a += residual_terms(u, v, self.load)
         # the body force is linear in u: its residual is a LinearForm, assembled once per design,
         # not re-evaluated (and differentiated twice) in every Newton iteration (measured: the
         # Darcy body term doubled the cost of AssembleLinearization of a Neo-Hookean form)
@@ -276,11 +279,6 @@ class Mechanics(Equilibrium, Adjoint):
             field = self._coupled_field(body)
             if field is not None:
                 self._coupling = BodyCoupling.build(self, field, self._fbody)
-        with symbolic_linearisation(symbolic):
-            if residual_density is not None:
-                self.a += self.hot(self.residual_density(u, v)) * self.DX
-            if residual_terms is not None:
-                self.a += residual_terms(u, v, self.load)
 
     def _start_routes(self, guard, linear: bool, body, residual_terms) -> None:
         """The assembly routes (the linear system of a linear, conservative block with a
