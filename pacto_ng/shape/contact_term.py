@@ -79,7 +79,8 @@ class ShapeContact:
     Parameters
     ----------
     fes : ngsolve FESpace
-        The displacement's VectorH1 space on the part.
+        The state's space on the part: the displacement's VectorH1, or one whose first
+        component it is (see ``displacement``).
     space : ShapeSpace
         The shape's deformation ``d``: an order-1 space (its coefficients the vertices'
         motions).
@@ -91,23 +92,28 @@ class ShapeContact:
         (:class:`~pacto_ng.post.part_analysis.PartAnalysis`).
     thickness : float
         The 2D thickness (1 in 3D).
+    displacement : callable, optional
+        The displacement of a function of ``fes`` where ``fes`` holds more than it (the mixed
+        formulation's state); default: ``fes`` is the displacement's space.
     """
 
     def __init__(self, fes, space, names, *, E1: float, thickness: float = 1.0,
-                 penalty: float = CONTACT_PENALTY, reach: float = CONTACT_REACH):
+                 penalty: float = CONTACT_PENALTY, reach: float = CONTACT_REACH,
+                 displacement=None):
         if not space.vertex_dofs:
             raise ValueError("contact in the shape gradient needs an order-1 shape space (its "
                              "coefficients the vertices' motions)")
         self.mesh, self.space = fes.mesh, space
         with self._reference():
             self.contact = SelfContact.on_walls(fes, names, modulus=E1, penalty=penalty,
-                                                reach=reach, thickness=thickness)
+                                                reach=reach, thickness=thickness,
+                                                displacement=displacement)
         self.form = BilinearForm(fes, symmetric=False)
         nodes = [NodeId(VERTEX, i) for i in range(self.mesh.nv)]
         self._u_dofs = np.array([fes.GetDofNrs(n) for n in nodes], dtype=np.int64).ravel()
         self._d_dofs = np.array([space.space.GetDofNrs(n) for n in nodes],
                                 dtype=np.int64).ravel()
-        self._w = None
+        self._w = {}  # a buffer per vector size: the state's, the displacement's (measure)
         self._sum = MatrixSum()
         self.new_pattern = True  # whether the last tangent_with made a new sparsity pattern
 
@@ -121,13 +127,15 @@ class ShapeContact:
             self.mesh.SetDeformation(self.space.deformation)
 
     def _positions(self, vec):
-        """``u + P d``: the displacement of the walls' points from ``Ω0``."""
-        if self._w is None:
-            self._w = vec.CreateVector()
-        self._w.data = vec
-        w = self._w.FV().NumPy()
+        """``u + P d``: the displacement of the walls' points from ``Ω0`` (``vec`` a state
+        or a displacement: the displacement's dofs come first in either)."""
+        if len(vec) not in self._w:
+            self._w[len(vec)] = vec.CreateVector()
+        out = self._w[len(vec)]
+        out.data = vec
+        w = out.FV().NumPy()
         w[self._u_dofs] += self.space.deformation.vec.FV().NumPy()[self._d_dofs]
-        return self._w
+        return out
 
     def pair(self, vec) -> None:
         """Seek the pairs at the state ``vec`` (they hold until the next pairing)."""
@@ -168,7 +176,7 @@ class ShapeContact:
         return out
 
     def measure(self, vec) -> tuple[float, float, float]:
-        """``(area, force, largest pressure)`` of the contact at the state ``vec``
+        """``(area, force, largest pressure)`` of the contact at the displacement ``vec``
         (:meth:`~pacto_ng.physics.contact.SelfContact.measure`)."""
         w = self._positions(vec)
         with self._reference():

@@ -38,10 +38,12 @@ from ..physics.spaces import dirichlet_options
 BONUS_INTORDER = 2
 
 
-def shape_dx():
+def shape_dx(rules=None):
     """The volume measure of every shape-differentiated integral: ``dx`` with
-    :data:`BONUS_INTORDER`."""
-    return dx(bonus_intorder=BONUS_INTORDER)
+    :data:`BONUS_INTORDER`, or with the quadrature ``rules`` (per element type) where the
+    forms' own orders differ (the same rules then serve the state and its shape
+    derivative)."""
+    return dx(bonus_intorder=BONUS_INTORDER) if rules is None else dx(intrules=rules)
 
 
 def shape_ds(region: str):
@@ -132,7 +134,7 @@ class ShapeSpace:
         """``dJ`` of ``J = integrals`` (a SumOfIntegrals of the current shape's fields and
         coefficients) as the vector on ``X`` with ``dJ[V] = dJ · V``, held dofs zeroed."""
         lf = LinearForm(self.space)
-        lf += integrals.DiffShape(self.space.TestFunction())
+        lf += integrals.DiffShape(self.space.TestFunction()).Compile()
         lf.Assemble()
         out = lf.vec.FV().NumPy().copy()
         out[self.held] = 0.0

@@ -153,8 +153,8 @@ class _Loop:
         self.scale = abs(self.value) if scale is None else float(scale)
         if not self.scale > 0:
             raise ValueError("refine: the objective is zero on the starting shape")
-        self.state = response.u.vec.CreateVector()
-        self.state.data = response.u.vec
+        self.state = response.state.vec.CreateVector()
+        self.state.data = response.state.vec
 
     @property
     def value(self) -> float:
@@ -289,9 +289,9 @@ class _Loop:
                     measures = None
                 if measures is not None and self.merit(measures) < before:
                     self.shape, self.measures = trial, measures
-                    self.state.data = self.response.u.vec
+                    self.state.data = self.response.state.vec
                     return None, s, q, trials
-                self.response.u.vec.data = self.state  # the next solve starts from the last
+                self.response.state.vec.data = self.state  # the next solve starts from the last
             s *= 0.5
         self.evaluate(self.shape)
         return "wall_floor" if walled else "no_descent", s, q, trials
