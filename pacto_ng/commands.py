@@ -92,23 +92,21 @@ def resume_with_part(args) -> int:
 
 def _with_part(done, out, args) -> int:
     """A finished optimisation's part made, checked and analysed (unless ``--no-part``), and
-    then, for a linear run the refinement applies to
-    (:func:`~pacto_ng.post.refine_setup.refuses`: a pressure case with an output port) whose
-    part is sealed, and unless ``--no-refine`` or the optimisation stopped on a failure, its shape refined as ``pacto refine DIR``
-    does (the refinement keeps the part's topology: an open chamber stays open, and the part
-    line has said so; under a nonlinear model a line says how to refine it, as that takes
-    many times the run: gripper-silicone's was at step 7 of 20 after 21 minutes; a
-    refinement that cannot be made is said in one line; the run's result stands); the run's
-    exit code."""
+    then, for a run the refinement applies to (:func:`~pacto_ng.post.refine_setup.refuses`: a
+    pressure case with an output port) whose part is sealed, and unless ``--no-refine`` or the
+    optimisation stopped on a failure or the part's analysis found no equilibrium, its shape
+    refined as ``pacto refine DIR`` does (the
+    refinement keeps the part's topology: an open chamber stays open, and the part line has
+    said so; a refinement that cannot be made is said in one line; the run's result stands);
+    the run's exit code; :func:`why_not_refined` says which sealed parts are not refined."""
     if leads() and not args.no_part:
         summary = finish_run(out, done.problem, done.summary, quiet=args.quiet)
         if (args.no_refine or done.exit_code != 0 or not summary["part"].get("made")
                 or summary.get("sealed") is False or refuses(run := load_run(out, "refine"))):
             return done.exit_code
-        if run.params.model != "linear":
-            say(args.quiet, f"the part is not refined by default under the {run.params.model} "
-                            f"model (its refinement takes many times the run): pacto refine "
-                            f"{out} refines it")
+        why = why_not_refined(summary["part"], run.params.model, done.problem.mesh.dim, out)
+        if why:
+            say(args.quiet, why)
         else:
             try:
                 refine_run(out, quiet=args.quiet, overwrite=args.command == "resume"
@@ -117,6 +115,20 @@ def _with_part(done, out, args) -> int:
                 print(f"pacto: warning: the part was not refined: {err}", file=sys.stderr,
                       flush=True)
     return done.exit_code
+
+
+def why_not_refined(part: dict, model: str, dim: int, out) -> str:
+    """Why a finished run's sealed part (its summary entry ``part``) is not refined by
+    default, in one line, or "" where it is: a part whose analysis found no equilibrium at
+    the run's load (there is nothing to start from), and a 3D part under a nonlinear model
+    (its refinement was not measured to end in a time of the run's order; a 2D one does:
+    pneunet-silicone's took 368 s after a run of 68 s, docs/guide.md)."""
+    if part.get("converged") is False:
+        return "the part is not refined: its analysis found no equilibrium at the run's load"
+    if model != "linear" and dim == 3:
+        return (f"the 3D part is not refined by default under the {model} model (its "
+                f"refinement takes many times the run): pacto refine {out} refines it")
+    return ""
 
 
 def sweep_command(case, params, args) -> int:

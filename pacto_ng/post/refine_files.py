@@ -97,6 +97,7 @@ def plot_outlines(path, before, after, summary: dict, name: str, *, domain=None,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
+    from matplotlib.transforms import offset_copy
 
     fig, ax = plt.subplots(figsize=(8, 6))
     styles = {"before": ("0.55", 0.8, "before (the part as made)"),
@@ -121,7 +122,9 @@ def plot_outlines(path, before, after, summary: dict, name: str, *, domain=None,
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3, fontsize=8)
+    # below the x label whatever the axes' height (a flat part's is small)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=3, fontsize=8,
+              bbox_transform=offset_copy(ax.transAxes, fig=fig, y=-30, units="points"))
     s = summary
     ax.set_title(f"{name} part refined (status {s['status']}, {s['steps']} steps): Δ "
                  f"{s['delta_before']:.4g} → {s['delta_after']:.4g} m "
@@ -129,7 +132,7 @@ def plot_outlines(path, before, after, summary: dict, name: str, *, domain=None,
                  f"{s['volume_bound']:.4g}), {s['load_type']} {s['load']:.3g} "
                  f"{s['load_unit']}, {s['model']}", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, format="png", dpi=130)
+    fig.savefig(path, format="png", dpi=130, bbox_inches="tight")
     plt.close(fig)
 
 

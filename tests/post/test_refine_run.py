@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 from pacto_ng.cli import main
+from pacto_ng.commands import why_not_refined
 
 pytestmark = pytest.mark.usefixtures("pacto_one_thread")
 
@@ -328,10 +329,9 @@ def test_a_wall_floor_is_kept_and_the_thinnest_wall_reported(solid_member, tmp_p
     assert len(err) == 1 and "--min-wall" in err[0]
 
 
-def test_a_nonlinear_run_says_how_to_refine_its_part(tmp_path, capsys):
-    """``pacto resume`` (as ``pacto run``) under a nonlinear model, from the solid member:
-    it ends with the part and a line naming ``pacto refine DIR`` (the refinement is not run
-    by default: it takes many times the run), and writes no DIR/refine/."""
+def test_a_nonlinear_2d_run_ends_with_its_refined_part(tmp_path, capsys):
+    """``pacto resume`` (as ``pacto run``) under a nonlinear model in 2D, from the solid
+    member: it ends with the part refined under that model (DIR/refine/)."""
     from small_cases import run_with_design
 
     run = run_with_design(tmp_path / "nh", ["pneunet", "--maxh", "0.004", "--iterations", "1",
@@ -340,5 +340,17 @@ def test_a_nonlinear_run_says_how_to_refine_its_part(tmp_path, capsys):
     capsys.readouterr()
     assert main(["resume", str(run), "--iterations", "2"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
-    assert f"pacto refine {run} refines it" in lines[-1] and "neohookean" in lines[-1]
-    assert lines[-2].startswith("part: ") and not (run / "refine").exists()
+    summary = json.loads((run / "refine" / "summary.json").read_text())
+    assert summary["model"] == "neohookean" and summary["steps"] > 0
+    assert lines[-1].startswith("refined: ")
+
+
+def test_which_parts_are_not_why_not_refined():
+    """A part without an equilibrium at the run's load, and a 3D part under a nonlinear
+    model (a line naming ``pacto refine DIR``); a 2D one under any model, a 3D linear one
+    are refined."""
+    assert "no equilibrium" in why_not_refined({"converged": False}, "linear", 2, "d")
+    line = why_not_refined({"converged": True}, "neohookean", 3, "runs/x")
+    assert "pacto refine runs/x refines it" in line and "neohookean" in line
+    assert why_not_refined({"converged": True}, "wang", 2, "d") == ""
+    assert why_not_refined({"converged": True}, "linear", 3, "d") == ""
