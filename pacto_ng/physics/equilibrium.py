@@ -76,6 +76,9 @@ class Equilibrium:
         self._tangent_at = None  # id of the state the factorisation belongs to
         self.result: NewtonResult | None = None
         self._ramp_first = None  # first increment of the last successful ramp from zero
+        #: called with (load factor, state) at every equilibrium Newton's load ramp reaches
+        #: (a progress line), or None
+        self.on_step = None
         self._gtrial = GridFunction(self.space)
         guard_cf = None
         if self.mixed is not None:  # J > 0, Θ > 0 and the model's guard at F̄ (mixed.py)
@@ -342,7 +345,8 @@ class Equilibrium:
         if self.linear:
             warm = True  # one Newton step from any state solves a linear problem
         res = solve_with_continuation(self, self.gfx.vec, self.target, self.settings, warm=warm,
-                                      linear=self.linear, first_increment=self._ramp_first)
+                                      linear=self.linear, first_increment=self._ramp_first,
+                                      on_step=self.on_step)
         if res.ramp_first is not None:
             self._ramp_first = res.ramp_first  # where the next ramp from zero starts
         self.result = res

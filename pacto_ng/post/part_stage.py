@@ -117,7 +117,7 @@ def _analyse(path, part: Part, problem, summary, say) -> dict:
     order = PART_ORDER[part.dim]
     kind = params.load_type
     ports = part_ports(setup)
-    ana, point = _solved(part, problem, (load, kind, order))
+    ana, point = _solved(part, problem, (load, kind, order), say=say)
     say(f"analysed at {load:.4g} {problem.case.load_unit} ({kind}, {ana.model}, order {order})"
         + ("" if point.converged else ": no equilibrium"))
     contact, (ana, point) = _with_contact(part, problem, (ana, point), (load, kind, order), say)
@@ -153,9 +153,10 @@ def _analyse(path, part: Part, problem, summary, say) -> dict:
     return entry
 
 
-def _solved(part: Part, problem, loading: tuple, contact: tuple = ()):
+def _solved(part: Part, problem, loading: tuple, contact: tuple = (), say=None):
     """``(PartAnalysis, SweepPoint)``: the part solved at ``loading`` = (load, kind, order)
-    with the run's model, the walls ``contact`` in self-contact."""
+    with the run's model, the walls ``contact`` in self-contact; ``say`` gets the progress
+    lines of a long load ramp."""
     load, kind, order = loading
     setup = problem.setup
     try:
@@ -164,7 +165,26 @@ def _solved(part: Part, problem, loading: tuple, contact: tuple = ()):
                            ports=part_ports(setup), contact=contact)
     except ValueError as err:
         raise InputError(f"the part cannot be analysed: {err}") from None
+    ana.mech.on_step = load_ramp_progress(say, load, problem.case.load_unit)
     return ana, ana.solve(load)
+
+
+#: the part's load ramp says each step it reaches once its analysis has taken this long (s)
+PROGRESS_AFTER = 5.0
+
+
+def load_ramp_progress(say, load: float, unit: str):
+    """``on_step(load factor, state)`` of the part's analysis: one line per load step of
+    Newton's ramp reached after :data:`PROGRESS_AFTER` seconds (None without ``say``)."""
+    if say is None:
+        return None
+    start = time.perf_counter()
+
+    def step(factor, _state):
+        seconds = time.perf_counter() - start
+        if seconds >= PROGRESS_AFTER and factor < load:
+            say(f"reached {factor:.4g} of {load:.4g} {unit} on the load ramp")
+    return step
 
 
 #: the quadrature order of the walls' probe (:func:`walls_probe`) on a 3D part's faces: one
@@ -207,7 +227,7 @@ def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
     if part.dim == 3:
         say(f"its walls pass through each other there (overlap {overlap:.3g} m²)")
         return entry, solved
-    again = _solved(part, problem, loading, contact=walls)
+    again = _solved(part, problem, loading, contact=walls, say=say)
     entry["converged"] = bool(again[1].converged)
     say(f"its walls pass through each other there (overlap {overlap:.3g} m²): analysed again "
         f"with them in contact" + ("" if again[1].converged else ": no equilibrium"))

@@ -9,6 +9,11 @@ from ngsolve import Mesh
 
 from pacto_ng.case import build_problem, get_case
 from pacto_ng.cli import main
+from pacto_ng.params import Parameters
+from pacto_ng.physics.loads import Port
+from pacto_ng.physics.mechanics import Supports
+from pacto_ng.post import part_stage
+from pacto_ng.post.part_analysis import PartAnalysis
 from pacto_ng.post.part_stage import beyond_linear, finish_run
 from pacto_ng.threads import compute
 
@@ -190,3 +195,31 @@ def test_a_part_that_is_not_analysed_says_so():
     line = last_line({"part": {"made": True, "analysed": False, "why_not_analysed": why,
                                "sealed": None}}, "RUN")
     assert line == f"part: made, not analysed ({why}) — RUN/part.stl"
+
+
+def test_a_long_load_ramp_says_each_step_it_reaches(monkeypatch):
+    """The part's analysis calls its mechanics' ``on_step`` at every equilibrium of Newton's
+    load ramp from rest; the part stage's lines name the steps below the load once the
+    analysis has taken PROGRESS_AFTER seconds (0 here), none without a printer."""
+    shape = Rectangle(2.0, 0.5).Face()
+    for e in shape.edges:
+        c = e.center
+        e.name = ("left" if abs(c.x) < 1e-9 else "right" if abs(c.x - 2) < 1e-9 else
+                  "pressure" if abs(c.y) < 1e-9 else "top")
+    mesh = Mesh(OCCGeometry(shape, dim=2).GenerateMesh(maxh=0.25))
+    params = Parameters(model="neohookean", E1=1.0, E0=1e-3, E2=1.0, nu=0.3, plane="strain",
+                        thickness=1.0, order=1)
+    ana = PartAnalysis(mesh, "fixed", params=params, supports=Supports(clamp=("left",)),
+                       ports=Port("right", (0.0, 1.0)))
+    reached = []
+    ana.mech.on_step = lambda load, _state: reached.append(load)
+    with compute(1):
+        assert ana.solve(0.05).converged
+    assert len(reached) >= 2 and reached[-1] == pytest.approx(0.05) and reached[0] < 0.05
+    monkeypatch.setattr(part_stage, "PROGRESS_AFTER", 0.0)
+    lines = []
+    step = part_stage.load_ramp_progress(lines.append, 1e4, "Pa")
+    for load in (2500.0, 1e4):
+        step(load, None)
+    assert lines == ["reached 2500 of 1e+04 Pa on the load ramp"]
+    assert part_stage.load_ramp_progress(None, 1e4, "Pa") is None
