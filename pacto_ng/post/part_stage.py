@@ -123,6 +123,7 @@ def _analyse(path, part: Part, problem, summary, say) -> dict:
     contact, (ana, point) = _with_contact(part, problem, (ana, point), (load, kind, order), say)
     entry = {"analysed": True, "kind": kind, "model": ana.model, "order": order,
              "formulation": ana.formulation, "load": load, "converged": point.converged,
+             "load_reached": load * point.load_reached,
              "newton_iterations": point.iterations, "min_J": _num(point.min_j),
              "output_displacement": _num(point.delta),
              "ports": {p.region: {"along": _num(a), "vector": [_num(c) for c in v]}
@@ -350,8 +351,10 @@ def last_line(summary: dict, path) -> str:
     if part.get("analysed"):
         unit = summary.get("load_unit", "")
         if not part["converged"]:
+            reached = part.get("load_reached")
             bits.append(f"its {part['kind']} analysis at {part['load']:.4g} {unit} did not "
-                        f"converge")
+                        f"converge" + ("" if reached is None else
+                                       f" (equilibria up to {reached:.4g} {unit})"))
         else:
             d, e = part["output_displacement"], part["output_displacement_design"]
             text = f"moves {d:.4g} m at {part['load']:.4g} {unit}"

@@ -223,3 +223,16 @@ def test_a_long_load_ramp_says_each_step_it_reaches(monkeypatch):
         step(load, None)
     assert lines == ["reached 2500 of 1e+04 Pa on the load ramp"]
     assert part_stage.load_ramp_progress(None, 1e4, "Pa") is None
+
+
+def test_a_part_without_an_equilibrium_at_the_load_says_how_far_it_got():
+    """The last line of a sealed part whose analysis stopped short of the run's load names
+    the load its equilibria reached (an earlier summary without it, only the failure)."""
+    part = {"made": True, "sealed": True, "analysed": True, "converged": False,
+            "kind": "follower", "load": 1e4, "load_reached": 9873.0}
+    line = part_stage.last_line({"part": part, "load_unit": "Pa"}, "RUN")
+    assert ("its follower analysis at 1e+04 Pa did not converge (equilibria up to 9873 Pa)"
+            in line)
+    del part["load_reached"]
+    assert "did not converge —" in part_stage.last_line({"part": part, "load_unit": "Pa"},
+                                                         "RUN")
