@@ -94,11 +94,10 @@ def _with_part(done, out, args) -> int:
     """A finished optimisation's part made, checked and analysed (unless ``--no-part``), and
     then, for a run the refinement applies to (:func:`~pacto_ng.post.refine_setup.refuses`: a
     pressure case with an output port) whose part is sealed, and unless ``--no-refine`` or the
-    optimisation stopped on a failure or the part's analysis found no equilibrium, its shape
-    refined as ``pacto refine DIR`` does (the
+    optimisation stopped on a failure, its shape refined as ``pacto refine DIR`` does (the
     refinement keeps the part's topology: an open chamber stays open, and the part line has
-    said so; a refinement that cannot be made is said in one line; the run's result stands);
-    the run's exit code; :func:`why_not_refined` says which sealed parts are not refined."""
+    said so; :func:`why_not_refined` says which sealed parts are not refined; a refinement
+    that cannot be made is said in one line; the run's result stands); the run's exit code."""
     if leads() and not args.no_part:
         summary = finish_run(out, done.problem, done.summary, quiet=args.quiet)
         if (args.no_refine or done.exit_code != 0 or not summary["part"].get("made")

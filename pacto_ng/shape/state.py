@@ -114,8 +114,8 @@ class PartState:
         self.formulation = formulation_for(
             params.formulation, model=params.model, nu=params.nu, plane=params.plane,
             dim=mesh.dim, order=order, simplices=has_simplices(mesh))
-        _, self.fes, self.mixed, self.states = block_spaces(mesh, order, supports,
-                                                            self.formulation)
+        kw, self.fes, self.mixed, self.states = block_spaces(mesh, order, supports,
+                                                             self.formulation)
         self.mesh, self.kind, self.boundary, self.ports = mesh, kind, boundary, ports
         self.contact: ShapeContact | None = None
         self.thickness = float(params.thickness) if mesh.dim == 2 else 1.0
@@ -123,7 +123,7 @@ class PartState:
         # quadrature order above that of their shape derivative (FD 1.4e-5 to 3.2e-5 off,
         # tests/shape/test_mixed_gradient.py): one rule for both, the part analysis's
         self.dx = shape_dx() if self.mixed is None else shape_dx(
-            mechanics_rules(order, bubble=mesh.dim == 2))
+            mechanics_rules(order, bubble="orderinner" in kw))
         self.free = np.array(list(self.states.FreeDofs()), dtype=bool)
         values = solid_fields(mesh)
         l2 = L2(mesh, order=0)
