@@ -56,6 +56,7 @@ from .body_coupling import BodyCoupling
 from .compiled import compiled, symbolic_linearisation, symbolic_tangent
 from .equilibrium import Equilibrium
 from .linear_system import LinearSystem
+from .mixed import stored_energy
 from .newton import NewtonSettings
 from .quadrature import integration_rules, mechanics_rules
 from .spaces import block_spaces
@@ -402,13 +403,9 @@ class Mechanics(Equilibrium, Adjoint):
         """The stored energy density ``t φ`` of a state ``x`` (per unit area in 2D): ``φ(∇u)``,
         or ``φ(F̄ - I) + p̃ (J - Θ)`` in the mixed formulation (:mod:`~pacto_ng.physics.mixed`;
         ``J = Θ`` at equilibrium, in the element mean)."""
-        from ngsolve import Grad
-
         coeffs = self.coeffs if coeffs is None else coeffs
-        if self.mixed is None:
-            return self.thickness * self._energy(Grad(x), coeffs)
-        u, theta, p = self.mixed.split(x)
-        return self.thickness * self.mixed.energy(self._energy, Grad(u), theta, p, coeffs)
+        return self.thickness * stored_energy(self._energy, self.mixed, self.components(x),
+                                              coeffs)
 
     def volume_density(self, x, coeffs=None):
         """Everything integrated over the volume: ``t (φ - s b·u)`` (a CF, per unit area) of a

@@ -86,6 +86,17 @@ def formulation_for(setting: str, *, model: str, nu: float, plane: str, dim: int
     return setting
 
 
+def stored_energy(energy, mixed, parts, coeffs):
+    """The stored energy density of a state's components ``parts``: ``φ(∇u)`` of ``(u,)``
+    (``mixed`` None), or :meth:`Mixed.energy`'s ``φ(F̄ - I) + p̃ (J - Θ)`` of ``(u, ϑ, p̃)``."""
+    from ngsolve import Grad
+
+    if mixed is None:
+        return energy(Grad(parts[0]), coeffs)
+    u, theta, p = parts
+    return mixed.energy(energy, Grad(u), theta, p, coeffs)
+
+
 @dataclass(frozen=True)
 class FormulationSettings(Settings):
     """The finite element formulation of the mechanics."""

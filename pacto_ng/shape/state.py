@@ -58,7 +58,7 @@ from ..errors import InputError
 from ..parallel import free_norm
 from ..physics.energy import make_energy
 from ..physics.equilibrium import NewtonFailure
-from ..physics.mixed import formulation_for, has_simplices
+from ..physics.mixed import formulation_for, has_simplices, stored_energy
 from ..physics.newton import solve_with_continuation
 from ..physics.quadrature import integration_rules, mechanics_rules
 from ..physics.spaces import block_spaces
@@ -158,10 +158,7 @@ class PartState:
 
     def density(self, parts):
         """``ψ`` of a state's components ``parts`` (see the module), per unit volume."""
-        if self.mixed is None:
-            return self.energy(Grad(parts[0]), self.coeffs)
-        u, theta, p = parts
-        return self.mixed.energy(self.energy, Grad(u), theta, p, self.coeffs)
+        return stored_energy(self.energy, self.mixed, parts, self.coeffs)
 
     def _guard_of(self, guard, parts):
         """The admissibility CF of the state ``parts`` (positive where admissible), or None."""
