@@ -117,6 +117,7 @@ class Equilibrium:
             raise ValueError("contact needs the nonlinear route (build the block with "
                              "linear=False)")
         self.contact = contact
+        self.settings = self.settings.for_contact()
         contact.update(self.a, self.gfx.vec)
 
     def contact_settled(self) -> bool:

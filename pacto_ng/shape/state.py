@@ -34,7 +34,9 @@ Newton's method with load continuation and the guard of the formulation
 last shape's state; the tangent ``K = ∂R/∂x`` comes from ``AssembleLinearization`` and is
 factorised once and refactorised numerically (``Update``) with the same ordering afterwards.
 
-Output springs.  One at a named point adds its energy ``k/2 (d̂ · u)²`` to ``R``.  One on a
+Output springs.  One at a named point adds its energy ``k/2 (d̂ · u)²`` to ``R``, and so does one
+spread about the point (:class:`~pacto_ng.physics.loads.Spring`), whose support the shape
+holds (:class:`~pacto_ng.shape.deformation.ShapeSpace`'s ``near``).  One on a
 boundary port is the runs' distributed spring of the same total stiffness,
 ``k/2 (1/|Γ|) ∫_Γ (d̂ · u)² ds`` (:class:`~pacto_ng.physics.loads.Spring`), with ``1/|Γ|`` of
 the current shape.
@@ -193,7 +195,8 @@ class PartState:
         for p in self.ports:  # output springs
             for spring in p.springs():
                 if p.region not in self.mesh.GetBoundaries():
-                    a += Variation(spring.energy(self.mesh, u))  # at a named point
+                    # at a named point, or spread about it over a support the shape holds
+                    a += Variation(spring.energy(self.mesh, u))
                     continue
                 # on a boundary: k/2 (1/|Γ|) ∫_Γ (d̂·u)² ds, 1/|Γ| of the current shape
                 d = np.asarray(spring.direction, dtype=float)
@@ -226,6 +229,7 @@ class PartState:
                                     displacement=lambda x: self.split(x)[0])
         self.a = self._tangent_form(False)  # full storage: the contact's tangent is added
         self.linear, self._inverse = False, None
+        self.settings = self.settings.for_contact()
 
     # -- the problem Newton drives (pacto_ng.physics.newton) ---------------------------------
     def residual(self, vec, out, load):
