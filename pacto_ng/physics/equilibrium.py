@@ -297,6 +297,12 @@ class Equilibrium:
         return self.gfx.vec
 
     @property
+    def displacement_dofs(self) -> slice:
+        """The displacement's entries of :attr:`state_vector` (all of it, or the first
+        component of the mixed state's)."""
+        return slice(0, self.fes.ndof)
+
+    @property
     def ndof(self) -> int:
         """The number of displacement dofs (over every rank of a distributed mesh)."""
         return int(self.fes.ndofglobal)

@@ -117,7 +117,7 @@ def solve_controlled(problem, x, load: float, c, target: float, s: NewtonSetting
 
 def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, stop,
           max_points: int = 100, max_step: float | None = None, on_point=None,
-          arc: bool = True) -> list[PathPoint]:
+          arc: bool = True, dofs=slice(None)) -> list[PathPoint]:
     """Equilibria along the path from the state ``x`` at load factor ``load`` (``x`` updated
     in place to the last equilibrium), the control ``c · x`` raised by ``step`` at first, until
     ``stop(point)`` is true or ``max_points`` are found.  The increment grows by ``s.grow``
@@ -127,7 +127,10 @@ def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, s
     admissible.  Where the control cannot be raised further (it turns back along the path)
     and ``arc``, the path goes on by arc length (:func:`_by_arc_length`).  Returns the
     :class:`PathPoint` of every step; ``on_point(point)`` gets each as it is found.
-    PathFailure when a step cannot be cut further (the points found so far in ``.points``)."""
+    PathFailure when a step cannot be cut further (the points found so far in ``.points``).
+    ``dofs`` (an index of the state vector) are the entries whose motion measures the path:
+    the displacement's of a mixed state, whose pressure field (in pascals) would otherwise
+    outweigh the displacement (in metres) in every length and secant."""
     max_step = 8.0 * step if max_step is None else max_step
     points, history = [], [(c.InnerProduct(x), float(load), x.FV().NumPy().copy())]
     inc, rate = step, None  # the increment; the last step's state change per unit control
@@ -137,7 +140,7 @@ def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, s
         goal = here[0] + inc
         lam = _predict(problem, history, goal, x)
         ok, lam, it, why = solve_controlled(problem, x, lam, c, goal, s)
-        moved = float(np.linalg.norm(x.FV().NumPy() - here[2])) / abs(inc)
+        moved = float(np.linalg.norm((x.FV().NumPy() - here[2])[dofs])) / abs(inc)
         if ok and rate is not None and moved > JUMP * rate:
             ok, why = False, "the state jumped (to another branch of the path)"
         if not ok:
@@ -147,7 +150,8 @@ def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, s
                 continue
             if arc and len(history) > 1:
                 return _by_arc_length(problem, x, c, history, s, stop=stop, points=points,
-                                      max_points=max_points, on_point=on_point, longest=longest)
+                                      max_points=max_points, on_point=on_point, longest=longest,
+                                      dofs=dofs)
             raise _failure(f"no equilibrium beyond the control {here[0]:.6g} (load factor "
                            f"{here[1]:.6g}): {why}", points)
         rate, longest = moved, max(longest, moved * abs(inc))
@@ -159,7 +163,7 @@ def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, s
 
 
 def _by_arc_length(problem, x, c, history, s: NewtonSettings, *, stop, points, max_points,
-                   on_point, longest: float = 0.0) -> list[PathPoint]:
+                   on_point, longest: float = 0.0, dofs=slice(None)) -> list[PathPoint]:
     """Go on along the path from the last two equilibria of ``history`` ((control, load,
     state) each) by arc length (see the module): each step advances the state by ``l`` along
     the unit secant through the last two, ``l`` the last step's length at first, grown and
@@ -167,22 +171,25 @@ def _by_arc_length(problem, x, c, history, s: NewtonSettings, *, stop, points, m
     longest step before, whichever is longer; at least ``s.min_increment`` of the first).
     Appends to ``points`` (the control ``c · x`` still recorded, ``by_arc`` set) until
     ``stop(point)`` or ``max_points``; returns them.  PathFailure when a step cannot be cut
-    further."""
-    first = float(np.linalg.norm(history[-1][2] - history[-2][2]))
+    further.  Lengths and the secant's direction are of the entries ``dofs`` (:func:`trace`);
+    the predictor extrapolates every entry."""
+    first = float(np.linalg.norm((history[-1][2] - history[-2][2])[dofs]))
     length, t, most = first, x.CreateVector(), max(8.0 * first, longest)
     while len(points) < max_points:
         (_, l1, x1), (_, l2, x2) = history[-2], history[-1]
         secant = x2 - x1
-        t.FV().NumPy()[:] = secant / np.linalg.norm(secant)
+        span = np.linalg.norm(secant[dofs])
+        t[:] = 0.0
+        t.FV().NumPy()[dofs] = secant[dofs] / span
         along = t.InnerProduct(x)  # x holds x2 here
-        w = length / np.linalg.norm(secant)
+        w = length / span
         x.FV().NumPy()[:] = x2 + w * secant  # the secant's predictor, where admissible
         lam = l2 + w * (l2 - l1)
         if not problem.admissible(x):
             x.FV().NumPy()[:], lam = x2, l2
         ok, lam, it, why = solve_controlled(problem, x, lam, t, along + length, s,
                                             tol=CONTROL_RTOL * (abs(along) + length))
-        if ok and np.linalg.norm(x.FV().NumPy() - x2) > JUMP * length:
+        if ok and np.linalg.norm((x.FV().NumPy() - x2)[dofs]) > JUMP * length:
             ok, why = False, "the state jumped (to another branch of the path)"
         if not ok:
             x.FV().NumPy()[:] = x2

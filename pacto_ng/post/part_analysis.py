@@ -405,8 +405,8 @@ class PartAnalysis:
             path = trace(mech, x, c, step,
                          dataclasses.replace(mech.settings, min_increment=PATH_FLOOR),
                          load=start.load, stop=lambda q: q.load >= P, max_points=PEAK_STEPS,
-                         max_step=PEAK_GROWTH * step,
-                         on_point=line)
+                         max_step=PEAK_GROWTH * step, on_point=line,
+                         dofs=mech.displacement_dofs)
         except PathFailure as err:
             path = err.points
             if say is not None:

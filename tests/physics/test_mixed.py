@@ -86,6 +86,17 @@ def test_homogeneous_state_equals_the_displacement_formulation(kind, order):
     assert np.allclose([1.0 + theta(p) for p in pts], F11 * F22, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("formulation", ["displacement", "mixed"])
+def test_the_displacement_dofs_are_the_displacements(formulation):
+    """``displacement_dofs`` picks the displacement's entries out of the state vector (the
+    whole of it, or the mixed state's first component), the entries a path follower measures
+    its lengths by: they are the displacement's own coefficients."""
+    _, mech = _stretched_block(formulation, 2, "trig")
+    state = mech.state_vector.FV().NumPy()[mech.displacement_dofs]
+    assert np.array_equal(state, mech.u.vec.FV().NumPy())
+    assert (mech.state_vector.size > state.size) == (formulation == "mixed")
+
+
 def _cantilever(nu, formulation, n):
     """Tip deflection of a plane-strain Neo-Hookean cantilever (1 x 0.25 m, Q1 on 4n x n
     quads, a downward 20 N on the right edge: 4 % of the length) and its block."""
