@@ -17,8 +17,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from ngsolve import BBBND, BBND, BND, CF, IfPos, Integrate, ds, dx, exp, x, y, z
 
 from ..settings import Settings, setting
+from .walls import solid_boundaries
 
 
 @dataclass(frozen=True)
@@ -48,8 +50,6 @@ def _region(mesh, name):
 def _measure(mesh, name):
     """``(measure, weight)``: a point's measure and weight 1 (the value at its vertices), or a
     boundary's (an edge's in 3D) measure and one over its length or area (the mean over it)."""
-    from ngsolve import Integrate, dx, ds
-
     reg, kind = _region(mesh, name)
     if kind == "point":
         return dx(definedon=reg), 1.0
@@ -61,8 +61,6 @@ def _measure(mesh, name):
 
 def _vector(mesh, values, what: str, region: str):
     """``values`` as a CF of the mesh's dimension (``ValueError`` if the length differs)."""
-    from ngsolve import CF
-
     if len(values) != mesh.dim:
         raise ValueError(f"{what} at '{region}': {len(values)} components on a {mesh.dim}D mesh "
                          f"(give {mesh.dim})")
@@ -83,27 +81,79 @@ class PointLoad:
         return (scale * w * (force * u)) * meas
 
 
+#: a spread spring's weight exp(-ρ²/spread²) is cut to zero at ρ = SPREAD_REACH spreads (a
+#: weight of 1.1e-7 there)
+SPREAD_REACH = 4.0
+
+
 @dataclass(frozen=True)
 class Spring:
     """Linear spring ``k/2 (d·u)²`` at a named point (or on the mean of a boundary), N/m;
-    ``direction`` has as many components as the mesh has dimensions (the default is 2D's x)."""
+    ``direction`` has as many components as the mesh has dimensions (the default is 2D's x).
+
+    ``spread`` > 0 (m) spreads a spring at a named point over the boundary near it: the
+    weighted mean ``k/2 ∫_Γ ω (d·u)² ds / ∫_Γ ω ds`` over the solid's boundaries, with the
+    weight ``ω = exp(-|x - x0|² / spread²)`` about the point ``x0``, cut to zero beyond
+    SPREAD_REACH spreads (:meth:`support`, a ball a shape refinement holds).  A force at a
+    point has no finite displacement in elasticity (it grows as the mesh under it is refined,
+    in 2D as the logarithm of the element size), so a point spring's Δ depends on the mesh:
+    on a body-fitted part, whose elements at a corner port are smaller than the design's,
+    the spring's force can crush the element at the point.  A spread spring, the size of
+    what the port pushes on, acts alike on the design's mesh and on the part's.
+    """
 
     region: str
     stiffness: float
     direction: tuple[float, ...] = (1.0, 0.0)
+    spread: float = 0.0
+
+    def weight(self, mesh):
+        """``(ω, measure, size)``: the spring's weight, the measure it integrates over and
+        ``∫ ω`` over it: 1, the point's measure and 1; 1, the edge's or the boundary's and its
+        length or area; spread about a point, the weight of the class docstring, the solid's
+        boundaries (not the interfaces between its domains: :func:`~pacto_ng.physics.walls.
+        solid_boundaries`) and ``∫ ω ds`` (summed over the ranks of a distributed mesh)."""
+        support = self.support(mesh)
+        if support is None:
+            meas, w = _measure(mesh, self.region)
+            return CF(1.0), meas, 1.0 / w
+        x0, reach = support
+        r2 = sum((c - float(v)) ** 2 for c, v in zip((x, y, z), x0))
+        omega = exp(-r2 / self.spread ** 2) * IfPos(reach ** 2 - r2, 1.0, 0.0)
+        names = solid_boundaries(mesh)
+        region = mesh.Boundaries(names[0])
+        for name in names[1:]:
+            region = region + mesh.Boundaries(name)
+        return omega, ds(definedon=region), float(Integrate(omega, mesh, BND, definedon=region))
+
+    def support(self, mesh):
+        """``(x0, radius)``: the ball about the point ``x0`` out of which the weight of a
+        spread spring is zero; None for a spring that is not spread about a point."""
+        if not self.spread > 0 or _region(mesh, self.region)[1] != "point":
+            return None
+        return point_of(mesh, self.region), SPREAD_REACH * self.spread
 
     def energy(self, mesh, u):
+        """``k/2 (d·u)²`` as an integral: at the point, or the ω-weighted mean over the
+        boundary (:meth:`weight`).  For a boundary or a spread spring it is the mean square, a
+        distributed spring of the same total stiffness, not the squared mean (as stated in
+        the docs); at a point both agree."""
         d = np.asarray(self.direction, dtype=float)
         d = _vector(mesh, d / np.linalg.norm(d), "spring direction", self.region)
-        meas, w = _measure(mesh, self.region)
-        # the mean displacement of a boundary needs the squared mean, not the mean square:
-        # for a point region w = 1 and both agree; for an edge we use the mean square (a
-        # distributed spring of the same total stiffness), which is stated in the docs.
-        return 0.5 * self.stiffness * w * (d * u) ** 2 * meas
+        omega, meas, size = self.weight(mesh)
+        return (0.5 * self.stiffness / size) * omega * (d * u) ** 2 * meas
 
     def where(self, mesh):
         """The region of the mesh the spring acts on (a point, an edge or a boundary)."""
         return _region(mesh, self.region)[0]
+
+
+def point_of(mesh, name: str) -> tuple[float, ...]:
+    """The coordinates of the named point ``name`` (its first vertex)."""
+    for el in mesh.Elements(BBBND if mesh.dim == 3 else BBND):
+        if el.mat == name:
+            return tuple(mesh[el.vertices[0]].point)
+    raise ValueError(f"'{name}' is not a named point of the mesh")
 
 
 @dataclass(frozen=True)
@@ -117,6 +167,7 @@ class Port:
     direction: tuple[float, ...]
     spring: float = 0.0
     weight: float = 1.0
+    spread: float = 0.0  # the spring's spread about a named point (Spring.spread), m
 
     def __post_init__(self):
         if not self.spring >= 0:
@@ -132,7 +183,8 @@ class Port:
 
     def springs(self) -> tuple[Spring, ...]:
         """The port's output spring (none for ``spring`` = 0)."""
-        return (Spring(self.region, self.spring, self.direction),) if self.spring > 0 else ()
+        return ((Spring(self.region, self.spring, self.direction, self.spread),)
+                if self.spring > 0 else ())
 
 
 @dataclass(frozen=True)

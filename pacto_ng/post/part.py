@@ -110,18 +110,20 @@ class Part:
 def part_ports(setup) -> tuple[Port, ...]:
     """The output ports of a set-up for a part's analysis: each with the springs of the
     set-up on its region along its direction as its own spring (Δ = Σ weight · d·u, as the
-    optimisation reads it)."""
+    optimisation reads it), spread as the set-up's port or spring is (the larger spread)."""
     out = []
     for port in setup.ports:
         d = np.asarray(port.direction, dtype=float)
         d = d / np.linalg.norm(d)
-        k = float(port.spring)
+        k, spread = float(port.spring), float(port.spread)
         for s in setup.springs:
             sd = np.asarray(s.direction, dtype=float)
             sd = sd / np.linalg.norm(sd)
             if s.region == port.region and abs(abs(sd @ d) - 1.0) < 1e-12:
                 k += float(s.stiffness)
-        out.append(Port(port.region, tuple(map(float, port.direction)), k, float(port.weight)))
+                spread = max(spread, float(s.spread))
+        out.append(Port(port.region, tuple(map(float, port.direction)), k, float(port.weight),
+                        spread))
     return tuple(out)
 
 

@@ -87,7 +87,8 @@ class Job:
 
 def shape_response(mesh, job: Job):
     """``(PartResponse, ShapeSpace)`` of the part: the run's supports, ports and pressure;
-    the clamp and the ports held, the symmetry lines held in their normal component; with
+    the clamp and the ports held (a port's spring spread about it with its support), the
+    symmetry lines held in their normal component; with
     ``job.contact`` every boundary of the solid in self-contact."""
     supports = present_supports(job.setup.supports, mesh)
     ports = part_ports(job.setup)
@@ -98,7 +99,9 @@ def shape_response(mesh, job: Job):
     try:
         response = PartResponse(mesh, params=job.params, supports=supports, ports=ports,
                                 pressure=job.load, kind=job.kind)
-        space = ShapeSpace(mesh, hold=hold)
+        supports_of_springs = tuple(sp.support(mesh) for p in ports for sp in p.springs())
+        space = ShapeSpace(mesh, hold=hold,
+                           near=tuple(b for b in supports_of_springs if b is not None))
         if job.contact:
             response.use_contact(space, solid_boundaries(mesh))
     except ValueError as err:

@@ -28,7 +28,7 @@ not move there.  ``hold`` is a tuple of region names (every component held) or a
 from __future__ import annotations
 
 import numpy as np
-from ngsolve import CF, GridFunction, Integrate, LinearForm, VectorH1, ds, dx
+from ngsolve import CF, VOL, GridFunction, Integrate, LinearForm, VectorH1, ds, dx
 
 from ..physics.mechanics import Supports
 from ..physics.spaces import dirichlet_options
@@ -63,18 +63,38 @@ class ShapeSpace:
         Order of the VectorH1 space ``X`` of ``d`` and of the gradients.
     hold : tuple of str or Supports
         The regions that may not move (every component for a tuple of names).
+    near : tuple of (point, radius)
+        Balls that may not move: every element reaching into one is held (e.g. the support
+        of an output spring spread about its port, :meth:`~pacto_ng.physics.loads.Spring.
+        support`).
 
     Attributes: ``mesh``, ``space`` (``X``), ``deformation`` (the GridFunction of ``d``),
     ``held`` (numpy mask of the held dofs), ``ndof``.
     """
 
-    def __init__(self, mesh, *, order: int = 1, hold: tuple[str, ...] | Supports = ()):
+    def __init__(self, mesh, *, order: int = 1, hold: tuple[str, ...] | Supports = (),
+                 near: tuple = ()):
         supports = hold if isinstance(hold, Supports) else Supports(clamp=tuple(hold))
         self.mesh = mesh
         self.space = VectorH1(mesh, order=int(order), **dirichlet_options(mesh, supports))
         self.held = ~np.array(list(self.space.FreeDofs()), dtype=bool)
+        for point, radius in near:
+            self.held[self._dofs_near(np.asarray(point, dtype=float), float(radius))] = True
         self.deformation = GridFunction(self.space)
         self.ndof = self.space.ndof
+
+    def _dofs_near(self, point, radius: float) -> list[int]:
+        """The dofs of every element that reaches into the ball of ``radius`` about
+        ``point``: one with a vertex within ``radius`` plus its diameter (with a tenth more
+        for a curved element)."""
+        xyz = np.array([v.point for v in self.mesh.vertices], dtype=float)
+        dofs = []
+        for el in self.mesh.Elements(VOL):
+            corners = xyz[[v.nr for v in el.vertices]]
+            size = max(np.linalg.norm(a - b) for a in corners for b in corners)
+            if np.min(np.linalg.norm(corners - point, axis=1)) <= radius + 1.1 * size:
+                dofs.extend(self.space.GetDofNrs(el))
+        return dofs
 
     def set(self, values) -> None:
         """Move the mesh to ``Ω = (id + d)(Ω0)``, ``d`` given by its coefficients ``values``."""

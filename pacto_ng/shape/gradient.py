@@ -42,7 +42,8 @@ derivative is ``dJ[V]`` (the quotient rule ``d(Δ/SE) = (dΔ - J dSE)/SE`` on th
 parts).  Both objectives share the code: ``∂J = α ∂Δ - β ∂SE`` with ``(α, β) = (1, 0)`` for
 ``Δ`` and ``(1/SE, Δ/SE²)`` for ``Δ/SE``.
 
-Output springs.  One at a named point has no explicit shape term (above).  One on a boundary
+Output springs.  One at a named point has no explicit shape term (above), nor has one spread
+about it over a support the shape holds.  One on a boundary
 port, ``k/2 (1/|Γ|) ∫_Γ (d̂ · u)² ds`` with ``1/|Γ|`` of the current shape, has the term
 ``k/|Γ| ∫_Γ (d̂·u)(d̂·λ) ds`` in ``R(x; λ)``, which depends on the shape through the integral
 and through ``|Γ|``; ``L`` carries it as ``-k w ∫_Γ (d̂·u)(d̂·λ) ds + k w² J ∫_Γ ds`` with
