@@ -218,6 +218,10 @@ def _refine_remeshing(job: Job, mesh, bound: float, steps: int, quiet: bool,
             if job.hold_ratio and floor is None:
                 response.solve()
                 floor = response.value("ratio")
+                if not floor > 0:
+                    raise InputError(f"refine: the part's Δ/SE is {floor:.4g} at the run's "
+                                     f"load: its port moves against the port's direction, "
+                                     f"no mechanism to refine")
             result = refine(response, space, volume_max=bound, steps=steps - done,
                             step=STEP_SHARE * job.maxh, penalty=penalty,
                             alpha=1.0 / part_size(mesh) ** 2, bounds=job.domain, scale=scale,

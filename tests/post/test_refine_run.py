@@ -17,6 +17,7 @@ Jacobian 0.33, no warning; the refinement about 1.3 s.
 """
 import csv
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -354,3 +355,26 @@ def test_which_parts_are_not_why_not_refined():
     assert "pacto refine runs/x refines it" in line and "neohookean" in line
     assert why_not_refined({"converged": True}, "wang", 2, "d") == ""
     assert why_not_refined({"converged": True}, "linear", 3, "d") == ""
+
+
+def test_a_part_moving_against_its_port_is_refused_in_one_line(solid_member, tmp_path,
+                                                                monkeypatch, capsys):
+    """The solid member with its output spring spread over 4 mm about the port (the member's
+    corner held back over that patch) moves its port against the port's direction (Δ
+    -1.39e-6 m, measured): its Δ/SE is negative, and the refinement of a mechanism says so in
+    one line, exit code 2, before any step."""
+    import dataclasses
+
+    from pacto_ng.post import refine_setup
+
+    def spread(setup):
+        return tuple(dataclasses.replace(p, spread=0.004) for p in part_ports(setup))
+
+    part_ports = refine_setup.part_ports
+    monkeypatch.setattr(refine_setup, "part_ports", spread)
+    run = tmp_path / "run"
+    shutil.copytree(solid_member, run, ignore=shutil.ignore_patterns("refine"))
+    code = main(["refine", str(run), "--steps", "1", "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert "Δ/SE is -" in err[0] and "against the port's direction" in err[0]
