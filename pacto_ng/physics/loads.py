@@ -99,7 +99,8 @@ class Spring:
     in 2D as the logarithm of the element size), so a point spring's Δ depends on the mesh:
     on a body-fitted part, whose elements at a corner port are smaller than the design's,
     the spring's force can crush the element at the point.  A spread spring, the size of
-    what the port pushes on, acts alike on the design's mesh and on the part's.
+    what the port pushes on, acts alike on the design's mesh and on the part's where the
+    port's neighbourhood is the solid's boundary in both (not a passive void's edge).
     """
 
     region: str

@@ -328,7 +328,7 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
                 inc *= s.grow
         else:
             u.data = saved
-            inc = 0.5 * (trial_load - load)  # the increment tried, also where it was cut to the target
+            inc = 0.5 * (trial_load - load)  # the increment tried (also one cut to the target)
             result.reason = why
             if inc < s.min_increment * target:
                 result.reason = (f"load increment fell below {s.min_increment:g} of the target "
