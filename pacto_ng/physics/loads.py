@@ -37,8 +37,7 @@ def _region(mesh, name):
     """``(region, kind)`` of a named point (``"point"``) or boundary: in 2D a named edge
     (``"boundary"``); in 3D a named face (``"boundary"``) or a named edge (``"edge"``)."""
     points = mesh.BBBoundaries if mesh.dim == 3 else mesh.BBoundaries
-    named_points = mesh.GetBBBoundaries() if mesh.dim == 3 else mesh.GetBBoundaries()
-    if name in named_points:
+    if name in named_points(mesh):
         return points(name), "point"
     if mesh.dim == 3 and name in mesh.GetBBoundaries():
         return mesh.BBoundaries(name), "edge"
@@ -147,6 +146,11 @@ class Spring:
     def where(self, mesh):
         """The region of the mesh the spring acts on (a point, an edge or a boundary)."""
         return _region(mesh, self.region)[0]
+
+
+def named_points(mesh) -> tuple[str, ...]:
+    """The names of the mesh's named points (vertex regions)."""
+    return tuple(mesh.GetBBBoundaries() if mesh.dim == 3 else mesh.GetBBoundaries())
 
 
 def point_of(mesh, name: str) -> tuple[float, ...]:

@@ -34,11 +34,13 @@ import time
 from pathlib import Path
 
 import numpy as np
+from ngsolve import VOL, ElementId
 
 from ..errors import InputError
 from ..files import atomic_write_text
 from ..physics.contact import SelfContact
 from ..physics.equilibrium import NewtonFailure
+from ..physics.loads import named_points, point_of
 from ..physics.walls import solid_boundaries
 from .domain import symmetry_line
 from .mirror3d import mirror_surface, symmetry_planes
@@ -139,7 +141,8 @@ def _analyse(path, part: Part, problem, summary, say) -> dict:
     entry["gap_to_run"] = (None if not point.converged or not run_delta else
                            (point.delta - run_delta) / abs(run_delta))
     entry["contact"] = contact
-    entry["warnings"] = _warnings(part, problem, ports, point) + _overlap_warning(contact, path)
+    entry["warnings"] = (_warnings(part, problem, ports, point) + _overlap_warning(contact, path)
+                         + ([] if point.converged else crushed_at_port(ana, ports)))
     if point.converged and ana.model == "linear":
         entry["warnings"] += beyond_linear(part.mesh, point.max_u)
     if point.converged:
@@ -285,6 +288,26 @@ def beyond_linear(mesh, max_u: float) -> list[str]:
     return [f"the part moves up to {max_u:.3g} m, {max_u / size:.0%} of its size "
             f"({size:.3g} m): beyond small strains and rotations, where the linear model's "
             f"figures do not hold (run the case with --model neohookean, or --model auto)"]
+
+
+def crushed_at_port(ana: PartAnalysis, ports) -> list[str]:
+    """Where the part's analysis stopped short of its load with its lowest ``det F`` (at the
+    last equilibrium it reached) at a port whose spring acts at one point, within two of
+    that element's sizes: the line that says so.  A force at a point has no finite
+    displacement, and the part's elements there, finer than the design's, are crushed
+    (gripper-silicone's default part: docs/benchmarks.md, Limits)."""
+    low = ana.mech.lowest_jacobian()
+    mesh = ana.mesh
+    corners = np.array([mesh[v].point for v in mesh[ElementId(VOL, low["element"])].vertices])
+    size = max(float(np.linalg.norm(a - b)) for a in corners for b in corners)
+    for port in ports:
+        if port.spring > 0 and not port.spread and port.region in named_points(mesh):
+            if np.linalg.norm(corners.mean(axis=0) - point_of(mesh, port.region)) <= 2 * size:
+                return [f"its lowest det F ({low['J']:.2g}, at the last equilibrium) lies at the "
+                        f"output '{port.region}', whose spring acts at one point: a force at a "
+                        f"point crushes the part's elements there, finer than the design's (a "
+                        f"case file can spread it: Spring(..., spread=r), docs/guide.md)"]
+    return []
 
 
 def _warnings(part: Part, problem, ports, point) -> list[str]:
