@@ -1,5 +1,7 @@
 """Small shared set-ups of the tests."""
+import ngsolve as ng
 import numpy as np
+from netgen import occ
 
 from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
 
@@ -77,3 +79,16 @@ def run_with_design(out, argv, design):
     saved["x"] = x
     np.savez(ck, **saved)
     return out
+
+
+def unit_square(maxh: float, points: dict):
+    """The unit square meshed at ``maxh``: edges bottom, top, left, right; its corners named
+    by ``points`` ({name: (x, y)})."""
+    shape = occ.MoveTo(0, 0).Rectangle(1.0, 1.0).Face()
+    for e in shape.edges:
+        c = e.center
+        e.name = ("bottom" if c.y < 1e-9 else "top" if c.y > 1 - 1e-9 else
+                  "left" if c.x < 1e-9 else "right")
+    for name, (px, py) in points.items():
+        shape.vertices.Nearest((px, py, 0)).name = name
+    return ng.Mesh(occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))

@@ -2,27 +2,20 @@
 spring is: the same total stiffness as the point spring, and a displacement that settles as
 the mesh is refined where the point spring's does not (a force at a point has no finite
 displacement in elasticity)."""
-import ngsolve as ng
 import numpy as np
 import pytest
-from netgen import occ
 from ngsolve import CF, Integrate
 
 from pacto_ng.physics.loads import SPREAD_REACH, PointLoad, Spring
 from pacto_ng.physics.materials import linear_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
+from tests.small_cases import unit_square
 
 
 def square(maxh):
     """The unit square: edges bottom, top, left, right; its top right corner the point
     ``corner``."""
-    shape = occ.MoveTo(0, 0).Rectangle(1.0, 1.0).Face()
-    for e in shape.edges:
-        c = e.center
-        e.name = ("bottom" if c.y < 1e-9 else "top" if c.y > 1 - 1e-9 else
-                  "left" if c.x < 1e-9 else "right")
-    shape.vertices.Nearest((1, 1, 0)).name = "corner"
-    return ng.Mesh(occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=maxh))
+    return unit_square(maxh, {"corner": (1.0, 1.0)})
 
 
 @pytest.mark.parametrize("spread", [0.0, 0.1, 0.3])

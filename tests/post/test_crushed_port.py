@@ -2,14 +2,13 @@
 det F at a port whose spring acts at one point (part_stage.crushed_at_port)."""
 from types import SimpleNamespace
 
-import ngsolve as ng
 import numpy as np
-from netgen import occ
 
 from pacto_ng.physics.loads import PointLoad, Port, Spring
 from pacto_ng.physics.materials import jacobian, neohookean_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
 from pacto_ng.post.part_stage import crushed_at_port
+from tests.small_cases import unit_square
 
 
 def held_corner():
@@ -18,14 +17,7 @@ def held_corner():
     element at the corner, dragged by the top and held by the spring, has the lowest det F
     (0.41, measured; at 0.3 N Newton stalls at 0.58 of the load, as a part's does).  The top
     left corner is the point ``other``."""
-    shape = occ.MoveTo(0, 0).Rectangle(1.0, 1.0).Face()
-    for e in shape.edges:
-        c = e.center
-        e.name = ("bottom" if c.y < 1e-9 else "top" if c.y > 1 - 1e-9 else
-                  "left" if c.x < 1e-9 else "right")
-    shape.vertices.Nearest((1, 1, 0)).name = "corner"
-    shape.vertices.Nearest((0, 1, 0)).name = "other"
-    mesh = ng.Mesh(occ.OCCGeometry(shape, dim=2).GenerateMesh(maxh=0.1))
+    mesh = unit_square(0.1, {"corner": (1.0, 1.0), "other": (0.0, 1.0)})
     mech = Mechanics(mesh, order=2, energy=lambda G, c: neohookean_energy(G, 1.0, 0.3),
                      supports=Supports(clamp=("bottom",)), loads=(PointLoad("top", (0.1, 0.0)),),
                      springs=(Spring("corner", 10.0, (1.0, 0.0)),), thickness=1.0,
