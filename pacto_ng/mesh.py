@@ -302,7 +302,7 @@ def _say_snapped_segments(layout: Layout, xs: np.ndarray, ys: np.ndarray) -> Non
         if any(np.min(np.abs(nodes - e)) > tol for e in ends):
             lo, hi = sorted(ends)
             mids = 0.5 * (nodes[:-1] + nodes[1:])
-            covered = np.flatnonzero((mids >= lo) & (mids <= hi))
+            covered = np.flatnonzero((mids >= lo - tol) & (mids <= hi + tol))
             got = (nodes[covered[-1] + 1] - nodes[covered[0]]) if covered.size else 0.0
             moved.append(f"'{seg.name}' {hi - lo:.4g} -> {got:.4g}")
     if moved:

@@ -57,8 +57,8 @@ class NewtonSettings:
     max_iter: int = 30
     # an attempt at one load factor gives up after this many iterations without a residual
     # below its smallest so far: Newton converging makes a new smallest at least every few
-    # (at most 4 apart in the converged steps of gripper-silicone's part at defaults,
-    # 2026-12-07, whose failed attempts each ran all of max_iter before this)
+    # (at most 4 apart in the converged steps of gripper-silicone's part with its former
+    # point spring, 2026-12-07, whose failed attempts each ran all of max_iter before this)
     stall: int = 8
     max_backtracks: int = 8
     initial_increment: float = 1.0  # first load increment (fraction of the target)

@@ -295,7 +295,7 @@ def crushed_at_port(ana: PartAnalysis, ports) -> list[str]:
     last equilibrium it reached) at a port whose spring acts at one point, within two of
     that element's sizes: the line that says so.  A force at a point has no finite
     displacement, and the part's elements there, finer than the design's, are crushed
-    (gripper-silicone's default part: docs/benchmarks.md, Limits)."""
+    (gripper-silicone's part with its former point spring: docs/benchmarks.md)."""
     low = ana.mech.lowest_jacobian()
     mesh = ana.mesh
     corners = np.array([mesh[v].point for v in mesh[ElementId(VOL, low["element"])].vertices])

@@ -63,3 +63,38 @@ def test_default_run_converges_to_a_working_part(case, tmp_path):
     assert s["output_displacement"] > 0.0
     rho = np.asarray(meshio.read(out / "design.vtu").point_data["rho_bar"])
     assert float(np.mean((rho > 0.1) & (rho < 0.9))) < 0.1
+
+
+@pytest.mark.parametrize("extra, length", [([], 8e-4), (COARSE, 1e-3)],
+                         ids=["default-mesh", "coarse"])
+def test_gripper_silicone_s_spring_and_port_act_on_the_jaw_pad_s_edge(extra, length):
+    """The output spring and port act on "output_edge", the jaw pad's right edge from its inner
+    corner (40, 4) mm up 0.8 mm (the whole 0.5 mm element edges it reaches into on the coarse
+    grid: 1 mm): every element edge of it borders the passive pad (so the part, which keeps
+    the pad, has the same edge), and Δ is the edge's mean of -u_y; the layout refuses an edge
+    longer than the pad's 1 mm."""
+    from ngsolve import BND, Integrate
+
+    from pacto_ng.case import build_problem, get_case
+    from pacto_ng.geometries import pa_mechanism as geo
+    from pacto_ng.threads import compute
+
+    case = get_case("gripper-silicone")
+    params = case.defaults.with_overrides(
+        dict(zip([a.lstrip("-") for a in extra[::2]], extra[1::2])))
+    setup = case.setup(params)
+    assert setup.port.region == setup.springs[0].region == "output_edge"
+    assert "output_edge" in setup.pressure.zero
+    with compute():
+        problem = build_problem(case, params)
+        mesh = problem.mech.mesh
+        edge = mesh.Boundaries("output_edge")
+        assert Integrate(1.0, mesh, BND, definedon=edge) == pytest.approx(length, rel=1e-12)
+        beside = {mesh[e].elements[0] for el in mesh.Elements(BND) if el.mat == "output_edge"
+                  for e in el.edges}
+        assert {mesh[el].mat for el in beside} == {"jaw_pad"}
+        problem.evaluate(np.full(problem.field.n, 0.4))
+        mean_uy = Integrate(problem.mech.u[1], mesh, BND, definedon=edge) / length
+        assert float(problem.values["delta"]) == pytest.approx(-mean_uy, rel=1e-10)
+    with pytest.raises(ValueError, match="^output_edge"):
+        geo.layout(0.04, 0.02, gripper=True, output_edge=0.0011)

@@ -45,3 +45,19 @@ def test_a_segment_between_grid_nodes_is_said_with_the_length_it_covers(capsys):
     mesh_for(case, case.resolve(case.defaults.replace(nelx=50, nely=12,
                                                       load_width=2 * 0.25 / 12)))
     assert "load" not in capsys.readouterr().err  # on the nodes: nothing to say
+
+
+def test_a_segment_ending_at_an_edge_s_midpoint_is_said_with_the_length_the_mesh_names(capsys):
+    """A segment whose end lies on an element edge's midpoint (to round-off) takes that edge,
+    and the line says the length the mesh names: on 100 x 50 quads of 0.04 x 0.02 m (edges of
+    0.4 mm), the right edge's segment from 4 to 5 mm ends on the midpoint of the edge from 4.8
+    to 5.2 mm (computed as 0.005000000000000001), so it covers 1.2 mm."""
+    from ngsolve import BND, Integrate
+
+    from pacto_ng.mesh import Layout, Segment, structured_mesh
+
+    layout = Layout(0.04, 0.02, segments=(Segment("edge", (0.04, 0.004), (0.04, 0.005)),))
+    mesh = structured_mesh(layout, 100, 50)
+    named = Integrate(1.0, mesh, BND, definedon=mesh.Boundaries("edge"))
+    assert named == pytest.approx(1.2e-3, rel=1e-9)
+    assert "'edge' 0.001 -> 0.0012" in capsys.readouterr().err
