@@ -26,7 +26,7 @@ from .post.part_stage import finish_run
 from .post.refine_check import check_refine_gradients
 from .post.refine_run import refine_run
 from .post.refine_setup import Loading, refuses
-from .post.runs import load_run
+from .post.runs import load_run, rebuild
 from .runner import optimise_case, resume_run
 from .sweep import run_sweep
 from .sweep_plan import parse_loads, parse_models
@@ -99,7 +99,11 @@ def _with_part(done, out, args) -> int:
     said so; :func:`why_not_refined` says which sealed parts are not refined; a refinement
     that cannot be made is said in one line; the run's result stands); the run's exit code."""
     if leads() and not args.no_part:
-        summary = finish_run(out, done.problem, done.summary, quiet=args.quiet)
+        # a distributed run's part is made by its rank 0 from the final design analysed on
+        # the serial mesh, as a serial run's (the other ranks are done)
+        problem = done.problem if done.problem.numbering is None else \
+            rebuild(load_run(out, args.command))
+        summary = finish_run(out, problem, done.summary, quiet=args.quiet)
         if (args.no_refine or done.exit_code != 0 or not summary["part"].get("made")
                 or summary.get("sealed") is False or refuses(run := load_run(out, "refine"))):
             return done.exit_code

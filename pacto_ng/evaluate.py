@@ -13,7 +13,7 @@ import numpy as np
 from .case import Case, build_problem
 from .errors import InputError
 from .files import RUN_FILES, atomic_write_text, claim_folder
-from .outputs import summary_dict, write_vtu
+from .outputs import one_mesh, summary_dict, write_vtu
 from .params import Parameters
 from .physics.equilibrium import NewtonFailure
 from .problem import Problem
@@ -187,7 +187,7 @@ def _evaluate(case: Case, params: Parameters, density: str, path: Path, *, filte
         message = "single analysis" if failure is None else str(failure)
         best = None
 
-    summ = summary_dict(problem, [], _R, time.perf_counter() - t0)
+    summ = summary_dict(problem, [], _R, time.perf_counter() - t0, one_mesh(problem))
     summ["evaluated_from"] = str(density)
     summ["filtered"] = filtered
     write_vtu(path / "design", problem, x)

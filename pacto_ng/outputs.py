@@ -18,11 +18,13 @@ with a summary.json holds a finished run's complete results.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 from pathlib import Path
 
 import numpy as np
+from ngsolve import Integrate
 
 from .delta import output_displacement, output_displacement_at
 from .files import atomic_path, atomic_write_text, check_tail
@@ -30,12 +32,51 @@ from .filters import HelmholtzFilter
 from .measures import strain_stress_measures, tensor_components
 from .physics.darcy_leakage import Outflow, leakage
 from .physics.darcy_load import Compliance
-from .problem import Problem
+from .problem import Problem, shown_density
 from .responses import StrainEnergy, compliance as compliance_block
 
 #: the columns of history.csv (one row per iteration), then the case's reported responses
 HISTORY_COLUMNS = ("iteration", "objective", "volume", "constraint", "change", "penal", "beta",
                    "load", "newton", "load_steps", "design_cuts", "time")
+
+
+@dataclasses.dataclass(frozen=True)
+class Drawn:
+    """What a run's pictures draw (:func:`write_pictures`), on one serial mesh: a serial run's
+    problem (:func:`drawn`), or a distributed run's fields gathered to rank 0 on the serial
+    mesh it meshed (:mod:`pacto_ng.parallel_outputs`).  ``shown``: the density drawn
+    per element (ρ̄, or with two materials ρ̄1 (1 + ρ̄2) / 2); ``solid``: the pressure's
+    density per element (its ρ̄ = 0.5 contour); ``p_rel``: p / P_in at the vertices;
+    ``materials``: (ρ̄1, ρ̄2) of a two-material design."""
+
+    mesh: object
+    name: str
+    model: str
+    volume: float
+    shown: np.ndarray
+    solid: np.ndarray | None = None
+    p_rel: np.ndarray | None = None
+    p_in: float = 0.0
+    leak: float | None = None
+    materials: tuple | None = None
+
+
+#: the element densities a run's files hold (the one or the two materials')
+DENSITIES = ("rho_bar", "rho_bar1", "rho_bar2")
+
+
+@dataclasses.dataclass(frozen=True)
+class OneMesh:
+    """A run's fields on one serial mesh: a serial run's own (:func:`one_mesh`), or a
+    distributed run's gathered to rank 0 onto the serial mesh it meshed and kept
+    (:mod:`pacto_ng.parallel_outputs`).  ``cells``: element arrays by name in the mesh's
+    order (the densities of :data:`DENSITIES` and the pressure's); ``design``: the mask of
+    the design elements; ``p``: the pressure at the mesh's vertices (None: no pressure)."""
+
+    mesh: object
+    cells: dict
+    design: np.ndarray
+    p: np.ndarray | None = None
 
 
 def run_summary(problem: Problem, history: list, result, wall: float) -> dict:
@@ -65,8 +106,13 @@ def run_summary(problem: Problem, history: list, result, wall: float) -> dict:
     }
 
 
-def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
-    """summary.json of a serial run: :func:`run_summary` and the figures of the analysis."""
+def summary_dict(problem: Problem, history: list, result, wall: float,
+                 one: OneMesh | None) -> dict:
+    """summary.json of a run: :func:`run_summary` and the figures of the analysis.  On a
+    distributed mesh every rank calls it (its figures are reduced over the ranks), and
+    ``one``, the element fields on one serial mesh (:func:`one_mesh`; a distributed run's,
+    gathered to the rank that writes: None elsewhere), gives the figures made on it: the
+    leakage and a two-material design's fractions."""
     p = problem.params
     vals = problem.values
     mech_res = problem.mech.result
@@ -90,7 +136,7 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "best_iterate": result.best,
         "newton_iterations": newton_counts,
         "newton_iterations_total": int(sum(newton_counts)),
-        "mesh": {"elements": problem.mesh.ne, "h": problem.h, "order": p.order,
+        "mesh": {"elements": _elements(problem), "h": problem.h, "order": p.order,
                  "displacement_dofs": problem.mech.ndof,
                  "structured": p.nelx > 0, "nelx": p.nelx, "nely": p.nely, "nelz": p.nelz,
                  "dim": problem.mesh.dim},
@@ -105,8 +151,16 @@ def summary_dict(problem: Problem, history: list, result, wall: float) -> dict:
         "solvers": solvers_used(problem),
     })
     out.update(lowest_jacobian(problem))
-    out.update(pressure_and_material_summary(problem))
+    out.update(pressure_and_material_summary(problem, one))
+    if problem.numbering is not None:
+        out["mpi"] = {"ranks": problem.numbering.comm.size,
+                      "elements_per_rank": problem.numbering.counts}
     return out
+
+
+def _elements(problem: Problem) -> int:
+    """The number of elements of the run's mesh (on a distributed mesh, of every rank)."""
+    return problem.mesh.ne if problem.numbering is None else problem.numbering.ne
 
 
 def solvers_used(problem: Problem) -> dict:
@@ -134,8 +188,11 @@ def lowest_jacobian(problem: Problem) -> dict:
     out = {}
     for key, points in (("lowest_J", "quadrature"), ("lowest_J_corners", "corners")):
         low = problem.mech.lowest_jacobian(points)
-        out[key] = {"J": low["J"], "element": low["element"],
-                    "rho_bar": float(rho[low["element"]]), "point": low["point"]}
+        el = low["element"]
+        out[key] = {"J": low["J"], "element": el, "point": low["point"],
+                    "rho_bar": float(rho[el]) if el >= 0 else None}
+        if problem.numbering is not None:  # the least over the ranks, in the serial order
+            out[key] = problem.numbering.least(out[key], "J")
     return out
 
 
@@ -183,27 +240,39 @@ def leak(problem: Problem) -> float | None:
     return float(Outflow(blk).forward(vals[blk.inputs[0]], vals[blk.output]))
 
 
-def pressure_and_material_summary(problem: Problem) -> dict:
-    """Pressure cases: ``leak`` (Q/(Kv P_in), :func:`leak`), and ``leakage`` (the largest
+def pressure_and_material_summary(problem: Problem, one: OneMesh | None) -> dict:
+    """Pressure cases: ``leak`` (Q/(Kv P_in), :func:`leak`; every rank of a distributed
+    mesh), and on the fields of ``one`` (:func:`summary_dict`) ``leakage`` (the largest
     pressure in solid away from the cavity, a fraction of P_in, see
     :func:`pacto_ng.physics.darcy_leakage.leakage`) with its details.  Two materials: the
-    volume fractions of the total solid, of material 1 (soft, ``Σ a ρ̄1 (1-ρ̄2)``) and of
-    material 2 (stiff, ``Σ a ρ̄1 ρ̄2``) over the design elements."""
+    volume fractions of :func:`material_fractions`."""
     out = {}
-    vals = problem.values
-    if problem.pressure_block is not None:
-        blk = problem.pressure_block
+    blk = problem.pressure_block
+    if blk is not None:
         out["leak"] = leak(problem)
-        info = leakage(blk, vals[blk.inputs[0]], problem.h)
+    if one is None:
+        return out
+    if blk is not None:
+        info = leakage(one.mesh, blk.inlet, one.cells[blk.inputs[0]], one.p, p_in=blk.p_in,
+                       delta_s=blk.delta_s, h=problem.h)
         out["leakage"] = info.pop("leakage")
         out["leakage_detail"] = info
     if problem.n_design_fields == 2:
-        w = np.where(problem.field.design, problem.field.areas, 0.0)
-        r1, r2 = np.asarray(vals["rho_bar1"]), np.asarray(vals["rho_bar2"])
-        out["material_fractions"] = {"solid": float(w @ r1 / w.sum()),
-                                     "material1_soft": float(w @ (r1 * (1 - r2)) / w.sum()),
-                                     "material2_stiff": float(w @ (r1 * r2) / w.sum())}
+        areas = np.array(Integrate(1.0, one.mesh, element_wise=True))
+        out["material_fractions"] = material_fractions(one.design, areas, one.cells["rho_bar1"],
+                                                       one.cells["rho_bar2"])
     return out
+
+
+def material_fractions(design, areas, rho1, rho2) -> dict:
+    """A two-material design's volume fractions over its ``design`` elements (a mask, with
+    their ``areas``): of the total solid, of material 1 (soft, ``Σ a ρ̄1 (1-ρ̄2)``) and of
+    material 2 (stiff, ``Σ a ρ̄1 ρ̄2``)."""
+    w = np.where(design, areas, 0.0)
+    r1, r2 = np.asarray(rho1), np.asarray(rho2)
+    return {"solid": float(w @ r1 / w.sum()),
+            "material1_soft": float(w @ (r1 * (1 - r2)) / w.sum()),
+            "material2_stiff": float(w @ (r1 * r2) / w.sum())}
 
 
 def _finite(name, arr):
@@ -229,38 +298,56 @@ def write_history(target: Path, history: list, problem: Problem) -> None:
 def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, result,
                   wall: float) -> dict:
     """Write the run's results into ``path``; returns the summary (summary.json)."""
-    summ = summary_dict(problem, history, result, wall)
+    one = one_mesh(problem)
+    summ = summary_dict(problem, history, result, wall, one)
     for key in ("objective", "volume_fraction"):
         if summ[key] is not None and not np.isfinite(summ[key]):
             raise RuntimeError(f"{key} is not finite: nothing written")
     write_history(path / "history.csv", history, problem)
     write_vtu(path / "design", problem, x)
-    write_pictures(path, problem, history, leak=summ.get("leak"))
+    write_pictures(path, drawn(problem, one, summ), history, problem.objective)
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ
 
 
-def write_pictures(path: Path, problem: Problem, history: list, *, leak=None,
-                   gathered: tuple | None = None) -> None:
-    """design.png, convergence.png, and pressure.png and materials.png where they apply (each
-    written atomically).  ``gathered``: ``(points, cells, rho, title, p_rel)``, a distributed
-    run's serial mesh, densities and p / P_in (or None) on rank 0
-    (:mod:`pacto_ng.parallel_outputs`), which draws design.png, convergence.png and in 3D
-    pressure.png."""
-    # the post package loads matplotlib and pyvista at its import (0.5 s): only here
-    from .post.plots import (convergence_png, density_png, materials_png, pictures_of_arrays,
-                             pressure_png)
+def one_mesh(problem: Problem) -> OneMesh:
+    """The element fields of a serial run's ``problem`` on its mesh (:class:`OneMesh`)."""
+    vals, block = problem.values, problem.pressure_block
+    names = DENSITIES + ((block.inputs[0],) if block is not None else ())
+    return OneMesh(problem.mesh, {n: np.asarray(vals[n]) for n in names if n in vals},
+                   problem.field.design,
+                   None if block is None else block.pressure.vec.FV().NumPy()[:problem.mesh.nv])
 
-    if gathered is not None:
-        pictures_of_arrays(path, *gathered)
-    else:
-        density_png(path / "design.png", problem)
-        if problem.pressure_block is not None:
-            pressure_png(path / "pressure.png", problem, leak=leak)
-        if problem.n_design_fields == 2 and problem.mesh.dim == 2:
-            materials_png(path / "materials.png", problem)
+
+def drawn(problem: Problem, one: OneMesh, summary: dict) -> Drawn:
+    """What the pictures of the run of ``problem`` draw, of its fields on ``one`` mesh and
+    its ``summary`` (the volume fraction and the leak)."""
+    block = problem.pressure_block
+    out = Drawn(one.mesh, problem.case.name, problem.params.model, summary["volume_fraction"],
+                shown_density(one.cells), leak=summary.get("leak"),
+                materials=((one.cells["rho_bar1"], one.cells["rho_bar2"])
+                           if problem.n_design_fields == 2 else None))
+    if block is None:
+        return out
+    p_in = block.p_in  # the load factor scales the body force, not p
+    return dataclasses.replace(out, solid=one.cells[block.inputs[0]], p_in=p_in,
+                               p_rel=one.p / (p_in if p_in != 0 else 1.0))
+
+
+def write_pictures(path: Path, drawn: Drawn, history: list, objective: str) -> None:
+    """design.png, convergence.png (``objective`` and the volume of ``history``), and
+    pressure.png and materials.png where they apply (each written atomically), of ``drawn``
+    (:class:`Drawn`), serial or gathered from a distributed run alike."""
+    # the post package loads matplotlib and pyvista at its import (0.5 s): only here
+    from .post.plots import convergence_png, density_png, materials_png, pressure_png
+
+    density_png(path / "design.png", drawn)
+    if drawn.p_rel is not None:
+        pressure_png(path / "pressure.png", drawn)
+    if drawn.materials is not None and drawn.mesh.dim == 2:
+        materials_png(path / "materials.png", drawn)
     if history:
-        convergence_png(path / "convergence.png", history, problem.objective)
+        convergence_png(path / "convergence.png", history, objective)
 
 
 def measure_fields(problem: Problem) -> dict[str, np.ndarray]:
@@ -292,7 +379,7 @@ def write_vtu(stem: Path, problem: Problem, x: np.ndarray | None):
         names.append(name)
 
     vals = problem.values
-    for key in ("rho_bar", "rho_bar1", "rho_bar2"):
+    for key in DENSITIES:
         if key in vals:
             add_l2(key, np.asarray(vals[key]))
     if x is not None and problem.n_design_fields == 1:

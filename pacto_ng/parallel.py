@@ -101,8 +101,9 @@ class Numbering:
 
     def __init__(self, comm, local: np.ndarray, counts: list[int] | None, ne: int):
         self.comm, self.local, self.counts, self.ne = comm, local, counts, ne
-        # rank 0: the serial mesh's vertex coordinates and element vertices (None elsewhere)
-        self.serial_points = self.serial_cells = None
+        # rank 0: the serial mesh it meshed, a copy kept whole for the files it writes (the
+        # pictures and figures of one serial mesh, as a serial run's); None elsewhere
+        self.serial_mesh = None
 
     @classmethod
     def match(cls, comm, mesh, serial_centroids: np.ndarray | None):
@@ -138,6 +139,13 @@ class Numbering:
             out[idx] = part
         return out
 
+    def least(self, entry: dict, key: str) -> dict:
+        """The ``entry`` of the least ``key`` over the ranks, on every rank, its ``element``
+        (a local index on the rank that gives it, -1: none) in the serial order."""
+        if entry["element"] >= 0:
+            entry = dict(entry, element=int(self.local[entry["element"]]))
+        return min(self.comm.allgather(entry), key=lambda e: e[key])
+
     def allgather(self, values: np.ndarray) -> np.ndarray:
         """The element-wise local ``values`` of every rank, in serial order on every rank."""
         out = np.empty(self.ne)
@@ -159,15 +167,12 @@ def distribute(meshed, comm):
     import ngsolve
     from netgen.meshing import Mesh as NGMesh
 
-    points = cells = None
+    serial = None
     if comm.rank == 0:
-        mesh = meshed.mesh
-        centroids = element_centroids(mesh)
-        # the serial mesh's vertices and elements, for the files rank 0 writes
-        points = np.array([v.point for v in mesh.vertices], dtype=float)
-        cells = np.array([[v.nr for v in el.vertices] for el in mesh.Elements()], dtype=np.int64)
+        centroids = element_centroids(meshed.mesh)
         h, shape = comm.bcast(meshed.h, root=0), meshed.shape
         ngm = meshed.mesh.ngmesh
+        serial = ngsolve.Mesh(ngm.Copy())  # Distribute empties rank 0's mesh
         ngm.Distribute(comm)
     else:
         centroids, shape = None, None
@@ -175,7 +180,7 @@ def distribute(meshed, comm):
         ngm = NGMesh.Receive(comm)
     part = Meshed(ngsolve.Mesh(ngm), h, shape)
     numbering = Numbering.match(comm, part.mesh, centroids)
-    numbering.serial_points, numbering.serial_cells = points, cells
+    numbering.serial_mesh = serial
     return part, numbering
 
 

@@ -1,54 +1,58 @@
 """The results of a run on a distributed mesh (:mod:`pacto_ng.parallel`), written by rank 0.
 
-Every rank computes the summary's figures together (reductions over the ranks); rank 0 writes
-history.csv, summary.json and design.vtu: the design variables ``x`` and the densities ρ̄
-gathered per element, and the displacement ``u`` and the pressure ``p`` at the vertices, onto
-the serial mesh it meshed, with the model's strain and stress measures per element
-(:func:`pacto_ng.outputs.measure_fields`), and design.png, convergence.png and (3D) pressure.png
-drawn on it.  Not yet written on a distributed mesh: pressure.png in 2D, materials.png and the
-summary's leak figures of :func:`pacto_ng.outputs.write_outputs` (``pacto evaluate RUN`` of the
-run's checkpoint, serially, writes them).
+Every rank computes the summary of :func:`pacto_ng.outputs.summary_dict` together (its
+figures reduced over the ranks); the element fields are gathered to rank 0, onto the serial
+mesh it meshed and kept (:attr:`~pacto_ng.parallel.Numbering.serial_mesh`), with the
+displacement and the pressure at its vertices, and rank 0 writes what a serial run writes
+of the same fields: history.csv, summary.json (the serial run's figures, the leakage and a
+two-material design's fractions made on that mesh, and ``mpi``), design.vtu (``x``, ρ̄,
+``u``, ``p`` and the model's strain and stress measures,
+:func:`pacto_ng.outputs.measure_fields`) and the pictures of
+:func:`pacto_ng.outputs.write_pictures` (design.png mirrored where the case is a half,
+pressure.png, materials.png, convergence.png).
 """
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
+import meshio
 import numpy as np
+from ngsolve import VERTEX, NodeId
+from scipy.spatial import cKDTree
 
 from .files import atomic_path, atomic_write_text
-from .outputs import measure_fields, run_summary, write_history, write_pictures
+from .outputs import (DENSITIES, OneMesh, drawn, measure_fields, summary_dict, write_history,
+                      write_pictures)
 
 
 def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list, result,
                               wall: float, *, write: bool) -> dict:
     """The summary of the run (every rank: collective), and on the rank that ``write``s its
-    files; returns the summary."""
-    numbering, vals = problem.numbering, problem.values
-    summ = run_summary(problem, history, result, wall)
-    summ["mpi"] = {"ranks": numbering.comm.size, "elements_per_rank": numbering.counts}
-    summ["mesh"] = {"elements": numbering.ne, "h": problem.h, "order": problem.params.order,
-                    "dim": problem.mesh.dim,
-                    "displacement_dofs": int(problem.mech.ndof)}
-    rho = numbering.gather(np.asarray(vals.get("rho_bar", vals.get("rho_bar1")), dtype=float))
+    files; returns the summary (the whole on that rank)."""
+    numbering, vals, block = problem.numbering, problem.values, problem.pressure_block
+    names = DENSITIES + ((block.inputs[0],) if block is not None else ())
+    cells = {name: numbering.gather(np.asarray(vals[name], dtype=float))
+             for name in names if name in vals}
+    design = numbering.gather(problem.field.design.astype(float))
     xs = None
     if problem.n_design_fields == 1:
         xs = numbering.gather(problem.field.full(problem.design_numbering.local(x)))
-    cells = {"rho_bar": rho, "x": xs}
-    cells.update({name: numbering.gather(arr) for name, arr in measure_fields(problem).items()})
-    mech, points = problem.mech, {}
-    points["u"] = _vertex_field(numbering, problem.mesh, mech.u, problem.mesh.dim)
-    if problem.pressure_block is not None:
-        points["p"] = _vertex_field(numbering, problem.mesh, problem.pressure_block.pressure, 1)
+    fields = {name: numbering.gather(arr) for name, arr in measure_fields(problem).items()}
+    points = {"u": _vertex_field(numbering, problem.mesh, problem.mech.u, problem.mesh.dim)}
+    if block is not None:
+        points["p"] = _vertex_field(numbering, problem.mesh, block.pressure, 1)
+    one = None
+    if numbering.comm.rank == 0:
+        one = OneMesh(numbering.serial_mesh, cells, design > 0.5,
+                      None if block is None else points["p"].ravel())
+    summ = summary_dict(problem, history, result, wall, one)
     if not write:
         return summ
     write_history(path / "history.csv", history, problem)
-    _write_vtu(path / "design.vtu", numbering, cells, points)
-    title = f"{problem.case.name} - {problem.params.model}, volume {summ['volume_fraction']:.3f}"
-    p_rel = None if "p" not in points else points["p"].ravel() / (problem.pressure_block.p_in
-                                                                 or 1.0)
-    write_pictures(path, problem, history,  # on the serial mesh, not mirrored
-                   gathered=(numbering.serial_points, numbering.serial_cells, rho, title, p_rel))
+    densities = {name: cells[name] for name in DENSITIES if name in cells}
+    _write_vtu(path / "design.vtu", one.mesh, {**densities, "x": xs, **fields}, points)
+    write_pictures(path, drawn(problem, one, summ), history, problem.objective)
     atomic_write_text(path / "summary.json", json.dumps(summ, indent=1))  # last: the run is done
     return summ
 
@@ -57,17 +61,14 @@ def _vertex_field(numbering, mesh, gf, comps: int) -> np.ndarray | None:
     """The values of the H1 field ``gf`` (``comps`` components) at the serial mesh's vertices,
     on rank 0 (None on the others): every rank sends its vertices' coordinates and values (a
     cumulated field: a shared vertex has one value), rank 0 places them by coordinates."""
-    from ngsolve import VERTEX, NodeId
-    from scipy.spatial import cKDTree
-
     vec, space = gf.vec.FV().NumPy(), gf.space
-    pts = np.array([v.point for v in mesh.vertices], dtype=float).reshape(-1, mesh.dim)
+    pts = _points(mesh)
     vals = np.array([vec[list(space.GetDofNrs(NodeId(VERTEX, i)))[:comps]]
                      for i in range(mesh.nv)], dtype=float).reshape(-1, comps)
     parts = numbering.comm.gather((pts, vals), root=0)
     if numbering.comm.rank != 0:
         return None
-    serial = numbering.serial_points
+    serial = _points(numbering.serial_mesh)
     out = np.full((len(serial), comps), np.nan)
     tree = cKDTree(serial)
     for p, v in parts:
@@ -76,18 +77,21 @@ def _vertex_field(numbering, mesh, gf, comps: int) -> np.ndarray | None:
     return out
 
 
-def _write_vtu(target: Path, numbering, fields: dict, points: dict) -> None:
-    """The serial mesh with element and vertex fields (meshio; written atomically)."""
-    import meshio
+def _points(mesh) -> np.ndarray:
+    """The vertex coordinates of ``mesh``, (n, dim)."""
+    return np.array([v.point for v in mesh.vertices], dtype=float).reshape(-1, mesh.dim)
 
-    cells = numbering.serial_cells
+
+def _write_vtu(target: Path, mesh, fields: dict, points: dict) -> None:
+    """The serial ``mesh`` with element and vertex fields (meshio; written atomically)."""
+    cells = np.array([[v.nr for v in el.vertices] for el in mesh.Elements()], dtype=np.int64)
     kind = {(3, 4): "tetra", (3, 8): "hexahedron", (2, 3): "triangle",
-            (2, 4): "quad"}[(numbering.serial_points.shape[1], cells.shape[1])]
+            (2, 4): "quad"}[(mesh.dim, cells.shape[1])]
     data = {name: [arr] for name, arr in fields.items() if arr is not None}
-    xyz = numbering.serial_points
+    xyz = _points(mesh)
     if xyz.shape[1] == 2:  # VTU's points are 3D
         xyz = np.c_[xyz, np.zeros(len(xyz))]
-    mesh = meshio.Mesh(xyz, [(kind, cells)], cell_data=data,
-                       point_data={name: arr for name, arr in points.items()})
+    out = meshio.Mesh(xyz, [(kind, cells)], cell_data=data,
+                      point_data={name: arr for name, arr in points.items()})
     with atomic_path(target) as tmp:
-        meshio.write(str(tmp), mesh, file_format="vtu")
+        meshio.write(str(tmp), out, file_format="vtu")

@@ -17,6 +17,15 @@ if TYPE_CHECKING:
     from .setup import Setup
 
 
+def shown_density(values: dict) -> np.ndarray:
+    """The element densities that show a design, of its ``values`` (element arrays by name):
+    ρ̄, or with two materials ρ̄1 (1 + ρ̄2) / 2 (void 0, the soft material 1/2, the stiff
+    material 1)."""
+    if "rho_bar" in values:
+        return np.asarray(values["rho_bar"])
+    return np.asarray(values["rho_bar1"]) * (1 + np.asarray(values["rho_bar2"])) / 2.0
+
+
 @dataclass
 class Problem:
     """A built optimisation problem: mesh, design field, chain and response names."""
@@ -156,12 +165,8 @@ class Problem:
         return self.chain.values
 
     def design_density(self) -> np.ndarray:
-        """The element densities that show the design: ρ̄, or with two materials ρ̄1 (1 + ρ̄2)
-        / 2 (void 0, the soft material 1/2, the stiff material 1)."""
-        vals = self.values
-        if "rho_bar" in vals:
-            return np.asarray(vals["rho_bar"])
-        return np.asarray(vals["rho_bar1"]) * (1 + np.asarray(vals["rho_bar2"])) / 2.0
+        """The element densities that show the design (:func:`shown_density`)."""
+        return shown_density(self.values)
 
     def _volume_block(self):
         return next(b for b in self.chain.blocks if b.output == "volume")

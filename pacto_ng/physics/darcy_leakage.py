@@ -12,11 +12,16 @@ from ..parallel import bounding_box, total
 from .darcy import DarcyPressure
 
 
-def leakage(block: DarcyPressure, rho, h: float, *, solid: float = 0.9, void: float = 0.5,
-            skin: float | None = None) -> dict:
+def leakage(mesh, inlet, rho, p, *, p_in: float, delta_s: float, h: float,
+            solid: float = 0.9, void: float = 0.5, skin: float | None = None) -> dict:
     r"""How much pressure reaches solid material away from the pressurised cavity.
 
-    Definitions (element densities ``ρ̄`` as given to ``block``; vertex pressures ``p``):
+    Of a serial ``mesh`` (a distributed run's rank 0 passes the serial mesh it meshed, with
+    the fields gathered onto it): ``inlet`` the names of the inlet boundaries, ``rho`` the
+    element densities the pressure was solved with, ``p`` the pressures at the vertices,
+    ``p_in`` the inlet pressure and ``delta_s`` the Darcy drainage depth.
+
+    Definitions (element densities ``ρ̄``; vertex pressures ``p``):
 
     * **cavity**: the elements with ``ρ̄ < void`` (0.5) that are connected to the inlet
       boundary through elements with ``ρ̄ < void`` sharing a vertex (an element touching the
@@ -44,9 +49,8 @@ def leakage(block: DarcyPressure, rho, h: float, *, solid: float = 0.9, void: fl
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
 
-    mesh = block.mesh
     rho = np.asarray(rho, dtype=float)
-    skin = h + 2.0 * max(block.delta_s, h) if skin is None else float(skin)
+    skin = h + 2.0 * max(delta_s, h) if skin is None else float(skin)
     pts = np.array([v.point for v in mesh.vertices])
     conn = [[v.nr for v in el.vertices] for el in mesh.Elements()]
     rows = np.repeat(np.arange(len(conn)), [len(c) for c in conn])
@@ -54,7 +58,7 @@ def leakage(block: DarcyPressure, rho, h: float, *, solid: float = 0.9, void: fl
     inc = csr_matrix((np.ones(rows.size), (rows, cols)), shape=(len(conn), mesh.nv))
     inlet_v = np.zeros(mesh.nv, dtype=bool)
     for el in mesh.Elements(BND):
-        if el.mat in block.inlet:
+        if el.mat in inlet:
             inlet_v[[v.nr for v in el.vertices]] = True
     # cavity: components of the low-density elements (vertex adjacency) that touch the inlet
     low = np.flatnonzero(rho < void)
@@ -69,14 +73,13 @@ def leakage(block: DarcyPressure, rho, h: float, *, solid: float = 0.9, void: fl
     dist = cKDTree(pts[wet_v]).query(centroids)[0]
     beyond = ~cavity & (dist > skin)
     outside = beyond & (rho >= solid)
-    pv = block.gfp.vec.FV().NumPy()[:mesh.nv]
-    pe = np.asarray(inc @ pv).ravel() / np.asarray(inc.sum(axis=1)).ravel()
+    pe = np.asarray(inc @ np.asarray(p, dtype=float)[:mesh.nv]).ravel() / np.asarray(inc.sum(axis=1)).ravel()
     out = dict(leakage=0.0, where=None, leakage_any=0.0, where_any=None, skin=skin,
                elements_checked=int(outside.sum()), cavity_elements=int(cavity.sum()))
     for key, sel in (("", outside), ("_any", beyond)):
-        if sel.any() and block.p_in != 0:
+        if sel.any() and p_in != 0:
             k = np.flatnonzero(sel)[np.argmax(pe[sel])]
-            out["leakage" + key] = float(max(pe[k], 0.0) / block.p_in)
+            out["leakage" + key] = float(max(pe[k], 0.0) / p_in)
             out["where" + key] = [float(c) for c in centroids[k][:2]]
     return out
 

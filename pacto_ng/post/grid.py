@@ -52,20 +52,6 @@ def mesh_to_pyvista_3d(mesh):
     return pv.UnstructuredGrid(flat.astype(np.int64), types, pts)
 
 
-def arrays_to_pyvista(points: np.ndarray, cells: np.ndarray):
-    """A pyvista UnstructuredGrid of one kind of cell from arrays: ``points`` (n, 2 or 3) and
-    ``cells`` (0-based vertex numbers per element: triangles or quadrilaterals in 2D,
-    tetrahedra or hexahedra in 3D, in Netgen's vertex order, which is VTK's)."""
-    import pyvista as pv
-
-    kind = {(2, 3): pv.CellType.TRIANGLE, (2, 4): pv.CellType.QUAD,
-            (3, 4): pv.CellType.TETRA, (3, 8): pv.CellType.HEXAHEDRON}[
-        (points.shape[1], cells.shape[1])]
-    pts = points if points.shape[1] == 3 else np.c_[points, np.zeros(len(points))]
-    return pv.UnstructuredGrid({kind: np.asarray(cells, dtype=np.int64)},
-                               np.asarray(pts, dtype=float))
-
-
 def grid_and_densities(mesh, rho):
     """The mesh as a pyvista grid and ``rho`` as a flat float array, one value per element."""
     grid = mesh_to_pyvista(mesh)

@@ -95,9 +95,6 @@ def _part_and_analysis(path, problem, summary, say):
     """``(Part, analysis entry)``: the part made and written, analysed at the run's load;
     ``say(what)`` reports each step."""
     params, setup = problem.params, problem.setup
-    if problem.numbering is not None:
-        raise InputError("the part of a distributed run is made by 'pacto analyse DIR' "
-                         "(serially)")
     pressure = problem.pressure_block
     part = make_part(problem, setup, maxh=PART_MAXH[problem.mesh.dim] * problem.h,
                      pressure=None if pressure is None else copy_gridfunction(pressure.pressure),

@@ -11,11 +11,12 @@ straight ``symmetry`` boundary is drawn as it is.
 from __future__ import annotations
 
 import numpy as np
+from ngsolve import Integrate
 
 from ..files import atomic_path
 from .domain import Line, symmetry_line
 from .domain import mirror as reflect
-from .grid import arrays_to_pyvista, mesh_to_pyvista
+from .grid import mesh_to_pyvista
 from .plots3d import design_picture, pressure_picture
 
 
@@ -77,33 +78,19 @@ def _size(allpts):
     return (8, max(2.0, 8 * h / w))
 
 
-def density_png(path, problem, field_name: str | None = None, title: str | None = None,
-                mirror=True):
-    rho = problem.design_density() if field_name is None else np.asarray(problem.values[field_name])
-    if problem.mesh.dim == 3:
-        design_picture(path, mesh_to_pyvista(problem.mesh), rho,
-                       title=title or _title_3d(problem))
+def density_png(path, drawn, title: str | None = None, mirror=True):
+    """design.png: the density ``drawn.shown`` (``drawn``: :class:`pacto_ng.outputs.Drawn`; 2D:
+    grey polygons, mirrored about the symmetry line; 3D:
+    :func:`~pacto_ng.post.plots3d.design_picture`)."""
+    mesh, rho = drawn.mesh, np.asarray(drawn.shown)
+    if mesh.dim == 3:
+        design_picture(path, mesh_to_pyvista(mesh), rho, title=title or (
+            f"{drawn.name} - {drawn.model}, volume {drawn.volume:.3f}"))
         return
-    polys, rho, line = picture_polygons(problem.mesh, rho, mirror)
+    polys, rho, line = picture_polygons(mesh, rho, mirror)
     density_polygons_png(path, polys, rho, title or (
-        f"{problem.case.name} — {problem.params.model}, ρ̄ (volume "
-        f"{problem.volume_fraction():.3f})"
+        f"{drawn.name} — {drawn.model}, ρ̄ (volume {drawn.volume:.3f})"
         + ("" if line is None else ", mirrored about the symmetry line")))
-
-
-def pictures_of_arrays(path, points: np.ndarray, cells: np.ndarray, rho, title: str,
-                       p_rel=None) -> None:
-    """``path``/design.png, and of a 3D mesh with ``p_rel`` (p / P_in at the points)
-    ``path``/pressure.png, of a mesh given as arrays (the serial mesh a distributed run's rank
-    0 writes, :class:`~pacto_ng.parallel.Numbering`): ``points`` (n, d), ``cells`` (one kind,
-    0-based vertex numbers per element) and ``rho`` one value per cell."""
-    if points.shape[1] == 2:
-        density_polygons_png(path / "design.png", list(points[cells]), np.asarray(rho), title)
-        return
-    grid = arrays_to_pyvista(points, cells)
-    design_picture(path / "design.png", grid, rho, title=title)
-    if p_rel is not None:
-        pressure_picture(path / "pressure.png", grid, p_rel, rho, title=title)
 
 
 def density_polygons_png(path, polys, rho, title: str) -> None:
@@ -128,11 +115,6 @@ def density_polygons_png(path, polys, rho, title: str) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=120)
     plt.close(fig)
-
-
-def _title_3d(problem) -> str:
-    return (f"{problem.case.name} - {problem.params.model}, volume "
-            f"{problem.volume_fraction():.3f}")
 
 
 def convergence_png(path, history: list, objective_name: str):
@@ -181,30 +163,25 @@ def nodal_average(mesh, values, areas) -> np.ndarray:
     return num / np.maximum(den, 1e-300)
 
 
-def pressure_png(path, problem, title: str | None = None, leak: float | None = None,
-                 mirror=True):
+def pressure_png(path, drawn, title: str | None = None, mirror=True):
     """The Darcy pressure field with the ρ̄ = 0.5 contour of the design drawn on it (as thesis
     Figs 6.9 and 6.18): colours p / P_in at the vertices, black line the contour of the
-    area-weighted nodal average of the element densities ρ̄ (the total solid for two
-    materials); a 3D run: :func:`pacto_ng.post.plots3d.pressure_picture`.  ``leak``: the
-    design's Q/(Kv P_in), summary.json's ``leak`` (:func:`pacto_ng.outputs.leak`), quoted in
-    the title (None: not quoted)."""
-    block = problem.pressure_block
-    mesh = problem.mesh
-    rho = np.asarray(problem.values[block.inputs[0]])
-    p_in = block.p_in  # the load factor scales the body force, not p
-    pv = block.pressure.vec.FV().NumPy()[:mesh.nv] / (p_in if p_in != 0 else 1.0)
-    quoted = "" if leak is None else f"leak Q/(Kv P_in) = {leak:.3g}"
+    area-weighted nodal average of the element densities ``drawn.solid`` (the total solid for
+    two materials); a 3D run: :func:`pacto_ng.post.plots3d.pressure_picture`.
+    ``drawn.leak``: the design's Q/(Kv P_in), summary.json's ``leak``
+    (:func:`pacto_ng.outputs.leak`), quoted in the title (None: not quoted)."""
+    mesh, rho, pv, p_in = drawn.mesh, np.asarray(drawn.solid), drawn.p_rel, drawn.p_in
+    quoted = "" if drawn.leak is None else f"leak Q/(Kv P_in) = {drawn.leak:.3g}"
     if mesh.dim == 3:
         pressure_picture(path, mesh_to_pyvista(mesh), pv, rho, title=title or (
-            f"{problem.case.name} (P_in = {p_in:g} Pa)" + (f", {quoted}" if quoted else "")))
+            f"{drawn.name} (P_in = {p_in:g} Pa)" + (f", {quoted}" if quoted else "")))
         return
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rho_n = nodal_average(mesh, rho, problem.field.areas)
+    rho_n = nodal_average(mesh, rho, np.array(Integrate(1.0, mesh, element_wise=True)))
     tri, both, line = picture_triangulation(mesh, np.c_[pv, rho_n], mirror)
     pv, rho_n = both[:, 0], both[:, 1]
     x, y = tri.x, tri.y
@@ -215,7 +192,7 @@ def pressure_png(path, problem, title: str | None = None, leak: float | None = N
     ax.set_xlim(x.min(), x.max())
     ax.set_ylim(y.min(), y.max())
     ax.set_aspect("equal")
-    ax.set_title(title or f"{problem.case.name} — p / P_in (P_in = {p_in:g} Pa), "
+    ax.set_title(title or f"{drawn.name} — p / P_in (P_in = {p_in:g} Pa), "
                  f"ρ̄ = 0.5 contour" + (f"\n{quoted}" if quoted else ""), fontsize=10)
     fig.colorbar(tpc, ax=ax, fraction=0.03, label="p / P_in")
     fig.tight_layout()
@@ -224,9 +201,10 @@ def pressure_png(path, problem, title: str | None = None, leak: float | None = N
     plt.close(fig)
 
 
-def materials_png(path, problem, title: str | None = None, mirror=True):
-    """Two-material design: void white, soft material (ρ̄2 = 0) orange, stiff (ρ̄2 = 1) blue;
-    each element's colour is mixed by ρ̄2 and faded to white by ρ̄1."""
+def materials_png(path, drawn, title: str | None = None, mirror=True):
+    """Two-material design (``drawn.materials``, 2D): void white, soft material (ρ̄2 = 0)
+    orange, stiff (ρ̄2 = 1) blue; each element's colour is mixed by ρ̄2 and faded to white by
+    ρ̄1."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -234,11 +212,10 @@ def materials_png(path, problem, title: str | None = None, mirror=True):
     from matplotlib.collections import PolyCollection
     from matplotlib.patches import Patch
 
-    r1 = np.clip(np.asarray(problem.values["rho_bar1"]), 0, 1)[:, None]
-    r2 = np.clip(np.asarray(problem.values["rho_bar2"]), 0, 1)[:, None]
+    r1, r2 = (np.clip(np.asarray(r), 0, 1)[:, None] for r in drawn.materials)
     soft, stiff = np.array([0.93, 0.55, 0.13]), np.array([0.12, 0.30, 0.70])
     colours = (1 - r1) * 1.0 + r1 * ((1 - r2) * soft + r2 * stiff)
-    polys, colours, _ = picture_polygons(problem.mesh, colours, mirror)
+    polys, colours, _ = picture_polygons(drawn.mesh, colours, mirror)
     allpts = np.concatenate(polys)
     fig, ax = plt.subplots(figsize=_size(allpts))
     ax.add_collection(PolyCollection(polys, facecolors=colours, edgecolors="face", linewidths=0.1))
@@ -248,7 +225,7 @@ def materials_png(path, problem, title: str | None = None, mirror=True):
     ax.legend(handles=[Patch(color=soft, label="material 1 (soft)"),
                        Patch(color=stiff, label="material 2 (stiff)")],
               loc="upper right", fontsize=8)
-    ax.set_title(title or f"{problem.case.name} — ρ̄1 (solid) mixed by ρ̄2 (stiff fraction)")
+    ax.set_title(title or f"{drawn.name} — ρ̄1 (solid) mixed by ρ̄2 (stiff fraction)")
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=120)

@@ -106,18 +106,17 @@ def test_reflect_about_a_line():
 def test_pictures_are_written_mirrored(pa_half, tmp_path):
     """density_png and plot_deformed draw the whole mechanism (a smoke test: the files exist
     and the picture is twice as tall as the half alone)."""
-    import types
 
     import matplotlib.image as mpimg
     import ngsolve as ng
 
+    from pacto_ng.outputs import Drawn
     from pacto_ng.post.pictures import plot_deformed
     from pacto_ng.post.plots import density_png
 
-    problem = types.SimpleNamespace(mesh=pa_half, values={"rho_bar": _design(pa_half)})
+    drawn = Drawn(pa_half, "pa", "linear", 0.3, _design(pa_half))
     for mirror in (True, False):
-        density_png(tmp_path / f"design_{mirror}.png", problem, field_name="rho_bar", title="t",
-                    mirror=mirror)
+        density_png(tmp_path / f"design_{mirror}.png", drawn, title="t", mirror=mirror)
     whole = mpimg.imread(tmp_path / "design_True.png")
     half = mpimg.imread(tmp_path / "design_False.png")
     assert whole.shape[0] > 1.5 * half.shape[0]  # twice as tall (the figure follows the data)

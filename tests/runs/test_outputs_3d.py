@@ -10,7 +10,8 @@ import pytest
 
 from pacto_ng.box import Block, Box, netgen_box_mesh, structured_box
 from pacto_ng.member_width import member_width_of_run
-from pacto_ng.outputs import write_vtu
+from pacto_ng.outputs import drawn as outputs_drawn
+from pacto_ng.outputs import one_mesh, write_vtu
 from pacto_ng.post.plots import density_png, pressure_png
 from pacto_ng.post.plots3d import WINDOW
 
@@ -21,7 +22,8 @@ BOX = Box(0.04, 0.02, 0.01, blocks=(Block("chamber", "void", (0.01, 0.005, 0.002
 
 
 def stand_in(mesh):
-    """What write_vtu, density_png and pressure_png read of a Problem, for ``mesh``."""
+    """What write_vtu and the pictures' :func:`pacto_ng.outputs.drawn` read of a Problem, for
+    ``mesh``."""
     from ngsolve import CF, H1, L2, GridFunction, InnerProduct, Sym, Trace, VectorH1, x, y, z
 
     l2 = L2(mesh, order=0)
@@ -42,7 +44,7 @@ def stand_in(mesh):
     return SimpleNamespace(
         mesh=mesh, params=SimpleNamespace(order=1, model="linear"),
         case=SimpleNamespace(name="box3d"), values={"rho_bar": rho, "p": gfp},
-        n_design_fields=1, field=SimpleNamespace(full=lambda xs: xs),
+        n_design_fields=1, field=SimpleNamespace(full=lambda xs: xs, design=rho > 0),
         mech=SimpleNamespace(l2=l2, u=gfu, energy=energy, coeffs=None),
         pressure_block=SimpleNamespace(pressure=gfp, p_in=1e5, inputs=("rho_bar",)),
         design_density=lambda: rho, volume_fraction=lambda: float(np.mean(rho)))
@@ -79,8 +81,9 @@ def test_design_vtu_holds_the_3d_fields(problem, tmp_path):
 def test_design_and_pressure_pictures_are_rendered_off_screen(problem, tmp_path):
     import matplotlib.image as mpimg
 
-    density_png(tmp_path / "design.png", problem)
-    pressure_png(tmp_path / "pressure.png", problem)
+    drawn = outputs_drawn(problem, one_mesh(problem), {"volume_fraction": 0.5})
+    density_png(tmp_path / "design.png", drawn)
+    pressure_png(tmp_path / "pressure.png", drawn)
     for name in ("design.png", "pressure.png"):
         img = mpimg.imread(tmp_path / name)
         assert img.shape[:2] == (WINDOW[1], WINDOW[0])
