@@ -334,18 +334,18 @@ def drawn(problem: Problem, one: OneMesh, summary: dict) -> Drawn:
                                p_rel=one.p / (p_in if p_in != 0 else 1.0))
 
 
-def write_pictures(path: Path, drawn: Drawn, history: list, objective: str) -> None:
+def write_pictures(path: Path, what: Drawn, history: list, objective: str) -> None:
     """design.png, convergence.png (``objective`` and the volume of ``history``), and
-    pressure.png and materials.png where they apply (each written atomically), of ``drawn``
+    pressure.png and materials.png where they apply (each written atomically), of ``what``
     (:class:`Drawn`), serial or gathered from a distributed run alike."""
     # the post package loads matplotlib and pyvista at its import (0.5 s): only here
     from .post.plots import convergence_png, density_png, materials_png, pressure_png
 
-    density_png(path / "design.png", drawn)
-    if drawn.p_rel is not None:
-        pressure_png(path / "pressure.png", drawn)
-    if drawn.materials is not None and drawn.mesh.dim == 2:
-        materials_png(path / "materials.png", drawn)
+    density_png(path / "design.png", what)
+    if what.p_rel is not None:
+        pressure_png(path / "pressure.png", what)
+    if what.materials is not None and what.mesh.dim == 2:
+        materials_png(path / "materials.png", what)
     if history:
         convergence_png(path / "convergence.png", history, objective)
 

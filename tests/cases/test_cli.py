@@ -1,6 +1,5 @@
 """The pacto command: listing, parameters, bad input (one line, exit 2), evaluate, resume."""
 import json
-import os
 import subprocess
 import sys
 
@@ -109,7 +108,6 @@ def test_run_writes_the_output_contract(tmp_path):
 def test_resume_after_kill_gives_the_same_design(tmp_path):
     """Kill a run mid-way (a real SIGKILL), resume it, and compare with an uninterrupted run."""
     import signal
-    import time
 
     args = ["run", "inverter", "--nelx", "30", "--nely", "15", "--iterations", "24"]
     full = tmp_path / "full"

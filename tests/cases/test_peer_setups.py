@@ -4,7 +4,6 @@ transcription of each code's analysis (tests/kumar_reference.py), to 1e-10."""
 import json
 
 import numpy as np
-import pytest
 
 import kumar_reference as ref
 from pacto_ng import main

@@ -9,12 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from small_cases import PA_H, PA_L, small_pa_layout, small_pa_mesh
+from small_cases import PA_H, PA_L, small_pa_mesh
 from pacto_ng.core import Chain, check_gradient
 from pacto_ng.design import DesignField, Embed, FixPassive
 from pacto_ng.filters import HeavisideProjection, HelmholtzFilter
 from pacto_ng.interpolation import simp2_cf, simp_cf
-from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
 from pacto_ng.physics.darcy import DarcyPressure
 from pacto_ng.physics.darcy_load import Compliance, darcy_body
 from pacto_ng.physics.loads import Port, Spring

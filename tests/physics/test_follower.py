@@ -10,9 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from small_cases import PA_H, PA_L, small_pa_layout, small_pa_mesh
+from small_cases import PA_H, PA_L, small_pa_mesh
 from pacto_ng.interpolation import simp_cf
-from pacto_ng.mesh import Layout, Region, Segment, netgen_mesh, structured_mesh
 from pacto_ng.physics.darcy import DarcyPressure
 from pacto_ng.physics.darcy_load import darcy_body, darcy_follower
 from pacto_ng.physics.materials import jacobian, linear_energy, neohookean_energy

@@ -8,7 +8,6 @@ closed box with the chamber inside, clamped at x = 0, the tip face at x = 0.1 m.
 """
 import json
 
-import numpy as np
 import pytest
 
 from pacto_ng.cli import main

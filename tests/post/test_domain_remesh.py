@@ -3,8 +3,8 @@ and void chambers keep their exact edges and names; rectangles stay as good as t
 import numpy as np
 import pytest
 
-from conftest import (CAVITY, H, OUTPUT, W, centroids, chamber_density, chamber_layout,
-                      chamber_pressure, half_disc_shape, name_edges, ring_quarter_shape)
+from conftest import (CAVITY, H, W, centroids, chamber_density, chamber_pressure,
+                      half_disc_shape, name_edges, ring_quarter_shape)
 from pacto_ng.post.remesh import remesh
 from pacto_ng.post.threshold import threshold
 

@@ -12,7 +12,7 @@ Closed forms on the 100 x 50 structured chamber mesh (h = 1 mm, domain 0.1 x 0.0
 import numpy as np
 import pytest
 
-from conftest import CAVITY, FRAME, H, W, box_density, chamber_density
+from conftest import H, W, box_density, chamber_density
 from pacto_ng.post.threshold import threshold
 from pacto_ng.post.threshold_choice import (choose_threshold, connecting_threshold, design_volume,
                                             part_contains, volume_threshold)

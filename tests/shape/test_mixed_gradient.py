@@ -3,7 +3,6 @@
 differences of the re-solved part, and its state against the part analysis's
 (pacto_ng/post/part_analysis.py, whose mechanics block builds the same formulation on its own
 forms)."""
-import numpy as np
 import pytest
 
 from pacto_ng.params import Parameters
