@@ -98,11 +98,7 @@ def _with_part(done, out, args) -> int:
     refinement keeps the part's topology: an open chamber stays open, and the part line has
     said so; :func:`why_not_refined` says which sealed parts are not refined; a refinement
     that cannot be made is said in one line; the run's result stands); the run's exit code."""
-    if leads() and not args.no_part:
-        # a distributed run's part is made by its rank 0 from the final design analysed on
-        # the serial mesh, as a serial run's (the other ranks are done)
-        problem = done.problem if done.problem.numbering is None else \
-            rebuild(load_run(out, args.command))
+    if leads() and not args.no_part and (problem := _part_problem(done, out, args.command)):
         summary = finish_run(out, problem, done.summary, quiet=args.quiet)
         if (args.no_refine or done.exit_code != 0 or not summary["part"].get("made")
                 or summary.get("sealed") is False or refuses(run := load_run(out, "refine"))):
@@ -118,6 +114,21 @@ def _with_part(done, out, args) -> int:
                 print(f"pacto: warning: the part was not refined: {err}", file=sys.stderr,
                       flush=True)
     return done.exit_code
+
+
+def _part_problem(done, out, command: str):
+    """The problem whose final design the part is made of: the run's own, or a distributed
+    run's final design analysed by its rank 0 on the serial mesh (the other ranks are done);
+    None where that serial problem cannot be made (e.g. it would not fit this machine), said
+    in one line: the run's result stands, and ``pacto analyse DIR`` makes the part."""
+    if done.problem.numbering is None:
+        return done.problem
+    try:
+        return rebuild(load_run(out, command))
+    except InputError as err:
+        print(f"pacto: warning: the part was not made: {err} ('pacto analyse {out}' makes it "
+              "where the run's design fits one process)", file=sys.stderr, flush=True)
+        return None
 
 
 def why_not_refined(part: dict, model: str, dim: int, out) -> str:

@@ -236,3 +236,24 @@ def test_a_part_without_an_equilibrium_at_the_load_says_how_far_it_got():
     del part["load_reached"]
     assert "did not converge —" in part_stage.last_line({"part": part, "load_unit": "Pa"},
                                                          "RUN")
+
+
+def test_a_distributed_run_s_part_that_cannot_be_made_on_one_process_is_said_in_one_line(
+        tmp_path, capsys):
+    """A distributed run's part is made by its rank 0 from the final design analysed on the
+    serial mesh; where that cannot be made (here: no finished run in the folder, as a serial
+    problem too large for the machine is refused), one warning line names the reason and
+    ``pacto analyse DIR``, no part is made, and the run's exit code stands."""
+    from types import SimpleNamespace
+
+    from pacto_ng.commands import _part_problem, _with_part
+
+    done = SimpleNamespace(problem=SimpleNamespace(numbering=object()), exit_code=0,
+                           summary={})
+    assert _part_problem(done, tmp_path, "run") is None
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("pacto: warning: the part was not made: run: ")
+    assert f"'pacto analyse {tmp_path}' makes it" in err[0]
+    args = SimpleNamespace(no_part=False, command="run", quiet=True)
+    assert _with_part(done, tmp_path, args) == 0
+    assert not (tmp_path / "part.stl").exists()
