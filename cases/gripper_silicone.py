@@ -13,9 +13,10 @@ jaw pad above it.  Output: the jaw pad's right edge from its inner corner (40, 4
 0.8 mm (two element edges, "output_edge"), Δ = the edge's mean of -u_y (the jaw closes), with
 an output spring k_out = 900 N/m on that edge (k/2 times its mean of u_y²; a gripped object of
 about 1 N/mm; 0.1 of the jaw's E1 t).  The edge lies on the passive pad in the design and in
-its part alike; a spring at the corner point would crush the part's finer elements there
-before the full load (docs/benchmarks.md, Limits).  Model: Wang's interpolation over the preset's Yeoh law (finite strains where there is
-material, small strains in the void); ν = 0.45 (the preset's) and ``formulation=auto``, which
+its part alike; a spring at the corner point crushed the part's finer elements there before
+the full load (docs/benchmarks.md, "The built-in cases at defaults").  Model: Wang's
+interpolation over the preset's Yeoh law (finite strains where there is material, small
+strains in the void); ν = 0.45 (the preset's) and ``formulation=auto``, which
 takes the mixed formulation there (Q1/P0 on these quadrilaterals) against volumetric locking.
 Structured quadrilaterals of 0.4 mm (100 x 50), Darcy penetration depth Δs = 1 mm, filter
 radius 1.6 mm, volume fraction 0.2.  Load 10 kPa: p/E1 = 1.1e-2, 34 times the pa-gripper's.
