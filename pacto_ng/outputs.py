@@ -24,7 +24,6 @@ import json
 from pathlib import Path
 
 import numpy as np
-from ngsolve import Integrate
 
 from .delta import output_displacement, output_displacement_at
 from .files import atomic_path, atomic_write_text, check_tail
@@ -47,7 +46,8 @@ class Drawn:
     mesh it meshed (:mod:`pacto_ng.parallel_outputs`).  ``shown``: the density drawn
     per element (ρ̄, or with two materials ρ̄1 (1 + ρ̄2) / 2); ``solid``: the pressure's
     density per element (its ρ̄ = 0.5 contour); ``p_rel``: p / P_in at the vertices;
-    ``materials``: (ρ̄1, ρ̄2) of a two-material design."""
+    ``materials``: (ρ̄1, ρ̄2) of a two-material design; ``areas``: the element areas (volumes
+    in 3D)."""
 
     mesh: object
     name: str
@@ -59,6 +59,7 @@ class Drawn:
     p_in: float = 0.0
     leak: float | None = None
     materials: tuple | None = None
+    areas: np.ndarray | None = None
 
 
 #: the element densities a run's files hold (the one or the two materials')
@@ -70,12 +71,14 @@ class OneMesh:
     """A run's fields on one serial mesh: a serial run's own (:func:`one_mesh`), or a
     distributed run's gathered to rank 0 onto the serial mesh it meshed and kept
     (:mod:`pacto_ng.parallel_outputs`).  ``cells``: element arrays by name in the mesh's
-    order (the densities of :data:`DENSITIES` and the pressure's); ``design``: the mask of
-    the design elements; ``p``: the pressure at the mesh's vertices (None: no pressure)."""
+    order (:func:`cell_names`); ``design``: the mask of the design elements; ``areas``: the
+    element areas (volumes in 3D); ``p``: the pressure at the mesh's vertices (None: no
+    pressure)."""
 
     mesh: object
     cells: dict
     design: np.ndarray
+    areas: np.ndarray
     p: np.ndarray | None = None
 
 
@@ -258,8 +261,8 @@ def pressure_and_material_summary(problem: Problem, one: OneMesh | None) -> dict
         out["leakage"] = info.pop("leakage")
         out["leakage_detail"] = info
     if problem.n_design_fields == 2:
-        areas = np.array(Integrate(1.0, one.mesh, element_wise=True))
-        out["material_fractions"] = material_fractions(one.design, areas, one.cells["rho_bar1"],
+        out["material_fractions"] = material_fractions(one.design, one.areas,
+                                                       one.cells["rho_bar1"],
                                                        one.cells["rho_bar2"])
     return out
 
@@ -310,12 +313,19 @@ def write_outputs(path: Path, problem: Problem, x: np.ndarray, history: list, re
     return summ
 
 
+def cell_names(problem: Problem) -> tuple[str, ...]:
+    """The element fields a run's files and figures read (:class:`OneMesh`): the densities
+    of :data:`DENSITIES` the problem has and the pressure's density."""
+    block = problem.pressure_block
+    names = DENSITIES + ((block.inputs[0],) if block is not None else ())
+    return tuple(n for n in dict.fromkeys(names) if n in problem.values)
+
+
 def one_mesh(problem: Problem) -> OneMesh:
     """The element fields of a serial run's ``problem`` on its mesh (:class:`OneMesh`)."""
-    vals, block = problem.values, problem.pressure_block
-    names = DENSITIES + ((block.inputs[0],) if block is not None else ())
-    return OneMesh(problem.mesh, {n: np.asarray(vals[n]) for n in names if n in vals},
-                   problem.field.design,
+    block = problem.pressure_block
+    return OneMesh(problem.mesh, {n: np.asarray(problem.values[n]) for n in cell_names(problem)},
+                   problem.field.design, problem.field.areas,
                    None if block is None else block.pressure.vec.FV().NumPy()[:problem.mesh.nv])
 
 
@@ -324,7 +334,7 @@ def drawn(problem: Problem, one: OneMesh, summary: dict) -> Drawn:
     its ``summary`` (the volume fraction and the leak)."""
     block = problem.pressure_block
     out = Drawn(one.mesh, problem.case.name, problem.params.model, summary["volume_fraction"],
-                shown_density(one.cells), leak=summary.get("leak"),
+                shown_density(one.cells), leak=summary.get("leak"), areas=one.areas,
                 materials=((one.cells["rho_bar1"], one.cells["rho_bar2"])
                            if problem.n_design_fields == 2 else None))
     if block is None:

@@ -18,12 +18,12 @@ from pathlib import Path
 
 import meshio
 import numpy as np
-from ngsolve import VERTEX, NodeId
+from ngsolve import VERTEX, Integrate, NodeId
 from scipy.spatial import cKDTree
 
 from .files import atomic_path, atomic_write_text
-from .outputs import (DENSITIES, OneMesh, drawn, measure_fields, summary_dict, write_history,
-                      write_pictures)
+from .outputs import (DENSITIES, OneMesh, cell_names, drawn, measure_fields, summary_dict,
+                      write_history, write_pictures)
 
 
 def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list, result,
@@ -31,9 +31,8 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
     """The summary of the run (every rank: collective), and on the rank that ``write``s its
     files; returns the summary (the whole on that rank)."""
     numbering, vals, block = problem.numbering, problem.values, problem.pressure_block
-    names = DENSITIES + ((block.inputs[0],) if block is not None else ())
     cells = {name: numbering.gather(np.asarray(vals[name], dtype=float))
-             for name in names if name in vals}
+             for name in cell_names(problem)}
     design = numbering.gather(problem.field.design.astype(float))
     xs = None
     if problem.n_design_fields == 1:
@@ -44,7 +43,9 @@ def write_distributed_outputs(path: Path, problem, x: np.ndarray, history: list,
         points["p"] = _vertex_field(numbering, problem.mesh, block.pressure, 1)
     one = None
     if numbering.comm.rank == 0:
-        one = OneMesh(numbering.serial_mesh, cells, design > 0.5,
+        serial = numbering.serial_mesh
+        one = OneMesh(serial, cells, design > 0.5,
+                      np.array(Integrate(1.0, serial, element_wise=True)),
                       None if block is None else points["p"].ravel())
     summ = summary_dict(problem, history, result, wall, one)
     if not write:

@@ -303,7 +303,8 @@ def crushed_at_port(ana: PartAnalysis, ports) -> list[str]:
                 return [f"its lowest det F ({low['J']:.2g}, at the last equilibrium) lies at the "
                         f"output '{port.region}', whose spring acts at one point: a force at a "
                         f"point crushes the part's elements there, finer than the design's (a "
-                        f"case file can spread it: Spring(..., spread=r), docs/guide.md)"]
+                        f"case file can spread it, Spring(..., spread=r), or put it on a named "
+                        f"edge of solid: docs/guide.md)"]
     return []
 
 

@@ -11,7 +11,6 @@ straight ``symmetry`` boundary is drawn as it is.
 from __future__ import annotations
 
 import numpy as np
-from ngsolve import Integrate
 
 from ..files import atomic_path
 from .domain import Line, symmetry_line
@@ -166,8 +165,8 @@ def nodal_average(mesh, values, areas) -> np.ndarray:
 def pressure_png(path, drawn, title: str | None = None, mirror=True):
     """The Darcy pressure field with the ρ̄ = 0.5 contour of the design drawn on it (as thesis
     Figs 6.9 and 6.18): colours p / P_in at the vertices, black line the contour of the
-    area-weighted nodal average of the element densities ``drawn.solid`` (the total solid for
-    two materials); a 3D run: :func:`pacto_ng.post.plots3d.pressure_picture`.
+    nodal average of the element densities ``drawn.solid`` weighted by ``drawn.areas`` (the
+    total solid for two materials); a 3D run: :func:`pacto_ng.post.plots3d.pressure_picture`.
     ``drawn.leak``: the design's Q/(Kv P_in), summary.json's ``leak``
     (:func:`pacto_ng.outputs.leak`), quoted in the title (None: not quoted)."""
     mesh, rho, pv, p_in = drawn.mesh, np.asarray(drawn.solid), drawn.p_rel, drawn.p_in
@@ -181,7 +180,7 @@ def pressure_png(path, drawn, title: str | None = None, mirror=True):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rho_n = nodal_average(mesh, rho, np.array(Integrate(1.0, mesh, element_wise=True)))
+    rho_n = nodal_average(mesh, rho, drawn.areas)
     tri, both, line = picture_triangulation(mesh, np.c_[pv, rho_n], mirror)
     pv, rho_n = both[:, 0], both[:, 1]
     x, y = tri.x, tri.y

@@ -44,7 +44,8 @@ def stand_in(mesh):
     return SimpleNamespace(
         mesh=mesh, params=SimpleNamespace(order=1, model="linear"),
         case=SimpleNamespace(name="box3d"), values={"rho_bar": rho, "p": gfp},
-        n_design_fields=1, field=SimpleNamespace(full=lambda xs: xs, design=rho > 0),
+        n_design_fields=1, field=SimpleNamespace(full=lambda xs: xs, design=rho > 0,
+                                                 areas=np.ones(mesh.ne)),
         mech=SimpleNamespace(l2=l2, u=gfu, energy=energy, coeffs=None),
         pressure_block=SimpleNamespace(pressure=gfp, p_in=1e5, inputs=("rho_bar",)),
         design_density=lambda: rho, volume_fraction=lambda: float(np.mean(rho)))
