@@ -40,7 +40,7 @@ as the elements at the contact are halved once, twice and three times).
 NGSolve pairs the points once per :meth:`SelfContact.update` (within ``maxdist`` of the
 surface, at ``intorder`` quadrature points per face), at the state given; the pairs then stay
 until the next update: the caller solves with them fixed and pairs again until they hold
-(:meth:`~pacto_ng.physics.equilibrium.Equilibrium.contact_settled`).  An energy that
+(:meth:`~pacto_ng.physics.equilibrium.Equilibrium.pairs_mismatch`).  An energy that
 simplifies to zero (k = 0) crashes NGSolve, so the stiffness must be positive.
 """
 from __future__ import annotations

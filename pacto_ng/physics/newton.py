@@ -82,13 +82,15 @@ class NewtonSettings:
                              ">= 1")
 
     def for_contact(self) -> NewtonSettings:
-        """These settings for a problem with contact: no ``stall`` limit short of
-        ``max_iter``.  Newton with penalty contact wanders before it converges: up to 26
-        iterations without a new smallest residual in the converged steps of
-        tests/post/test_refine_contact.py and tests/shape/test_contact_gradient.py, 20 in
-        tests/physics/test_hertz.py, against at most 4 without contact (the silicone cases'
-        and the limit-point tests', 2026-12-07)."""
-        return replace(self, stall=self.max_iter)
+        """These settings for a problem with contact: the residual's line search (Armijo on
+        ``|R|``) and no ``stall`` limit short of ``max_iter``.  A full Newton step presses
+        walls whose contact its tangent did not see deep into each other (the residual's norm
+        grew up to 2e5 times on the squeezed slotted slab of tests/physics/test_contact.py),
+        and Newton without the line search wanders: 174 iterations on that slab with every
+        wall a candidate (1213 tetrahedra, order 2, linear, 3 kPa), 16 with it; the 3D Hertz
+        test's 191 s became 28 s (2026-12-08).  Before it, converged steps went up to 26
+        iterations without a new smallest residual (2026-12-07)."""
+        return replace(self, stall=self.max_iter, line_search="residual")
 
     def for_route(self, direct: bool) -> NewtonSettings:
         """These settings with ``rtol`` 0 replaced by the route's tolerance."""

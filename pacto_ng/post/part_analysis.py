@@ -76,8 +76,6 @@ KINDS = ("fixed", "follower", "darcy")
 #: self-contact: the penalty stiffness in units of E1 / h (an overlap of 5e-4 h at a contact
 #: pressure of E1), and the distance within which pairs are sought, in element sizes
 CONTACT_PENALTY, CONTACT_REACH = 1e3, 3.0
-#: ... and the most pairings per pressure (Newton with the pairs fixed between them)
-CONTACT_CYCLES = 20
 #: past a pressure maximum: the path is followed in steps of this fraction of the output
 #: motion Newton reached, at most PEAK_STEPS of them (:meth:`PartAnalysis.sweep`)
 PEAK_STEP, PEAK_STEPS = 0.1, 60
@@ -316,20 +314,11 @@ class PartAnalysis:
             self._unit.Set(sign)
             self.mech.load_changed()  # the unit load vector changed sign
         self.mech.target = abs(P)
-        iterations = 0
         try:
-            # with contact: Newton with the pairs fixed, then paired anew, until they hold
-            for _ in range(CONTACT_CYCLES if self.mech.contact is not None else 1):
-                self.mech.forward(*self.solid_values())
-                iterations += self.mech.result.iterations
-                if self.mech.contact is None or self.mech.contact_settled():
-                    break
-            else:
-                return self._failed(P, iterations, 1.0)
+            iterations = self.mech.forward_paired(*self.solid_values())
         except NewtonFailure as failure:
             res = failure.result
-            return self._failed(P, iterations + res.iterations,
-                                res.load_reached / abs(P) if P else 0.0)
+            return self._failed(P, res.iterations, res.load_reached / abs(P) if P else 0.0)
         return self._read(P, iterations)
 
     def sweep(self, pressures, *, say: Callable[[str], None] | None = None) -> Sweep:

@@ -59,13 +59,13 @@ from ngsolve import (L2, VOL, BilinearForm, CF, Cof, Det, Grad, GridFunction, Id
 from ..errors import InputError
 from ..parallel import free_norm
 from ..physics.energy import make_energy
-from ..physics.equilibrium import NewtonFailure
+from ..physics.equilibrium import CONTACT_CYCLES, NewtonFailure
 from ..physics.mixed import formulation_for, has_simplices, stored_energy
 from ..physics.newton import solve_with_continuation
 from ..physics.quadrature import integration_rules, mechanics_rules
 from ..physics.spaces import block_spaces
 from ..physics.walls import outward_normal
-from ..post.part_analysis import CONTACT_CYCLES, solid_fields
+from ..post.part_analysis import solid_fields
 from .contact_term import ShapeContact
 from .deformation import ShapeSpace, shape_ds, shape_dx
 
