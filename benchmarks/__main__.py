@@ -3,7 +3,7 @@
     python -m benchmarks all [--quick] [--out docs/studies.md] [--plots docs]
     python -m benchmarks peer|trade|stability|profile|mbb [--quick] ...
     python -m benchmarks solvers_3d|iteration_3d|iteration_ratio|locking|limit_point|silicone|
-        scaling|iterative_tolerance [--out FILE]   (one at a time)
+        scaling|iterative_tolerance|contact [--out FILE]   (one at a time)
 
 Each study writes one marked block of the report (``<!-- BEGIN name -->`` ... ``<!-- END name
 -->``); the rest of the file (other engineers' sections) is kept as it is.  The default run
@@ -27,7 +27,7 @@ STUDIES = ("peer", "trade", "stability", "profile", "mbb")
 # Studies with their own command line and report block, run one at a time (not by `all`:
 # they take 20-25 minutes each): `python -m benchmarks NAME` runs `benchmarks.NAME`.
 STANDALONE = ("solvers_3d", "iteration_3d", "iteration_ratio", "locking", "limit_point",
-              "silicone", "scaling", "iterative_tolerance")
+              "silicone", "scaling", "iterative_tolerance", "contact")
 
 
 def machine() -> str:

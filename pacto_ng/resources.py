@@ -358,16 +358,17 @@ def _count(n: float) -> str:
     return f"{n:,.0f}" if n < 1e7 else f"{n:.2g}"
 
 
-def _duration(s: float) -> str:
+def duration(s: float) -> str:
+    """Seconds said in the unit that reads best (s, min, h, days, years)."""
+    if s < 10:
+        return f"{s:.2g} s"
     if s < 120:
         return f"{s:.0f} s"
     if s < 7200:
         return f"{s / 60:.0f} min"
     if s < 48 * 3600:
-        return f"{s / 3600:.0f} h"
-    if s < 3e9:
-        return f"{s / 86400:.2g} days"
-    return f"{s / 3.15e7:.2g} years"
+        return f"{s / 3600:.1f} h"
+    return f"{s / 86400:.2g} days" if s < 3e9 else f"{s / 3.15e7:.2g} years"
 
 
 def check(est: Estimate, what: str, *, mesh_time_limit: float = MESH_TIME_LIMIT,
@@ -392,6 +393,6 @@ def check(est: Estimate, what: str, *, mesh_time_limit: float = MESH_TIME_LIMIT,
         line += (f"; {needs} about {_bytes(est.memory)} of memory, more than the "
                  f"{_bytes(limit_bytes)} it may use ({limit_what})")
     if too_slow:
-        line += (f"; meshing alone would take about {_duration(est.mesh_seconds)} of "
+        line += (f"; meshing alone would take about {duration(est.mesh_seconds)} of "
                  f"{est.mesher} here, over mesh_time_limit = {mesh_time_limit:g} s ({longer})")
     raise InputError(line + (f"; {advice}" if advice else ""))

@@ -42,12 +42,14 @@ from ..physics.contact import SelfContact
 from ..physics.equilibrium import NewtonFailure
 from ..physics.loads import named_points, point_of
 from ..physics.walls import solid_boundaries
+from ..resources import duration
 from .domain import symmetry_line
 from .mirror3d import mirror_surface, symmetry_planes
 from .part import Part, make_part, part_ports, present_supports
 from .part2d import part_mesh, write_part_stl as write_stl_2d
 from .part3d import write_part_stl as write_stl_3d
 from .part_analysis import CONTACT_REACH, PartAnalysis
+from .part_resources import TIME_LIMIT, contact_seconds
 from .pictures import plot_deformed
 from .plots3d import deformed_picture
 from .runs import at_order, copy_gridfunction, design_delta
@@ -158,6 +160,12 @@ def _solved(part: Part, problem, loading: tuple, contact: tuple = (), say=None):
     """``(PartAnalysis, SweepPoint)``: the part solved at ``loading`` = (load, kind, order)
     with the run's model, the walls ``contact`` in self-contact; ``say`` gets the progress
     lines of a long load ramp."""
+    ana = _analysis(part, problem, loading, contact, say)
+    return ana, ana.solve(loading[0])
+
+
+def _analysis(part: Part, problem, loading: tuple, contact: tuple, say) -> PartAnalysis:
+    """The part's :class:`PartAnalysis` of :func:`_solved`, not solved yet."""
     load, kind, order = loading
     setup = problem.setup
     try:
@@ -167,7 +175,7 @@ def _solved(part: Part, problem, loading: tuple, contact: tuple = (), say=None):
     except ValueError as err:
         raise InputError(f"the part cannot be analysed: {err}") from None
     ana.mech.on_step = load_ramp_progress(say, load, problem.case.load_unit)
-    return ana, ana.solve(load)
+    return ana
 
 
 #: the part's load ramp says each step it reaches once its analysis has taken this long (s)
@@ -204,12 +212,13 @@ PROBE_DEPTH_3D = 0.01
 
 def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
     """``(entry, (PartAnalysis, SweepPoint))``: where the part's walls pass through each
-    other at the solved state (:func:`walls_probe`), a 2D part solved again with its walls
-    in self-contact, whose figures are then the part's (``entry``: the overlap and Δ without
-    contact, whether the part was analysed in contact and whether that solve converged).  A
-    3D part is probed and not analysed again: contact costs 20-40 times a Newton iteration
-    there, minutes to an hour on a built-in part, so the last line points to ``pacto analyse
-    DIR --contact``.  ``entry`` is None where the walls do not meet."""
+    other at the solved state (:func:`walls_probe`), the part solved again with its walls in
+    self-contact, whose figures are then the part's (``entry``: the overlap and Δ without
+    contact, whether the part was analysed in contact and whether that solve converged).
+    One Newton iteration with contact is timed first: where even the fewest Newton
+    iterations a pressure takes with contact (:func:`~.part_resources.contact_seconds`)
+    would pass the analyses' time limit, the part is not solved again and the last line says
+    what it would take.  ``entry`` is None where the walls do not meet."""
     ana, point = solved
     if not point.converged:
         return None, solved
@@ -223,16 +232,22 @@ def _with_contact(part: Part, problem, solved: tuple, loading: tuple, say):
             overlap = 0.0  # walls that touch as made, pressed a little into each other
     if not overlap > 0.0:
         return None, solved
-    entry = {"overlap_without": overlap, "output_displacement_without": _num(point.delta),
-             "analysed": part.dim == 2}
-    if part.dim == 3:
-        say(f"its walls pass through each other there (overlap {overlap:.3g} m²)")
+    entry = {"overlap_without": overlap, "output_displacement_without": _num(point.delta)}
+    again = _analysis(part, problem, loading, walls, say)
+    low, high = contact_seconds(again.iteration_seconds(), 1)
+    entry["analysed"] = bool(low <= TIME_LIMIT)
+    said = f"its walls pass through each other there (overlap {overlap:.3g} m²)"
+    if not entry["analysed"]:
+        entry["estimate"] = f"{duration(low)} to {duration(high)}"
+        say(f"{said}: not analysed again with them in contact ({entry['estimate']})")
         return entry, solved
-    again = _solved(part, problem, loading, contact=walls, say=say)
-    entry["converged"] = bool(again[1].converged)
-    say(f"its walls pass through each other there (overlap {overlap:.3g} m²): analysed again "
-        f"with them in contact" + ("" if again[1].converged else ": no equilibrium"))
-    return entry, again if again[1].converged else solved
+    say(f"{said}: analysed again with them in contact ({duration(low)} to {duration(high)})")
+    point = again.solve(loading[0])
+    entry["converged"] = bool(point.converged)
+    if not point.converged:
+        say("no equilibrium with the walls in contact")
+        return entry, solved
+    return entry, (again, point)
 
 
 def walls_probe(ana: PartAnalysis, walls) -> SelfContact:
@@ -254,8 +269,8 @@ def _overlap_warning(contact, path) -> list[str]:
     overlap = f"its walls pass through each other in this analysis (overlap " \
               f"{contact['overlap_without']:.3g} m²)"
     if not contact["analysed"]:
-        return [overlap + f", not analysed in contact (a 3D part): 'pacto analyse {path} "
-                          f"--contact' does, over minutes to an hour"]
+        return [overlap + f", not analysed in contact (it would take {contact['estimate']}): "
+                          f"'pacto analyse {path} --contact --time-limit S' does"]
     return [overlap + f": 'pacto analyse {path} --contact' sweeps the pressure up to it with "
                       f"them in contact"]
 

@@ -71,22 +71,24 @@ def test_the_walls_overlap_is_measured_on_the_displacement(formulation):
     assert overlaps[0] == 0.0 and overlaps[1] > 0.1
 
 
-def test_a_3d_part_s_walls_are_probed_and_the_user_pointed_to_the_contact_analysis():
+def test_a_3d_part_s_walls_are_probed_and_the_part_analysed_with_them_in_contact():
     """A 3D part's walls are probed at one point per face (part_stage.PROBE_INTORDER_3D): the
     slotted slab's overlap at 3 kPa within 15 % of the contact quadrature's (11 % on these
-    1213 tetrahedra, 5 % at half their size, measured 2026-12-06), none at 500 Pa;
-    the part is not analysed again in contact (minutes to an hour in 3D) and its warning
-    names ``pacto analyse DIR --contact``."""
+    1213 tetrahedra, 5 % at half their size, measured 2026-12-06), none at 500 Pa.  Where
+    they pass through each other the part is analysed again with every wall in contact, as a
+    2D part is, once one Newton iteration with contact is timed (here at order 1, to be
+    quick): the slot then stays shut to the penalty's overlap and the corner moves less."""
     from types import SimpleNamespace
 
     from pacto_ng.physics.contact import SelfContact
     from pacto_ng.post.part_analysis import CONTACT_REACH
+    from pacto_ng.setup import Setup
 
     mesh = slotted_slab(0.1)
     params = Parameters(model="linear", E1=1e6, E0=1.0, nu=0.3, order=2)
-    ana = PartAnalysis(mesh, "fixed", params=params,
-                       supports=Supports(clamp=("left",), fix_z=("front", "back")),
-                       ports=Port("corner", (0.0, -1.0, 0.0)))
+    supports = Supports(clamp=("left",), fix_z=("front", "back"))
+    port = Port("corner", (0.0, -1.0, 0.0))
+    ana = PartAnalysis(mesh, "fixed", params=params, supports=supports, ports=port)
     walls = solid_boundaries(mesh)
     assert ana.solve(500.0).converged and walls_probe(ana, walls).overlap(ana.mech.u.vec) == 0
     point = ana.solve(3000.0)
@@ -98,11 +100,23 @@ def test_a_3d_part_s_walls_are_probed_and_the_user_pointed_to_the_contact_analys
     assert area == found
     assert depth > 0.2 * point.max_u  # passing through each other, not touching as made
     said = []
-    part = SimpleNamespace(mesh=mesh, dim=3)
-    entry, (again, same) = _with_contact(part, None, (ana, point), (3000.0, "fixed", 2),
-                                         said.append)
-    assert again is ana and same is point and entry["analysed"] is False
-    assert entry["overlap_without"] == found and "converged" not in entry
-    assert said == [f"its walls pass through each other there (overlap {found:.3g} m²)"]
+    problem = SimpleNamespace(params=params, setup=Setup(supports=supports, port=port),
+                              case=SimpleNamespace(load_unit="Pa"))
+    entry, (again, touching) = _with_contact(SimpleNamespace(mesh=mesh, dim=3), problem,
+                                             (ana, point), (3000.0, "fixed", 1), said.append)
+    assert entry["analysed"] and entry["converged"] and entry["overlap_without"] == found
+    assert said[0].startswith(f"its walls pass through each other there (overlap {found:.3g}"
+                              f" m²): analysed again with them in contact (")
+    assert again is not ana and touching.converged and touching.contact_area > 0
+    apart = PartAnalysis(mesh, "fixed", params=params.replace(order=1), supports=supports,
+                         ports=port).solve(3000.0)  # at the order analysed in contact
+    assert touching.delta < 0.9 * apart.delta  # the closed slot carries load
+    assert walls_probe(again, walls).overlap_depth(again.mech.u.vec)[1] < 1e-3 * depth
+    assert _overlap_warning(entry, "DIR") == []
+
+
+def test_a_part_whose_contact_analysis_would_take_too_long_says_what_it_would_take():
+    entry = {"overlap_without": 0.0875, "analysed": False, "estimate": "2.1 h to 24 h"}
     warning, = _overlap_warning(entry, "DIR")
-    assert "not analysed in contact (a 3D part): 'pacto analyse DIR --contact'" in warning
+    assert "not analysed in contact (it would take 2.1 h to 24 h): 'pacto analyse DIR " \
+           "--contact --time-limit S' does" in warning
