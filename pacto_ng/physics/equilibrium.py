@@ -23,14 +23,14 @@ from .solvers import LinearSolver, adjoint_rtol
 #: with contact, the most pairings per solve (Newton with the pairs fixed between them): walls that
 #: slide along each other settle slowly, the residual after pairing anew falling about half
 #: per pairing (a Neo-Hookean slotted block loaded on its top face only, 10 kPa after 3 kPa:
-#: 34 pairings, 2026-12-08)
+#: 34 pairings, 2026-12-07)
 CONTACT_CYCLES = 50
 #: ... and the pairs are taken to hold once pairing anew leaves a residual below this share of
 #: the load; Newton then solves once more with the new pairs, to its own tolerance.  The
 #: pairing converges linearly (a residual about 0.3 times the last one per pairing on the
 #: squeezed slotted slab of tests/physics/test_contact.py, every wall a candidate); against
 #: pairing until 1e-10, 1e-6 moved the contact force by 1.3e-7 and Δ by 5.6e-8 of themselves,
-#: in 6 pairings fewer per pressure (1213 tetrahedra, order 2, 1 and 3 kPa, 2026-12-08)
+#: in 6 pairings fewer per pressure (1213 tetrahedra, order 2, 1 and 3 kPa, 2026-12-07)
 PAIRS_SETTLE = 1e-6
 
 
@@ -168,7 +168,7 @@ class Equilibrium:
     def _paired_step(self, load, vec) -> None:
         """``on_step`` with contact: the pairs follow a load ramp, paired anew at each of its
         equilibria (walls that slide along each other: a Neo-Hookean slotted block loaded on
-        its top face to 10 kPa settled in 183 Newton iterations so, 378 without, 2026-12-08)."""
+        its top face to 10 kPa settled in 183 Newton iterations so, 378 without, 2026-12-07)."""
         self.contact.update(self.a, vec)
         if self.on_step is not None:
             self.on_step(load, vec)

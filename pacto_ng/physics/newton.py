@@ -88,7 +88,7 @@ class NewtonSettings:
         grew up to 2e5 times on the squeezed slotted slab of tests/physics/test_contact.py),
         and Newton without the line search wanders: 174 iterations on that slab with every
         wall a candidate (1213 tetrahedra, order 2, linear, 3 kPa), 16 with it; the 3D Hertz
-        test's 191 s became 28 s (2026-12-08).  Before it, converged steps went up to 26
+        test's 191 s became 28 s (2026-12-07).  Before it, converged steps went up to 26
         iterations without a new smallest residual (2026-12-07)."""
         return replace(self, stall=self.max_iter, line_search="residual")
 

@@ -147,12 +147,15 @@ def _analyse(path, part: Part, problem, summary, say) -> dict:
     if point.converged:
         title = (f"{problem.case.name} part, {load:.3g} {problem.case.load_unit} {kind}, "
                  f"{ana.model} (true scale)")
-        u = ana.mech.u
+        u, touch = ana.mech.u, None
+        if ana.mech.contact is not None:  # analysed in contact: its walls' vertices marked
+            points, pressures = ana.mech.contact.pressures(u.vec)
+            touch = points[pressures > 0]
         if part.dim == 2:
             plot_deformed(path / "part.png", part.mesh, u, title=title,
-                          mirror=symmetry_line(problem.mesh) or False)
+                          mirror=symmetry_line(problem.mesh) or False, contact=touch)
         else:
-            deformed_picture(path / "part.png", part.mesh, u, title=title)
+            deformed_picture(path / "part.png", part.mesh, u, title=title, contact=touch)
     return entry
 
 
