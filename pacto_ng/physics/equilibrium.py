@@ -32,6 +32,12 @@ CONTACT_CYCLES = 50
 #: pairing until 1e-10, 1e-6 moved the contact force by 1.3e-7 and Δ by 5.6e-8 of themselves,
 #: in 6 pairings fewer per pressure (1213 tetrahedra, order 2, 1 and 3 kPa, 2026-12-07)
 PAIRS_SETTLE = 1e-6
+#: ... and a warm start with contact gives up after this many Newton iterations without a new
+#: smallest residual (a load ramp from zero then takes over; a load ramp's steps may take up
+#: to ``max_iter`` without one): the slotted slab of benchmarks/contact.py at 3 kPa after
+#: 1 kPa, every wall a candidate, took 55 Newton iterations with a warm start of 30, 37 so
+#: (2026-12-07)
+WARM_STALL = 8
 
 
 class NewtonFailure(RuntimeError):
@@ -130,7 +136,7 @@ class Equilibrium:
             raise ValueError("contact needs the nonlinear route (build the block with "
                              "linear=False)")
         self.contact = contact
-        self.settings = self.settings.for_contact()
+        self.settings = replace(self.settings.for_contact(), warm_stall=WARM_STALL)
         contact.update(self.a, self.gfx.vec)
 
     def forward_paired(self, *values) -> int:

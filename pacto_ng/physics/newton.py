@@ -60,6 +60,9 @@ class NewtonSettings:
     # (at most 4 apart in the converged steps of gripper-silicone's part with its former
     # point spring, 2026-12-07, whose failed attempts each ran all of max_iter before this)
     stall: int = 8
+    # ... and a warm start (Newton at the full load from the last equilibrium) after this many
+    # (0: ``stall``), the load ramp then taking over
+    warm_stall: int = 0
     max_backtracks: int = 8
     initial_increment: float = 1.0  # first load increment (fraction of the target)
     min_increment: float = 1.0 / 1024
@@ -257,7 +260,8 @@ def _warm_start(problem, u, loads, s: NewtonSettings, hooks, result: NewtonResul
     (target, ref), (linear, accept, on_step) = loads, hooks
     saved = u.CreateVector()
     saved.data = u
-    ok, it, why, res = _attempt(problem, u, target, ref, s, linear, accept)
+    warm = replace(s, stall=s.warm_stall) if s.warm_stall else s
+    ok, it, why, res = _attempt(problem, u, target, ref, warm, linear, accept)
     result.iterations += it
     if ok:
         result.converged, result.load_reached, result.steps = True, target, 1

@@ -66,7 +66,7 @@ def analysis_seconds(est, dim: int, kinds, n_pressures: int, model: str) -> tupl
 
 #: Newton iterations per pressure with self-contact (pairings until the pairs hold, each a
 #: Newton solve; 2026-12-07): from 16 (the 3D slotted block of tests/physics/test_contact.py
-#: at 3 kPa, linear, order 1; 26 at order 2 and for the 2D one, Neo-Hookean, at 3 kPa after
+#: at 3 kPa, linear, order 1; 26 at order 2, 33 for the 2D one, Neo-Hookean, at 3 kPa after
 #: 100 Pa) to 182 (the 2D one loaded on its top face only, Neo-Hookean, at 10 kPa after 3 kPa:
 #: walls that slide along each other)
 CONTACT_NEWTON_PER_PRESSURE = (16, 182)

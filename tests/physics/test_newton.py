@@ -184,6 +184,44 @@ def test_failure_reasons_of_the_continuation():
     assert res.ramp_first == pytest.approx(0.125)
 
 
+def test_a_warm_start_gives_up_after_warm_stall_iterations_without_progress():
+    """``warm_stall``: a warm start that makes no progress hands over to the load ramp after
+    that many iterations, whatever ``stall`` allows the ramp's steps (contact's settings:
+    physics/equilibrium.py WARM_STALL).  R(u) = atan(u) - 0.5 from u = 3: full Newton steps
+    overshoot further each time (|R| grows towards π/2 + 0.5), so the warm start never finds
+    a smaller residual; the ramp from zero then converges."""
+    from ngsolve.la import CreateVVector
+
+    class Atan:
+        free = np.array([True])
+
+        def residual(self, vec, out, load):
+            out.FV().NumPy()[:] = np.arctan(vec.FV().NumPy()) - 0.5 * load
+
+        def assemble_tangent(self, vec, load):
+            x = float(np.clip(vec.FV().NumPy()[0], -1e150, 1e150))
+            self.k = 1.0 / (1.0 + x * x)
+
+        def solve_tangent(self, rhs, out):
+            out.FV().NumPy()[:] = rhs.FV().NumPy() / self.k
+
+        def admissible(self, vec):
+            return bool(np.all(np.isfinite(vec.FV().NumPy())))
+
+        def load_norm(self, load):
+            return abs(0.5 * load)
+
+    runs = {}
+    for warm_stall in (0, 3):
+        u = CreateVVector(1)
+        u[:] = 3.0
+        settings = NewtonSettings(stall=20, max_iter=20, warm_stall=warm_stall)
+        runs[warm_stall] = solve_with_continuation(Atan(), u, 1.0, settings, warm=True)
+        assert runs[warm_stall].converged
+        assert u.FV().NumPy()[0] == pytest.approx(np.tan(0.5), rel=1e-9)
+    assert runs[0].iterations - runs[3].iterations == 20 - 3  # the warm start's iterations
+
+
 def test_a_ramp_starts_where_the_last_one_succeeded():
     """The Neo-Hookean cantilever at 5e5 N from u = 0 needs small first increments; the next
     ramp from zero (e.g. after a failed warm start) starts at the first increment that worked
