@@ -71,6 +71,30 @@ def replace_block(path: str, name: str, body: str) -> None:
         f.write(text)
 
 
+def standalone(argv, name: str, title: str, doc: str, items, one, report) -> None:
+    """The command line of a standalone study ``python3 -m benchmarks NAME [--out FILE]``:
+    ``one(item)`` for each of ``items`` (printed as it comes), then the block
+    ``benchmarks-NAME`` of ``--out`` (default docs/studies.md): ``title``, the command and
+    the machine, the third paragraph of ``doc`` (the study's module docstring) and
+    ``report(results)``."""
+    from pacto_ng.threads import compute
+
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--out", default=os.path.join("docs", "studies.md"))
+    args = ap.parse_args(argv)
+    mach = machine()
+    print(f"[{name}] {mach}", flush=True)
+    results = []
+    with compute():
+        for item in items:
+            results.append(one(item))
+            print(results[-1], flush=True)
+    body = (f"## {title}\n\n`python3 -m benchmarks {name}` ({mach}).  "
+            + doc.split("\n\n")[2].replace("\n", " ") + "\n\n" + report(results))
+    replace_block(args.out, "benchmarks-" + name.replace("_", "-"), body)
+    print(body)
+
+
 def _describe(module):
     """The module docstring without its title and usage lines (the study's description)."""
     parts = module.__doc__.strip().split("\n\n")

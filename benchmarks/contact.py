@@ -15,8 +15,6 @@ wall slides along the lower one.
 """
 from __future__ import annotations
 
-import argparse
-import os
 import time
 
 #: (label, dimension, model, order, Netgen maxh, candidate walls, pressures in Pa, faces pressed)
@@ -93,24 +91,9 @@ def report(results) -> str:
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=os.path.join("docs", "studies.md"))
-    args = ap.parse_args(argv)
-    from benchmarks.__main__ import machine, replace_block
-    from pacto_ng.threads import compute
+    from benchmarks.__main__ import standalone
 
-    mach = machine()
-    print(f"[contact] {mach}", flush=True)
-    results = []
-    with compute():
-        for row in ROWS:
-            results.append(one(row))
-            print(results[-1], flush=True)
-    body = ("## Self-contact in a part's analysis: Newton iterations and seconds\n\n"
-            "`python3 -m benchmarks contact` (" + mach + ").  " + __doc__.split("\n\n")[2]
-            .replace("\n", " ") + "\n\n" + report(results))
-    replace_block(args.out, "benchmarks-contact", body)
-    print(body)
+    standalone(argv, "contact", "Self-contact in a part's analysis: Newton iterations and seconds", __doc__, ROWS, one, report)
 
 
 if __name__ == "__main__":

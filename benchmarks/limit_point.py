@@ -24,8 +24,6 @@ thread.
 """
 from __future__ import annotations
 
-import argparse
-import os
 import time
 
 import numpy as np
@@ -127,24 +125,9 @@ def report(rows: list[dict]) -> str:
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=os.path.join("docs", "studies.md"))
-    args = ap.parse_args(argv)
-    from benchmarks.__main__ import machine, replace_block
-    from pacto_ng.threads import compute
+    from benchmarks.__main__ import standalone
 
-    mach = machine()
-    print(f"[limit_point] {mach}", flush=True)
-    rows = []
-    with compute():
-        for h in SIZES:
-            rows.append(one(h))
-            print(rows[-1], flush=True)
-    body = ("## A pressure maximum followed: the inflated thick sphere\n\n"
-            "`python3 -m benchmarks limit_point` (" + mach + ").  " + __doc__.split("\n\n")[2]
-            .replace("\n", " ") + "\n\n" + report(rows))
-    replace_block(args.out, "benchmarks-limit-point", body)
-    print(body)
+    standalone(argv, "limit_point", "A pressure maximum followed: the inflated thick sphere", __doc__, SIZES, one, report)
 
 
 if __name__ == "__main__":

@@ -83,9 +83,9 @@ def contact_check(per_iteration: float, n_pressures: int, time_limit: float) -> 
     """The line that says how long a sweep with contact may take (:func:`contact_seconds`);
     InputError where even the lower figure passes ``time_limit``."""
     low, high = contact_seconds(per_iteration, n_pressures)
-    say = resources.duration
-    line = (f"with contact: {say(per_iteration)} per Newton iteration (measured), "
-            f"{say(low)} to {say(high)} per kind for {n_pressures} "
+    dur = resources.duration
+    line = (f"with contact: {dur(per_iteration)} per Newton iteration (measured), "
+            f"{dur(low)} to {dur(high)} per kind for {n_pressures} "
             f"pressure{'s' if n_pressures != 1 else ''}")
     if low > time_limit:
         raise InputError(f"--contact: {line}, longer than --time-limit {time_limit:g} s; give "

@@ -8,6 +8,7 @@ at λ1 = 1/√3: beyond that no equilibrium with J > 0 exists.
 """
 import numpy as np
 import pytest
+from ngsolve.la import CreateVVector
 
 from nonlinear_setup import cantilever, cantilever_mesh
 from pacto_ng.mesh import Layout, Segment, structured_mesh
@@ -55,6 +56,31 @@ def vertex_jacobians(mech):
             q = 0.999 * np.array(p) + 0.001 * c  # just inside this element
             out.append(J(mech.mesh(*q)))
     return np.array(out)
+
+
+class Scalar:
+    """R(u) = atan(u) - s f: equilibria exist only for |s f| < π/2."""
+
+    free = np.array([True])
+
+    def __init__(self, f):
+        self.f = f
+
+    def residual(self, vec, out, load):
+        out.FV().NumPy()[:] = np.arctan(vec.FV().NumPy()) - load * self.f
+
+    def assemble_tangent(self, vec, load):
+        x = float(np.clip(vec.FV().NumPy()[0], -1e150, 1e150))
+        self.k = 1.0 / (1.0 + x * x)
+
+    def solve_tangent(self, rhs, out):
+        out.FV().NumPy()[:] = rhs.FV().NumPy() / self.k
+
+    def admissible(self, vec):
+        return bool(np.all(np.isfinite(vec.FV().NumPy())))
+
+    def load_norm(self, load):
+        return abs(load * self.f)
 
 
 def test_inverting_step_is_cut_never_accepted():
@@ -127,32 +153,6 @@ def test_without_guard_svk_jumps_to_the_inverted_branch():
 
 def test_failure_reasons_of_the_continuation():
     """Non-finite loads and the step cap are reported, with the load reached."""
-    from ngsolve.la import CreateVVector
-
-    class Scalar:
-        """R(u) = atan(u) - s f: equilibria exist only for |s f| < π/2."""
-
-        free = np.array([True])
-
-        def __init__(self, f):
-            self.f = f
-
-        def residual(self, vec, out, load):
-            out.FV().NumPy()[:] = np.arctan(vec.FV().NumPy()) - load * self.f
-
-        def assemble_tangent(self, vec, load):
-            x = float(np.clip(vec.FV().NumPy()[0], -1e150, 1e150))
-            self.k = 1.0 / (1.0 + x * x)
-
-        def solve_tangent(self, rhs, out):
-            out.FV().NumPy()[:] = rhs.FV().NumPy() / self.k
-
-        def admissible(self, vec):
-            return bool(np.all(np.isfinite(vec.FV().NumPy())))
-
-        def load_norm(self, load):
-            return abs(load * self.f)
-
     u = CreateVVector(1)
     u[:] = 0.0
     res = solve_with_continuation(Scalar(1.0), u, 1.0, NewtonSettings(), warm=False)
@@ -190,33 +190,12 @@ def test_a_warm_start_gives_up_after_warm_stall_iterations_without_progress():
     physics/equilibrium.py WARM_STALL).  R(u) = atan(u) - 0.5 from u = 3: full Newton steps
     overshoot further each time (|R| grows towards π/2 + 0.5), so the warm start never finds
     a smaller residual; the ramp from zero then converges."""
-    from ngsolve.la import CreateVVector
-
-    class Atan:
-        free = np.array([True])
-
-        def residual(self, vec, out, load):
-            out.FV().NumPy()[:] = np.arctan(vec.FV().NumPy()) - 0.5 * load
-
-        def assemble_tangent(self, vec, load):
-            x = float(np.clip(vec.FV().NumPy()[0], -1e150, 1e150))
-            self.k = 1.0 / (1.0 + x * x)
-
-        def solve_tangent(self, rhs, out):
-            out.FV().NumPy()[:] = rhs.FV().NumPy() / self.k
-
-        def admissible(self, vec):
-            return bool(np.all(np.isfinite(vec.FV().NumPy())))
-
-        def load_norm(self, load):
-            return abs(0.5 * load)
-
     runs = {}
     for warm_stall in (0, 3):
         u = CreateVVector(1)
         u[:] = 3.0
         settings = NewtonSettings(stall=20, max_iter=20, warm_stall=warm_stall)
-        runs[warm_stall] = solve_with_continuation(Atan(), u, 1.0, settings, warm=True)
+        runs[warm_stall] = solve_with_continuation(Scalar(0.5), u, 1.0, settings, warm=True)
         assert runs[warm_stall].converged
         assert u.FV().NumPy()[0] == pytest.approx(np.tan(0.5), rel=1e-9)
     assert runs[0].iterations - runs[3].iterations == 20 - 3  # the warm start's iterations
