@@ -15,24 +15,13 @@ import numpy as np
 from ngsolve import GridFunction
 
 from ..parallel import everywhere, free_norm
+from .contact import PairsUnsettled, settle
 from .materials import jacobian
 from .newton import NewtonResult, solve_with_continuation
 from .quadrature import element_points, guard_rules
 from .solvers import LinearSolver, adjoint_rtol
 
-#: with contact, the most pairings per solve (Newton with the pairs fixed between them): walls that
-#: slide along each other settle slowly, the residual after pairing anew falling about half
-#: per pairing (a Neo-Hookean slotted block loaded on its top face only, 10 kPa after 3 kPa:
-#: 34 pairings, 2026-12-07)
-CONTACT_CYCLES = 50
-#: ... and the pairs are taken to hold once pairing anew leaves a residual below this share of
-#: the load; Newton then solves once more with the new pairs, to its own tolerance.  The
-#: pairing converges linearly (a residual about 0.3 times the last one per pairing on the
-#: squeezed slotted slab of tests/physics/test_contact.py, every wall a candidate); against
-#: pairing until 1e-10, 1e-6 moved the contact force by 1.3e-7 and Δ by 5.6e-8 of themselves,
-#: in 6 pairings fewer per pressure (1213 tetrahedra, order 2, 1 and 3 kPa, 2026-12-07)
-PAIRS_SETTLE = 1e-6
-#: ... and a warm start with contact gives up after this many Newton iterations without a new
+#: with contact, a warm start gives up after this many Newton iterations without a new
 #: smallest residual (a load ramp from zero then takes over; a load ramp's steps may take up
 #: to ``max_iter`` without one): the slotted slab of benchmarks/contact.py at 3 kPa after
 #: 1 kPa, every wall a candidate, took 55 Newton iterations with a warm start of 30, 37 so
@@ -95,6 +84,7 @@ class Equilibrium:
         self._tangent_at = None  # id of the state the factorisation belongs to
         self.result: NewtonResult | None = None
         self._ramp_first = None  # first increment of the last successful ramp from zero
+        self._at_load = 0.0  # the load factor of the equilibrium the state holds (0: unknown)
         #: called with (load factor, state) at every equilibrium Newton's load ramp reaches
         #: (a progress line), or None
         self.on_step = None
@@ -141,35 +131,39 @@ class Equilibrium:
 
     def forward_paired(self, *values) -> int:
         """:meth:`forward`, and with contact paired anew at each equilibrium and solved again
-        until the pairs hold (:data:`PAIRS_SETTLE`, then one more solve with the last pairs);
-        the Newton iterations over all the solves.  NewtonFailure (its iterations those of
-        all the solves) where a solve fails or the pairs do not settle in
-        :data:`CONTACT_CYCLES` pairings."""
-        iterations, last = 0, self.contact is None
-        for _ in range(CONTACT_CYCLES):
+        until the pairs hold (:func:`~pacto_ng.physics.contact.settle`); the Newton
+        iterations over all the solves.  NewtonFailure (its iterations those of all the
+        solves) where a solve fails or the pairs do not settle."""
+        done = 0
+
+        def solve() -> int:
+            nonlocal done
             try:
                 self.forward(*values)
             except NewtonFailure as failure:
                 res = failure.result
-                raise NewtonFailure(replace(res, iterations=iterations + res.iterations)) from None
-            iterations += self.result.iterations
-            if last:
-                return iterations
-            mismatch = self.pairs_mismatch()
-            if mismatch <= self.settings.rtol:
-                return iterations
-            last = mismatch <= PAIRS_SETTLE  # one more solve, with these pairs
-        raise NewtonFailure(replace(
-            self.result, converged=False, iterations=iterations,
-            reason=f"the contact's pairs did not settle in {CONTACT_CYCLES} pairings"))
+                raise NewtonFailure(replace(res, iterations=done + res.iterations)) from None
+            done += self.result.iterations
+            return self.result.iterations
 
-    def pairs_mismatch(self) -> float:
-        """Pair the contact surface anew at the current equilibrium; the residual there with the
-        new pairs, relative to the load (within Newton's tolerance: the pairs hold)."""
-        self.contact.update(self.a, self.gfx.vec)
-        r = self.gfx.vec.CreateVector()
-        self.residual(self.gfx.vec, r, self.target)
-        return free_norm(r, self.free) / self.load_norm(self.target)
+        if self.contact is None:
+            return solve()
+        try:
+            return settle(solve, self.pairs_mismatch, self.settings.rtol)
+        except PairsUnsettled as err:
+            raise NewtonFailure(replace(self.result, converged=False, iterations=done,
+                                        reason=str(err))) from None
+
+    def pairs_mismatch(self, vec=None, load=None) -> float:
+        """Pair the contact surface anew at the equilibrium ``vec`` (default: the block's) at
+        load factor ``load`` (default: the target); the residual there with the new pairs,
+        relative to the load (within Newton's tolerance: the pairs hold)."""
+        vec = self.gfx.vec if vec is None else vec
+        load = self.target if load is None else load
+        self.contact.update(self.a, vec)
+        r = vec.CreateVector()
+        self.residual(vec, r, load)
+        return free_norm(r, self.free) / self.load_norm(load)
 
     def _paired_step(self, load, vec) -> None:
         """``on_step`` with contact: the pairs follow a load ramp, paired anew at each of its
@@ -333,6 +327,7 @@ class Equilibrium:
         recomputed at the next use."""
         self._unit_load_norm = None
         self._f_unit = None
+        self._at_load = 0.0  # the state is no equilibrium of the new loads
 
     # -- the fields it gives ----------------------------------------------------------------
     @property
@@ -382,6 +377,7 @@ class Equilibrium:
             self.result = result
         else:
             self.result = NewtonResult(True, load_reached=1.0) if state.converged else None
+        self._at_load = self.result.load_reached if self.result is not None else 0.0
 
     # -- block interface ------------------------------------------------------------------------
     def set_fields(self, *values):
@@ -404,8 +400,9 @@ class Equilibrium:
             warm = True  # one Newton step from any state solves a linear problem
         res = solve_with_continuation(
             self, self.gfx.vec, self.target, self.settings, warm=warm, linear=self.linear,
-            first_increment=self._ramp_first,
+            first_increment=self._ramp_first, start=self._at_load,
             on_step=self.on_step if self.contact is None else self._paired_step)
+        self._at_load = res.load_reached
         if res.ramp_first is not None:
             self._ramp_first = res.ramp_first  # where the next ramp from zero starts
         self.result = res

@@ -71,6 +71,9 @@ class NewtonSettings:
     max_steps: int = 200
     max_total_iter: int = 1000  # Newton iterations per solve, over all load steps and retries
     line_search: str = "guard"  # "guard" (admissibility only) or "residual" (Armijo on |R|)
+    # a failed warm start ramps the load from the last equilibrium's, not from zero (a sweep
+    # of one design: past a snap, a ramp from zero would meet the snap again)
+    ramp_from_last: bool = False
     solver: str = "auto"  # the tangent's linear solver: auto | direct | iterative (solvers.py)
 
     def __post_init__(self):
@@ -278,7 +281,7 @@ def _warm_start(problem, u, loads, s: NewtonSettings, hooks, result: NewtonResul
 def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, warm: bool,
                             linear: bool = False, on_step=None, accept=None,
                             first_increment: float | None = None,
-                            ramp: bool = True) -> NewtonResult:
+                            ramp: bool = True, start: float = 0.0) -> NewtonResult:
     """Bring ``u`` to equilibrium at load factor ``target``.
 
     With ``warm`` the current ``u`` (the previous design's equilibrium at the same load) is
@@ -291,6 +294,8 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
     ``first_increment`` (a fraction of ``target``) replaces ``s.initial_increment`` as the first
     increment of a ramp from zero, e.g. the one that worked in the previous solve
     (``NewtonResult.ramp_first``), so that a ramp does not fail its way down to it again.
+    ``start``: the load factor at which ``u`` is an equilibrium; with ``s.ramp_from_last``
+    a failed warm start ramps the load from there (where below ``target``), not from zero.
     ``s.rtol`` 0 is the direct route's tolerance here (the mechanics block resolves its own
     route's, :meth:`NewtonSettings.for_route`).
     """
@@ -305,9 +310,24 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
     if warm and (_warm_start(problem, u, (target, ref), s, (linear, accept, on_step), result)
                  or not ramp):
         return result
+    if warm and s.ramp_from_last and 0.0 < start < target:
+        _ramp(problem, u, (start, target, ref), 0.5 * (target - start), s,
+              (linear, accept, on_step), result)
+        return result
     u[:] = 0.0
     first = s.initial_increment if first_increment is None else min(1.0, max(first_increment, s.min_increment))
-    load, inc = 0.0, first * target
+    _ramp(problem, u, (0.0, target, ref), first * target, s, (linear, accept, on_step), result)
+    return result
+
+
+def _ramp(problem, u, loads, inc: float, s: NewtonSettings, hooks,
+          result: NewtonResult) -> bool:
+    """The load ramp of :func:`solve_with_continuation` from the equilibrium ``u`` at
+    ``loads[0]`` to ``loads[1]`` (``loads[2]`` the target's load norm), ``inc`` the first
+    increment; recorded in ``result`` (a ramp from zero sets ``ramp_first``); whether it got
+    there (``u`` the last equilibrium either way)."""
+    (load, target, ref), (linear, accept, on_step) = loads, hooks
+    from_zero = load == 0.0
     saved = u.CreateVector()
     while load < target * (1 - 1e-12):
         if result.steps >= s.max_steps:
@@ -326,7 +346,7 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
             result.steps += 1
             result.history.append((load, it))
             result.residual = res / ref
-            if result.ramp_first is None:
+            if from_zero and result.ramp_first is None:
                 result.ramp_first = load / target
             if on_step is not None:
                 on_step(load, u)
@@ -344,4 +364,4 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
     result.converged = load >= target * (1 - 1e-12)
     if result.converged:
         result.reason = ""
-    return result
+    return result.converged

@@ -28,6 +28,12 @@ with the load's weight ψ = 0, the "cylindrical" choice of §9.4.4): each step p
 state's advance ``t · (x - x₂) = l`` along the unit secant ``t`` through the last two
 equilibria ``x₁``, ``x₂``; the same bordered iteration with ``c = t``.  The secant follows the
 path through a maximum of the load and through a turning point of any one functional alike.
+
+A problem with self-contact (a ``contact`` that is not None, and ``pairs_mismatch(x, s)``:
+:class:`~pacto_ng.physics.equilibrium.Equilibrium`) is paired anew at the path's start and
+at each of its equilibria, and each point solved again with the control held until the pairs
+hold (:func:`~pacto_ng.physics.contact.settle`): a dome pressed through its snap onto the
+floor beneath it lands there (tests/physics/test_contact_path.py).
 """
 from __future__ import annotations
 
@@ -36,6 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..parallel import free_norm
+from .contact import PairsUnsettled, settle
 from .newton import NewtonSettings
 
 
@@ -115,6 +122,37 @@ def solve_controlled(problem, x, load: float, c, target: float, s: NewtonSetting
                                      f"(residual {res / ref:.2e} of the load)")
 
 
+class _Unsolved(Exception):
+    """A point of the path not reached (with contact: one of its solves), and why."""
+
+    def __init__(self, iterations: int, why: str):
+        super().__init__(why)
+        self.iterations, self.why = iterations, why
+
+
+def _solve_point(problem, x, load: float, c, target: float, s: NewtonSettings, *,
+                 tol: float | None = None):
+    """:func:`solve_controlled`, and where the problem has contact, paired anew at the
+    equilibrium and solved again until the pairs hold (the module): the same result."""
+    if getattr(problem, "contact", None) is None:
+        return solve_controlled(problem, x, load, c, target, s, tol=tol)
+    reached = [load]
+
+    def solve() -> int:
+        ok, reached[0], it, why = solve_controlled(problem, x, reached[0], c, target, s, tol=tol)
+        if not ok:
+            raise _Unsolved(it, why)
+        return it
+
+    try:
+        iterations = settle(solve, lambda: problem.pairs_mismatch(x, reached[0]), s.rtol)
+    except _Unsolved as err:
+        return False, reached[0], err.iterations, err.why
+    except PairsUnsettled as err:
+        return False, reached[0], 0, str(err)
+    return True, reached[0], iterations, ""
+
+
 def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, stop,
           max_points: int = 100, max_step: float | None = None, on_point=None,
           arc: bool = True, dofs=slice(None)) -> list[PathPoint]:
@@ -132,6 +170,8 @@ def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, s
     the displacement's of a mixed state, whose pressure field (in pascals) would otherwise
     outweigh the displacement (in metres) in every length and secant."""
     max_step = 8.0 * step if max_step is None else max_step
+    if getattr(problem, "contact", None) is not None:
+        problem.pairs_mismatch(x, load)  # the pairs of the path's start
     points, history = [], [(c.InnerProduct(x), float(load), x.FV().NumPy().copy())]
     inc, rate = step, None  # the increment; the last step's state change per unit control
     longest = 0.0  # the longest step of the state
@@ -139,7 +179,7 @@ def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, s
         here = history[-1]
         goal = here[0] + inc
         lam = _predict(problem, history, goal, x)
-        ok, lam, it, why = solve_controlled(problem, x, lam, c, goal, s)
+        ok, lam, it, why = _solve_point(problem, x, lam, c, goal, s)
         moved = float(np.linalg.norm((x.FV().NumPy() - here[2])[dofs])) / abs(inc)
         if ok and rate is not None and moved > JUMP * rate:
             ok, why = False, "the state jumped (to another branch of the path)"
@@ -187,8 +227,8 @@ def _by_arc_length(problem, x, c, history, s: NewtonSettings, *, stop, points, m
         lam = l2 + w * (l2 - l1)
         if not problem.admissible(x):
             x.FV().NumPy()[:], lam = x2, l2
-        ok, lam, it, why = solve_controlled(problem, x, lam, t, along + length, s,
-                                            tol=CONTROL_RTOL * (abs(along) + length))
+        ok, lam, it, why = _solve_point(problem, x, lam, t, along + length, s,
+                                        tol=CONTROL_RTOL * (abs(along) + length))
         if ok and np.linalg.norm((x.FV().NumPy() - x2)[dofs]) > JUMP * length:
             ok, why = False, "the state jumped (to another branch of the path)"
         if not ok:
@@ -267,6 +307,23 @@ def retraces(loads, volumes) -> bool:
             if loads[i] >= loads[i - 1] and loads[i] > loads[i + 1]]
     top = tops[0] if tops else int(np.argmax(loads))
     return top + 1 < len(loads) and volumes[top + 1] < volumes[top]
+
+
+#: the load along a path counts as having fallen past a maximum once it is this share below
+#: the largest before (the wiggles of arc length round a maximum are far smaller)
+DROP = 0.02
+
+
+def climbs_again(loads) -> bool:
+    """Whether the load along a path (``loads``, one per point in order) fell past a
+    maximum, by more than :data:`DROP` of it, and rises again at the last point: past the
+    valley, where the path is stable under the load again (e.g. walls that came to rest on
+    each other), so that Newton can ramp the load on from there."""
+    top = fell = 0.0
+    for a in loads[:-1]:
+        top = max(top, a)
+        fell = fell or a < (1.0 - DROP) * top
+    return bool(fell) and len(loads) > 1 and loads[-1] > loads[-2]
 
 
 def load_maximum(points) -> tuple[float, float] | None:

@@ -60,30 +60,25 @@ from ..errors import InputError
 from ..physics.compiled import symbolic_tangent
 from ..physics.contact import SelfContact
 from ..physics.energy import make_energy
-from ..physics.equilibrium import NewtonFailure, WarmState
+from ..physics.equilibrium import NewtonFailure
 from ..physics.loads import Port, Spring
 from ..physics.materials import jacobian
 from ..physics.mechanics import Mechanics, Supports
 from ..physics.mixed import formulation_for, has_simplices
-from ..physics.path import PathFailure, PathPoint, load_maximum, retraces, rising, trace
 from ..physics.walls import (WallPressure, follower_terms, held_planes_origin, outward_normal,
                              volume_change)
 from ..threads import compute
 from .materials import STIFF
+from .past_peak import past_peak
 from .sweep_result import Sweep, SweepPoint
 
 KINDS = ("fixed", "follower", "darcy")
 #: self-contact: the penalty stiffness in units of E1 / h (an overlap of 5e-4 h at a contact
 #: pressure of E1), and the distance within which pairs are sought, in element sizes
 CONTACT_PENALTY, CONTACT_REACH = 1e3, 3.0
-#: past a pressure maximum: the path is followed in steps of this fraction of the output
-#: motion Newton reached, at most PEAK_STEPS of them (:meth:`PartAnalysis.sweep`)
-PEAK_STEP, PEAK_STEPS = 0.1, 60
-#: ... growing after easy steps to at most PEAK_GROWTH times the first; Newton's load ramp
-#: gives up once its increment falls below RAMP_FLOOR of the pressure (the path takes over)
-PEAK_GROWTH, RAMP_FLOOR = 2.0, 1.0 / 64
-#: ... and a step of the path is halved down to this fraction of the first
-PATH_FLOOR = 1.0 / 1024
+#: without contact, Newton's load ramp gives up once its increment falls below this share of
+#: the pressure: the path past a pressure maximum takes over (:mod:`.past_peak`)
+RAMP_FLOOR = 1.0 / 64
 
 
 def solid_fields(mesh) -> dict:
@@ -217,10 +212,15 @@ class PartAnalysis:
 
     @staticmethod
     def _newton(params, contact):
-        """The run's Newton settings; without contact its load ramp gives up once the
-        increment falls below RAMP_FLOOR of the pressure (the path past a pressure maximum
-        takes over from the last equilibrium, :meth:`_past_peak`)."""
-        s = params.newton.settings()
+        """The run's Newton settings: a pressure is reached from the last one's equilibrium
+        (a ramp from it where the warm start fails, not from zero: past a snap, a ramp from
+        zero would meet it again); without contact the ramp gives up once its increment
+        falls below RAMP_FLOOR of the pressure (the path past a pressure maximum takes over
+        from the last equilibrium, :mod:`~pacto_ng.post.past_peak`); with contact it goes on
+        down to Newton's own least increment (walls whose contact spreads, e.g. an arch
+        pressed flat onto the floor under it, take small increments:
+        tests/physics/test_contact_path.py)."""
+        s = dataclasses.replace(params.newton.settings(), ramp_from_last=True)
         if contact:
             return s
         return dataclasses.replace(s, min_increment=max(s.min_increment, RAMP_FLOOR))
@@ -326,10 +326,11 @@ class PartAnalysis:
         increasing order of size.  Where Newton loses the equilibrium on its way to a pressure
         (a chamber that balloons passes a pressure maximum), the path is followed on from the
         last equilibrium with Δ prescribed until the pressure comes back up to it
-        (:meth:`_past_peak`; not with contact).  After a failure the remaining pressures are
-        recorded as not converged without being attempted (a larger pressure starts from
-        further away).  ``say(line)``, if given, gets one progress line per pressure: the
-        pressure, Δ, Newton iterations and seconds."""
+        (:func:`~pacto_ng.post.past_peak.past_peak`; with contact, paired anew at each of its
+        points).  After a failure the remaining pressures are recorded as not converged
+        without being attempted (a larger pressure starts from further away).  ``say(line)``, if given,
+        gets one progress line per pressure: the pressure, Δ, Newton iterations and
+        seconds."""
         pressures = [float(P) for P in pressures]
         if np.any(np.diff(np.abs(pressures)) < 0):
             raise ValueError("pressures: give them in increasing order of size (each pressure "
@@ -341,8 +342,8 @@ class PartAnalysis:
                 t0 = time.perf_counter()
                 skipped = failed
                 pt = self._failed(P, 0, 0.0) if skipped else self.solve(P)
-                if not (pt.converged or skipped or self.mech.contact is not None):
-                    pt, peak = self._past_peak(pt, last, say, out.path)
+                if not (pt.converged or skipped):
+                    pt, peak = past_peak(self, pt, last, say, out.path)
                     out.peak = peak or out.peak
                     if peak and say is not None:
                         say(f"  {self.kind} {self.model}: a pressure maximum "
@@ -355,67 +356,6 @@ class PartAnalysis:
                 if say is not None:
                     say(self._line(pt, time.perf_counter() - t0, skipped))
         return out
-
-    def _past_peak(self, failed: SweepPoint, last, say=None, record=None):
-        """``(point, peak)`` after Newton lost the equilibrium on its way to
-        ``failed.pressure``: the path from the last equilibrium it reached, followed with Δ
-        prescribed (:func:`~pacto_ng.physics.path.trace`, steps of PEAK_STEP of the Δ reached,
-        in the direction in which the pressure rises there; by arc length where Δ turns back) until the pressure is back up to the one asked, then
-        Newton at that pressure from there (``past_peak``); the pressure maximum passed on the
-        way ({"pressure", "delta"}: Δ there, None if the pressure never fell); the failed
-        point where the path does not get there within PEAK_STEPS steps.  The path starts from
-        ``last`` ((pressure, state): the sweep's last equilibrium, or None) where Newton ended
-        below its pressure.  ``say(line)`` gets one line per point of the path; ``record``
-        (a list) gets each point's pressure, Δ and chamber volume change."""
-        mech, P = self.mech, abs(failed.pressure)
-        x, c = mech.state_vector, self.output_form
-        load = failed.load_reached * P
-        if last is not None and last[0] > load:
-            load, x.FV().NumPy()[:] = last
-        reached = c.InnerProduct(x)
-        if reached == 0.0:
-            return failed, None
-
-        seen = []  # this path's points: pressure, Δ and chamber volume change
-
-        def line(q):  # the point's state is the block's
-            dv = self.volume_change()
-            seen.append({"pressure": float(q.load), "delta": float(q.control),
-                         "volume_change": dv})
-            if say is not None:
-                how = " (by arc length)" if q.by_arc else ""
-                vol = "" if dv is None else f", ΔV = {dv:.4g}"
-                say(f"    on the path: Δ = {q.control:.5g}{vol} at P = {q.load:.5g}, "
-                    f"{q.iterations} Newton iterations{how}")
-
-        start = PathPoint(reached, load, 0, x.FV().NumPy().copy())
-        step = PEAK_STEP * abs(reached) * rising(mech, x, load, c)  # on, not back
-        try:
-            path = trace(mech, x, c, step,
-                         dataclasses.replace(mech.settings, min_increment=PATH_FLOOR),
-                         load=start.load, stop=lambda q: q.load >= P, max_points=PEAK_STEPS,
-                         max_step=PEAK_GROWTH * step, on_point=line,
-                         dofs=mech.displacement_dofs)
-        except PathFailure as err:
-            path = err.points
-            if say is not None:
-                say(f"    the path stops: {err}")
-        if record is not None:
-            record.extend(seen)
-        peak = load_maximum([start] + path)
-        if peak and retraces([q["pressure"] for q in seen], [q["volume_change"] for q in seen]):
-            if say is not None:
-                say(f"    the path turns back on itself at P = {peak[1]:.5g} (the chamber's "
-                    f"volume falls with the pressure): not a pressure maximum")
-            peak = None
-        if peak:  # the control is Δ
-            peak = {"pressure": float(np.sign(failed.pressure) * peak[1]), "delta": peak[0]}
-        if not path or path[-1].load < P:
-            return failed, peak
-        # Newton at the pressure, from the path's state (an equilibrium: no ramp from rest)
-        mech.set_state(WarmState(x.FV().NumPy().copy(), True))
-        point = self.solve(failed.pressure)
-        return dataclasses.replace(point, past_peak=point.converged and peak is not None), peak
 
     def _line(self, pt: SweepPoint, seconds: float, skipped: bool) -> str:
         head = f"  {self.kind} {self.model} P = {pt.pressure:.4g}: "

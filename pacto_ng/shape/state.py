@@ -59,7 +59,8 @@ from ngsolve import (L2, VOL, BilinearForm, CF, Cof, Det, Grad, GridFunction, Id
 from ..errors import InputError
 from ..parallel import free_norm
 from ..physics.energy import make_energy
-from ..physics.equilibrium import CONTACT_CYCLES, NewtonFailure
+from ..physics.contact import CONTACT_CYCLES
+from ..physics.equilibrium import NewtonFailure
 from ..physics.mixed import formulation_for, has_simplices, stored_energy
 from ..physics.newton import solve_with_continuation
 from ..physics.quadrature import integration_rules, mechanics_rules

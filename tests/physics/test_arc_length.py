@@ -15,7 +15,7 @@ import pytest
 from ngsolve import BaseVector
 
 from pacto_ng.physics.newton import NewtonSettings
-from pacto_ng.physics.path import PathFailure, load_maximum, retraces, trace
+from pacto_ng.physics.path import PathFailure, climbs_again, load_maximum, retraces, trace
 
 K = 0.2
 
@@ -127,3 +127,13 @@ def test_a_path_whose_pressure_and_volume_fall_together_retraces_itself():
     assert not retraces(loads, [0.1, 0.2, 0.3, 0.4, 0.5])
     assert retraces(loads, [0.1, 0.2, 0.3, 0.25, 0.2])
     assert not retraces(loads, [0.1, 0.2, None, 0.4, 0.5])
+
+
+def test_a_path_climbs_again_once_its_load_rises_after_a_real_fall():
+    """The valley past a maximum (walls that came to rest on each other): the load fell more
+    than DROP below its largest and rises at the last point; the wiggles of arc length round
+    a maximum are no fall."""
+    assert not climbs_again([1.0, 2.0, 3.0])
+    assert not climbs_again([190.0, 193.0, 190.0, 191.0])  # 1.6 % below the top
+    assert not climbs_again([193.0, 150.0, 108.0, 107.0])  # still falling
+    assert climbs_again([193.0, 150.0, 108.0, 109.0])

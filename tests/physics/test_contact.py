@@ -14,7 +14,7 @@ from ngsolve import Mesh
 
 from pacto_ng import Parameters, Port
 from pacto_ng.physics.mechanics import Supports
-from pacto_ng.physics.equilibrium import PAIRS_SETTLE
+from pacto_ng.physics.contact import PAIRS_SETTLE
 from pacto_ng.post.part_analysis import PartAnalysis
 
 LOW, HIGH = 0.49, 0.51  # the slot's walls
