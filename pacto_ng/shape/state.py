@@ -59,7 +59,7 @@ from ngsolve import (L2, VOL, BilinearForm, CF, Cof, Det, Grad, GridFunction, Id
 from ..errors import InputError
 from ..parallel import free_norm
 from ..physics.energy import make_energy
-from ..physics.contact import CONTACT_CYCLES
+from ..physics.contact import PairsUnsettled, settle
 from ..physics.equilibrium import NewtonFailure
 from ..physics.mixed import formulation_for, has_simplices, stored_energy
 from ..physics.newton import solve_with_continuation
@@ -279,36 +279,43 @@ class PartState:
     def equilibrium(self, ramp: bool = True) -> None:
         """Equilibrium on the current shape (warm-started from the last one's); NewtonFailure
         if Newton does not reach the pressure (with ``ramp`` False, if the warm start fails:
-        no ramp from zero)."""
+        no ramp from zero).  With contact: Newton with the pairs fixed, then paired anew,
+        until they hold to Newton's tolerance (:func:`~pacto_ng.physics.contact.settle`),
+        each solve after the first from the last pairing's equilibrium (no ramp from zero); a
+        load ramp pairs anew at each of its steps."""
         self._measure_springs()
-        # with contact: Newton with the pairs fixed, then paired anew, until they hold (from
-        # the last pairing's equilibrium: no ramp from zero)
-        for cycle in range(CONTACT_CYCLES if self.contact is not None else 1):
-            if self.contact is not None and cycle == 0:  # later: paired by _pairs_hold
-                self.contact.pair(self.state.vec)
+        solves = 0
+
+        def solve() -> int:
+            nonlocal solves
             warm = self.result is not None or self._started
             self.result = solve_with_continuation(
                 self, self.state.vec, self.pressure, self.settings, warm=warm,
-                linear=self.linear, ramp=(ramp or not warm) and cycle == 0,
+                linear=self.linear, ramp=(ramp or not warm) and solves == 0,
                 on_step=None if self.contact is None else lambda _, x: self.contact.pair(x))
+            solves += 1
             if not self.result.converged:
                 raise NewtonFailure(self.result)
-            if self.contact is None or self._pairs_hold():
-                break
+            return self.result.iterations
+
+        if self.contact is None:
+            solve()
         else:
-            raise NewtonFailure(dataclasses.replace(
-                self.result, converged=False,
-                reason=f"the contact's pairs did not settle in {CONTACT_CYCLES} pairings"))
+            self.contact.pair(self.state.vec)
+            try:
+                settle(solve, self._mismatch, self.settings.for_route(True).rtol, close=0.0)
+            except PairsUnsettled as err:
+                raise NewtonFailure(dataclasses.replace(
+                    self.result, converged=False, reason=str(err))) from None
         self.load.Set(self.pressure)
 
-    def _pairs_hold(self) -> bool:
-        """Pair anew at the equilibrium found; whether it holds with the new pairs (Newton's
-        tolerance).  A load ramp pairs anew at each of its steps (``on_step``)."""
+    def _mismatch(self) -> float:
+        """Pair anew at the equilibrium found; the residual there with the new pairs,
+        relative to the load."""
         self.contact.pair(self.state.vec)
         r = self.state.vec.CreateVector()
         self.residual(self.state.vec, r, self.pressure)
-        tol = self.settings.for_route(True).rtol * self.load_norm(self.pressure)
-        return free_norm(r, self.free) <= tol
+        return free_norm(r, self.free) / self.load_norm(self.pressure)
 
     def start_from(self, field) -> None:
         """The next solve starts at the full load from ``field`` (a displacement, e.g. that of
