@@ -72,7 +72,7 @@ class NewtonSettings:
     max_total_iter: int = 1000  # Newton iterations per solve, over all load steps and retries
     line_search: str = "guard"  # "guard" (admissibility only) or "residual" (Armijo on |R|)
     # a failed warm start ramps the load from the last equilibrium's, not from zero (a sweep
-    # of one design: past a snap, a ramp from zero would meet the snap again)
+    # of one design past a pressure maximum, where a ramp from zero would meet it again)
     ramp_from_last: bool = False
     solver: str = "auto"  # the tangent's linear solver: auto | direct | iterative (solvers.py)
 

@@ -212,15 +212,13 @@ class PartAnalysis:
 
     @staticmethod
     def _newton(params, contact):
-        """The run's Newton settings: a pressure is reached from the last one's equilibrium
-        (a ramp from it where the warm start fails, not from zero: past a snap, a ramp from
-        zero would meet it again); without contact the ramp gives up once its increment
-        falls below RAMP_FLOOR of the pressure (the path past a pressure maximum takes over
-        from the last equilibrium, :mod:`~pacto_ng.post.past_peak`); with contact it goes on
-        down to Newton's own least increment (walls whose contact spreads, e.g. an arch
-        pressed flat onto the floor under it, take small increments:
+        """The run's Newton settings; without contact its load ramp gives up once its
+        increment falls below RAMP_FLOOR of the pressure (the path past a pressure maximum
+        takes over from the last equilibrium, :mod:`~pacto_ng.post.past_peak`); with contact
+        it goes on down to Newton's own least increment (walls whose contact spreads, e.g.
+        an arch pressed flat onto the floor under it, take small increments:
         tests/physics/test_contact_path.py)."""
-        s = dataclasses.replace(params.newton.settings(), ramp_from_last=True)
+        s = params.newton.settings()
         if contact:
             return s
         return dataclasses.replace(s, min_increment=max(s.min_increment, RAMP_FLOOR))
