@@ -47,8 +47,8 @@ from __future__ import annotations
 
 import numpy as np
 from ngsolve import (H1, VERTEX, BilinearForm, CoefficientFunction, ContactBoundary,
-                     GridFunction, IfPos, Integrate, LinearForm, NodeId, ds, specialcf, x, y,
-                     z)
+                     GridFunction, IfPos, Integrate, LinearForm, NodeId, Parameter, ds,
+                     specialcf, x, y, z)
 
 from .walls import outward_normal
 
@@ -165,16 +165,16 @@ class SelfContact:
 
         half_k = 0.5 * thickness * self.stiffness
         self.cb = contact(lambda g: IfPos(g, half_k * g * g, 0), shift(fes.TrialFunction()))
-        # the measures on the displacement alone, each its own ContactBoundary and form
-        # (energies: t ∫ [g > 0] and t k ∫ max(g, 0) over both walls; the contact energy,
-        # whose gradient is the nodal forces)
+        # the measures on the displacement alone, paired once for all of them: one
+        # ContactBoundary whose energy density is a0 [g > 0] + a1 g + a2 g² where g > 0, its
+        # coefficients set for each measure (t/2 [g > 0] and t k g over both walls: the area
+        # and the force; the contact energy, whose gradient is the nodal forces)
         w = ufes.TrialFunction()
         self._state = GridFunction(ufes)
-        self._probes = [(contact(density, w), BilinearForm(ufes))
-                        for density in (lambda g: IfPos(g, 0.5 * thickness, 0),
-                                        lambda g: IfPos(g, thickness * self.stiffness * g, 0))]
-        self._forces = contact(lambda g: IfPos(g, half_k * g * g, 0), w)
-        self._force_form = BilinearForm(ufes)
+        self._terms = (Parameter(0.0), Parameter(0.0), Parameter(0.0))
+        a0, a1, a2 = self._terms
+        self._measures = contact(lambda g: IfPos(g, a0 + a1 * g + a2 * g * g, 0), w)
+        self._measure_form = BilinearForm(ufes)
         self._thickness = float(thickness)
         self._vertices, self._dofs, self._shares = _vertex_shares(ufes, region)
 
@@ -196,42 +196,54 @@ class SelfContact:
         the displacement's space, as the measures below): the area of either
         wall where they overlap (in 2D the length times the thickness), the normal force
         between them, ``2 k ∫ max(g, 0)`` over one wall (times the thickness in 2D), and the
-        largest contact pressure, the largest of :meth:`pressures` (0 without contact)."""
-        out = [self._probe(vec, k) for k in range(len(self._probes))]
-        return out[0], out[1], float(self._pressures().max(initial=0.0))
+        largest contact pressure, the largest of :meth:`pressures` (0 without contact); one
+        pairing."""
+        self._pair_measures(vec)
+        t, k = self._thickness, self.stiffness
+        return (self._measured(0.5 * t, 0.0), self._measured(0.0, t * k),
+                float(self._pressures().max(initial=0.0)))
 
     def overlap(self, vec) -> float:
         """The area of either wall where the walls overlap at the displacement ``vec`` (in 2D the
         length times the thickness): :meth:`measure`'s first figure, one pairing."""
-        return self._probe(vec, 0)
+        self._pair_measures(vec)
+        return self._measured(0.5 * self._thickness, 0.0)
 
     def overlap_depth(self, vec) -> tuple[float, float]:
         """``(area, depth)``: :meth:`overlap`, and the mean depth over which the walls overlap
         at the displacement ``vec`` (0 where they do not), ``∫ max(g, 0) / ∫ [g > 0]`` over
-        the walls; two pairings."""
-        area = self._probe(vec, 0)
-        return area, (self._probe(vec, 1) / (2.0 * self.stiffness * area) if area > 0 else 0.0)
+        the walls; one pairing."""
+        self._pair_measures(vec)
+        area = self._measured(0.5 * self._thickness, 0.0)
+        force = self._measured(0.0, self._thickness * self.stiffness)
+        return area, (force / (2.0 * self.stiffness * area) if area > 0 else 0.0)
 
-    def _probe(self, vec, k: int) -> float:
-        """The ``k``-th measure's energy at the displacement ``vec``, paired there."""
+    def _pair_measures(self, vec) -> None:
+        """Pair the measures' surface at the displacement ``vec``."""
         self._state.vec.data = vec
-        cb, form = self._probes[k]
-        cb.Update(self._state, form, intorder=self.intorder, maxdist=self.maxdist)
-        return float(form.Energy(self._state.vec))
+        self._measures.Update(self._state, self._measure_form, intorder=self.intorder,
+                              maxdist=self.maxdist)
+
+    def _measured(self, a0: float, a1: float, a2: float = 0.0) -> float:
+        """The measures' energy with the coefficients ``a0, a1, a2`` (the last pairing's)."""
+        for term, value in zip(self._terms, (a0, a1, a2)):
+            term.Set(value)
+        return float(self._measure_form.Energy(self._state.vec))
 
     def pressures(self, vec) -> tuple[np.ndarray, np.ndarray]:
         """``(points, p)`` at the displacement ``vec``: the reference positions of Γc's vertices
         (an array ``(n, dim)``) and the contact pressure at each, the hat-weighted mean of
         ``2 k max(g, 0)`` around it (see the module; 0 where the walls do not touch)."""
-        self._state.vec.data = vec
+        self._pair_measures(vec)
         return self._vertices.copy(), self._pressures()
 
     def _pressures(self) -> np.ndarray:
-        """The contact pressure at Γc's vertices at the displacement ``self._state``."""
-        self._forces.Update(self._state, self._force_form, intorder=self.intorder,
-                            maxdist=self.maxdist)
+        """The contact pressure at Γc's vertices at the displacement ``self._state`` (the
+        last pairing's)."""
+        for term, value in zip(self._terms, (0.0, 0.0, 0.5 * self._thickness * self.stiffness)):
+            term.Set(value)
         f = self._state.vec.CreateVector()
-        self._force_form.Apply(self._state.vec, f)
+        self._measure_form.Apply(self._state.vec, f)
         nodal = f.FV().NumPy()[self._dofs]  # (vertices, dim): the force on each vertex
         return np.linalg.norm(nodal, axis=1) / (self._thickness * self._shares)
 
