@@ -157,13 +157,15 @@ class Equilibrium:
     def pairs_mismatch(self, vec=None, load=None) -> float:
         """Pair the contact surface anew at the equilibrium ``vec`` (default: the block's) at
         load factor ``load`` (default: the target); the residual there with the new pairs,
-        relative to the load (within Newton's tolerance: the pairs hold)."""
+        relative to the load (within Newton's tolerance: the pairs hold; at no load, the
+        residual itself)."""
         vec = self.gfx.vec if vec is None else vec
         load = self.target if load is None else load
         self.contact.update(self.a, vec)
         r = vec.CreateVector()
         self.residual(vec, r, load)
-        return free_norm(r, self.free) / self.load_norm(load)
+        ref = self.load_norm(load)
+        return free_norm(r, self.free) / (ref if ref > 0 else 1.0)  # at no load: absolute
 
     def _paired_step(self, load, vec) -> None:
         """``on_step`` with contact: the pairs follow a load ramp, paired anew at each of its
