@@ -71,8 +71,8 @@ class NewtonSettings:
     max_steps: int = 200
     max_total_iter: int = 1000  # Newton iterations per solve, over all load steps and retries
     line_search: str = "guard"  # "guard" (admissibility only) or "residual" (Armijo on |R|)
-    # a failed warm start ramps the load from the last equilibrium's, not from zero (a sweep
-    # of one design past a pressure maximum, where a ramp from zero would meet it again)
+    # a failed warm start ramps the load from the last equilibrium's, never from zero (a
+    # sweep of one design past a pressure maximum, where a ramp from zero would meet it again)
     ramp_from_last: bool = False
     solver: str = "auto"  # the tangent's linear solver: auto | direct | iterative (solvers.py)
 
@@ -295,7 +295,8 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
     increment of a ramp from zero, e.g. the one that worked in the previous solve
     (``NewtonResult.ramp_first``), so that a ramp does not fail its way down to it again.
     ``start``: the load factor at which ``u`` is an equilibrium; with ``s.ramp_from_last``
-    a failed warm start ramps the load from there (where below ``target``), not from zero.
+    a failed warm start ramps the load from there (where below ``target``), never from zero
+    (``u`` then holds the warm start's equilibrium, or the ramp's last).
     ``s.rtol`` 0 is the direct route's tolerance here (the mechanics block resolves its own
     route's, :meth:`NewtonSettings.for_route`).
     """
@@ -310,9 +311,10 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
     if warm and (_warm_start(problem, u, (target, ref), s, (linear, accept, on_step), result)
                  or not ramp):
         return result
-    if warm and s.ramp_from_last and 0.0 < start < target:
-        _ramp(problem, u, (start, target, ref), 0.5 * (target - start), s,
-              (linear, accept, on_step), result)
+    if warm and s.ramp_from_last:  # never from zero (past a maximum it meets it again)
+        if 0.0 < start < target:
+            _ramp(problem, u, (start, target, ref), 0.5 * (target - start), s,
+                  (linear, accept, on_step), result)
         return result
     u[:] = 0.0
     first = s.initial_increment if first_increment is None else min(1.0, max(first_increment, s.min_increment))
