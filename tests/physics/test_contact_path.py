@@ -9,7 +9,6 @@ maximum, follows the path with the crown's motion prescribed (its pairs sought a
 point, pacto_ng/physics/path.py), past the valley where the crown comes to rest, and Newton
 ramps on from there.  Without contact the same sweep jumps through the plate to the inverted
 arch."""
-import numpy as np
 import pytest
 
 from contact_parts import FLOOR, RISE, pressed_arch
