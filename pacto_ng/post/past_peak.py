@@ -31,15 +31,16 @@ def past_peak(analysis, failed: SweepPoint, last, say=None, record=None):
     :class:`~pacto_ng.post.part_analysis.PartAnalysis`) after Newton lost the equilibrium
     on its way to ``failed.pressure``: the path from the last equilibrium it reached,
     followed with Δ prescribed (:func:`_path`) until the pressure is back up to the one
-    asked, or climbs again after falling (:func:`~pacto_ng.physics.path.climbs_again`: walls that
-    came to rest on each other, where Δ barely moves with the pressure); then Newton to
-    that pressure from there (``past_peak``; its load ramped from the path's last
-    pressure where needed, and so are the later pressures of the sweep from theirs); the pressure maximum passed on the way ({"pressure",
-    "delta"}: Δ there, None if the pressure never fell); the failed point where the
-    path does not get there within PEAK_STEPS steps.  The path starts from ``last``
-    ((pressure, state): the sweep's last equilibrium, or None) where Newton ended below
-    its pressure.  ``say(line)`` gets one line per point of the path; ``record`` (a
-    list) gets each point's pressure, Δ and chamber volume change."""
+    asked, or climbs again after falling (:func:`~pacto_ng.physics.path.climbs_again`:
+    walls that came to rest on each other, where Δ barely moves with the pressure); then
+    Newton to that pressure from there (``past_peak``; its load ramped from the path's last
+    pressure where needed, and so are the later pressures of the sweep from theirs); the
+    pressure maximum passed on the way ({"pressure", "delta"}: Δ there, None if the
+    pressure never fell); the failed point where the path does not get there within
+    PEAK_STEPS steps.  The path starts from ``last`` ((pressure, state): the sweep's last
+    equilibrium, or None) where Newton ended below its pressure.  ``say(line)`` gets one
+    line per point of the path; ``record`` (a list) gets each point's pressure, Δ and
+    chamber volume change."""
     mech, P = analysis.mech, abs(failed.pressure)
     x = mech.state_vector
     load = failed.load_reached * P
@@ -50,13 +51,13 @@ def past_peak(analysis, failed: SweepPoint, last, say=None, record=None):
         return failed, None
     seen = []  # this path's points: pressure, Δ and chamber volume change
     start = PathPoint(reached, load, 0, x.FV().NumPy().copy())
-    before = [] if last is None or last[0] >= load else [  # the sweep's last equilibrium
+    earlier = [] if last is None or last[0] >= load else [  # the sweep's last equilibrium
         PathPoint(float(analysis.output_form.FV().NumPy() @ last[1]), last[0], 0, last[1])]
     path = _path(analysis, start, P, seen, say)
     if record is not None:
         record.extend(seen)
     # the maximum, also where Newton's ramp came up to it (the start its top)
-    peak = load_maximum(before + [start] + path)
+    peak = load_maximum(earlier + [start] + path)
     if peak and retraces([q["pressure"] for q in seen], [q["volume_change"] for q in seen]):
         if say is not None:
             say(f"    the path turns back on itself at P = {peak[1]:.5g} (the chamber's "
