@@ -123,11 +123,12 @@ def solve_controlled(problem, x, load: float, c, target: float, s: NewtonSetting
 
 
 class _Unsolved(Exception):
-    """A point of the path not reached (with contact: one of its solves), and why."""
+    """A point of the path not reached (with contact: one of its solves); the message says
+    why."""
 
     def __init__(self, iterations: int, why: str):
         super().__init__(why)
-        self.iterations, self.why = iterations, why
+        self.iterations = iterations
 
 
 def _solve_point(problem, x, load: float, c, target: float, s: NewtonSettings, *,
@@ -136,21 +137,21 @@ def _solve_point(problem, x, load: float, c, target: float, s: NewtonSettings, *
     equilibrium and solved again until the pairs hold (the module): the same result."""
     if getattr(problem, "contact", None) is None:
         return solve_controlled(problem, x, load, c, target, s, tol=tol)
-    reached = [load]
 
     def solve() -> int:
-        ok, reached[0], it, why = solve_controlled(problem, x, reached[0], c, target, s, tol=tol)
+        nonlocal load
+        ok, load, it, why = solve_controlled(problem, x, load, c, target, s, tol=tol)
         if not ok:
             raise _Unsolved(it, why)
         return it
 
     try:
-        iterations = settle(solve, lambda: problem.pairs_mismatch(x, reached[0]), s.rtol)
+        iterations = settle(solve, lambda: problem.pairs_mismatch(x, load), s.rtol)
     except _Unsolved as err:
-        return False, reached[0], err.iterations, err.why
+        return False, load, err.iterations, str(err)
     except PairsUnsettled as err:
-        return False, reached[0], 0, str(err)
-    return True, reached[0], iterations, ""
+        return False, load, 0, str(err)
+    return True, load, iterations, ""
 
 
 def trace(problem, x, c, step: float, s: NewtonSettings, *, load: float = 0.0, stop,
