@@ -16,6 +16,7 @@ from ngsolve import GridFunction
 
 from ..parallel import everywhere, free_norm
 from .contact import PairsUnsettled, settle
+from .design_path import field_values, follow
 from .materials import jacobian
 from .newton import NewtonResult, solve_with_continuation
 from .quadrature import element_points, guard_rules
@@ -85,6 +86,7 @@ class Equilibrium:
         self.result: NewtonResult | None = None
         self._ramp_first = None  # first increment of the last successful ramp from zero
         self._at_load = 0.0  # the load factor of the equilibrium the state holds (0: unknown)
+        self._design = None  # the field values of that equilibrium (None: unknown)
         #: called with (load factor, state) at every equilibrium Newton's load ramp reaches
         #: (a progress line), or None
         self.on_step = None
@@ -330,6 +332,7 @@ class Equilibrium:
         self._unit_load_norm = None
         self._f_unit = None
         self._at_load = 0.0  # the state is no equilibrium of the new loads
+        self._design = None
 
     # -- the fields it gives ----------------------------------------------------------------
     @property
@@ -380,6 +383,7 @@ class Equilibrium:
         else:
             self.result = NewtonResult(True, load_reached=1.0) if state.converged else None
         self._at_load = self.result.load_reached if self.result is not None else 0.0
+        self._design = None  # the design of that state is not known
 
     # -- block interface ------------------------------------------------------------------------
     def set_fields(self, *values):
@@ -395,16 +399,24 @@ class Equilibrium:
             self._lin.stale = True
 
     def forward(self, *values):
+        old = self._design
         self.set_fields(*values)
+        new = None if self.linear else field_values(self.fields)
         # warm start from the last equilibrium (also one a failed solve reached on its way)
         warm = self.result is not None and (self.result.converged or self.result.load_reached > 0)
         if self.linear:
             warm = True  # one Newton step from any state solves a linear problem
+        # a new design of a nonlinear model: a failed warm start follows the design path
+        path = (warm and old is not None and new is not None and self.contact is None
+                and any(not np.array_equal(a, b) for a, b in zip(old, new)))
         res = solve_with_continuation(
             self, self.gfx.vec, self.target, self.settings, warm=warm, linear=self.linear,
-            first_increment=self._ramp_first, start=self._at_load,
+            first_increment=self._ramp_first, start=self._at_load, ramp=not path,
             on_step=self.on_step if self.contact is None else self._paired_step)
+        if path and not res.converged:
+            res = self._along_path(old, new, res.iterations)
         self._at_load = res.load_reached
+        self._design = new if res.converged else None
         if res.ramp_first is not None:
             self._ramp_first = res.ramp_first  # where the next ramp from zero starts
         self.result = res
@@ -414,3 +426,17 @@ class Equilibrium:
         out.data = self.gfx.vec
         self._adjoint_ready = False
         return out
+
+    def _along_path(self, old: list, new: list, tried: int) -> NewtonResult:
+        """The equilibrium of the new design (fields ``new``) along the design path from the
+        state's (``old``, design_path.py), where a warm start of ``tried`` Newton iterations
+        failed; where the path fails too, the load ramped from zero."""
+        res = follow(self, self.gfx.vec, old, new, (self._at_load, self.target), self.settings)
+        res.iterations += tried
+        if not res.converged:
+            more = solve_with_continuation(
+                self, self.gfx.vec, self.target, self.settings, warm=False,
+                first_increment=self._ramp_first, on_step=self.on_step)
+            more.iterations += res.iterations
+            res = more
+        return res

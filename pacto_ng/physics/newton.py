@@ -313,18 +313,19 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
         return result
     if warm and s.ramp_from_last:  # never from zero (past a maximum it meets it again)
         if 0.0 < start < target:
-            _ramp(problem, u, (start, target, ref), 0.5 * (target - start), s,
+            ramp_load(problem, u, (start, target, ref), 0.5 * (target - start), s,
                   (linear, accept, on_step), result)
         return result
     u[:] = 0.0
     first = s.initial_increment if first_increment is None else min(1.0, max(first_increment, s.min_increment))
-    _ramp(problem, u, (0.0, target, ref), first * target, s, (linear, accept, on_step), result)
+    ramp_load(problem, u, (0.0, target, ref), first * target, s, (linear, accept, on_step), result)
     return result
 
 
-def _ramp(problem, u, loads, inc: float, s: NewtonSettings, hooks,
+def ramp_load(problem, u, loads, inc: float, s: NewtonSettings, hooks,
           result: NewtonResult) -> bool:
-    """The load ramp of :func:`solve_with_continuation` from the equilibrium ``u`` at
+    """The load ramp of :func:`solve_with_continuation` (and of a design path,
+    design_path.py) from the equilibrium ``u`` at
     ``loads[0]`` to ``loads[1]`` (``loads[2]`` the target's load norm), ``inc`` the first
     increment; recorded in ``result`` (a ramp from zero sets ``ramp_first``); whether it got
     there (``u`` the last equilibrium either way)."""
