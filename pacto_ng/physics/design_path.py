@@ -21,8 +21,11 @@ import numpy as np
 from .newton import NewtonResult, NewtonSettings, ramp_load
 
 #: the path gives up (a load ramp from zero takes over) when its step falls below this
-#: fraction of the path
+#: fraction of the path, or after this many Newton iterations: where Newton meets a wall
+#: along it (a Neo-Hookean cantilever-3d's void crushing, 2026-12-07) the path spent 84-117
+#: iterations before failing; those that arrived took up to 22 on cantilever-3d (Wang)
 PATH_MIN_STEP = 1.0 / 64
+PATH_MAX_ITER = 60
 
 
 class DesignPath:
@@ -73,7 +76,8 @@ def follow(eq, u, old: list, new: list, loads: tuple[float, float],
     if not np.isfinite(ref) or ref == 0.0:
         result.reason = "no finite load at the new design"
         return result
-    steps = replace(s, min_increment=max(s.min_increment, PATH_MIN_STEP))
+    steps = replace(s, min_increment=max(s.min_increment, PATH_MIN_STEP),
+                    max_total_iter=PATH_MAX_ITER)
     ramp_load(path, u, (0.0, 1.0, ref), 0.5, steps, (False, None, None), result)
     path._at(1.0)
     # the path's t is no load factor: the load reached is the target's or none, and its first
