@@ -49,6 +49,12 @@ DIRECT_RTOL = 1e-10
 ITERATIVE_RTOL = 1e-6
 
 
+LINE_SEARCHES = ("guard", "residual", "guard+residual")
+#: the guard's attempt of "guard+residual" gives up after this many iterations without a new
+#: smallest residual (the residual's then starts)
+GUARD_STALL = 8
+
+
 @dataclass(frozen=True)
 class NewtonSettings:
     # residual norm relative to the full external load; 0: the route's (DIRECT_RTOL with a
@@ -70,7 +76,10 @@ class NewtonSettings:
     easy: int = 4  # a step converging in <= easy iterations lets the increment grow
     max_steps: int = 200
     max_total_iter: int = 1000  # Newton iterations per solve, over all load steps and retries
-    line_search: str = "guard"  # "guard" (admissibility only) or "residual" (Armijo on |R|)
+    # "guard" (admissibility only), "residual" (Armijo on |R|) or "guard+residual" (the
+    # guard's, stopping after GUARD_STALL iterations without progress; where it fails, the
+    # residual's from the same start)
+    line_search: str = "guard"
     # a failed warm start ramps the load from the last equilibrium's, never from zero (a
     # sweep of one design past a pressure maximum, where a ramp from zero would meet it again)
     ramp_from_last: bool = False
@@ -79,8 +88,8 @@ class NewtonSettings:
     def __post_init__(self):
         if self.solver not in SOLVERS:
             raise ValueError(f"solver must be one of {', '.join(SOLVERS)}")
-        if self.line_search not in ("guard", "residual"):
-            raise ValueError("line_search must be 'guard' or 'residual'")
+        if self.line_search not in LINE_SEARCHES:
+            raise ValueError(f"line_search must be one of {', '.join(LINE_SEARCHES)}")
         if not 0 < self.initial_increment <= 1:
             raise ValueError("initial_increment must lie in (0, 1]")
         if self.rtol < 0 or self.max_iter < 1 or self.stall < 1:
@@ -88,15 +97,19 @@ class NewtonSettings:
                              ">= 1")
 
     def for_contact(self) -> NewtonSettings:
-        """These settings for a problem with contact: the residual's line search (Armijo on
-        ``|R|``) and no ``stall`` limit short of ``max_iter``.  A full Newton step presses
+        """These settings for a problem with contact: the guard's line search first, and where
+        it fails the residual's (Armijo on ``|R|``, no ``stall`` limit short of ``max_iter``)
+        from the same start.  Neo-Hookean Newton's full steps raise ``|R|`` 10-100 times
+        before it converges quadratically (pneunet's part at 10-32 kPa, 2026-12-07): the
+        residual's line search alone cut them, 18-30 iterations per load step against 5-11,
+        and lost the equilibrium near 27 kPa where the guard's found it.  A full Newton step presses
         walls whose contact its tangent did not see deep into each other (the residual's norm
         grew up to 2e5 times on the squeezed slotted slab of tests/physics/test_contact.py),
         and Newton without the line search wanders: 174 iterations on that slab with every
         wall a candidate (1213 tetrahedra, order 2, linear, 3 kPa), 16 with it; the 3D Hertz
         test's 191 s became 28 s (2026-12-07).  Before it, converged steps went up to 26
         iterations without a new smallest residual (2026-12-07)."""
-        return replace(self, stall=self.max_iter, line_search="residual")
+        return replace(self, stall=self.max_iter, line_search="guard+residual")
 
     def for_route(self, direct: bool) -> NewtonSettings:
         """These settings with ``rtol`` 0 replaced by the route's tolerance."""
@@ -247,8 +260,21 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
 
 
 def _attempt(problem, u, load, ref, s, linear, accept):
-    """Newton at one load factor, then the caller's acceptance test of the equilibrium."""
-    ok, it, why, res = newton_step_solve(problem, u, load, ref, s, linear)
+    """Newton at one load factor (``line_search`` "guard+residual": the guard's, and where it
+    fails the residual's from the same start), then the caller's acceptance test of the
+    equilibrium."""
+    if s.line_search == "guard+residual":
+        saved = u.CreateVector()
+        saved.data = u
+        guard = replace(s, line_search="guard", stall=min(s.stall, GUARD_STALL))
+        ok, it, why, res = newton_step_solve(problem, u, load, ref, guard, linear)
+        if not ok:
+            u.data = saved
+            ok, more, why, res = newton_step_solve(problem, u, load, ref,
+                                                   replace(s, line_search="residual"), linear)
+            it += more
+    else:
+        ok, it, why, res = newton_step_solve(problem, u, load, ref, s, linear)
     if ok and accept is not None:
         why = accept(load, u)
         ok = not why

@@ -16,7 +16,7 @@ from pacto_ng.physics.equilibrium import NewtonFailure
 from pacto_ng.physics.loads import PointLoad
 from pacto_ng.physics.materials import jacobian, lame, neohookean_energy, svk_energy
 from pacto_ng.physics.mechanics import Mechanics, Supports
-from pacto_ng.physics.newton import NewtonSettings, solve_with_continuation
+from pacto_ng.physics.newton import GUARD_STALL, NewtonSettings, solve_with_continuation
 
 
 pytestmark = pytest.mark.usefixtures("one_thread")
@@ -227,20 +227,40 @@ def test_settings_validation():
 
 
 def test_guard_line_search_needs_fewer_iterations_than_residual_backtracking():
-    """Neo-Hookean cantilever, 2e5 N in one step: both searches find the same equilibrium; the
+    """Neo-Hookean cantilever, 2e5 N in one step: the searches find the same equilibrium; the
     guard-only search takes fewer Newton iterations (measured 5 against 19 on 1410 triangles,
-    see newton.py)."""
+    see newton.py), and "guard+residual" (contact's) as few, its guard's attempt converging."""
     mesh = cantilever_mesh("trig")
     rho = np.ones(mesh.ne)
     out = {}
-    for ls in ("guard", "residual"):
+    for ls in ("guard", "residual", "guard+residual"):
         mech = cantilever(mesh, "neohookean", 2, load=2e5,
                           newton=NewtonSettings(rtol=1e-12, initial_increment=1.0, line_search=ls))
         u = mech.forward(rho)
         out[ls] = (u.FV().NumPy().copy(), mech.result.iterations)
-    a, b = out["guard"][0], out["residual"][0]
-    assert np.linalg.norm(a - b) <= 1e-9 * np.linalg.norm(a)
+    a = out["guard"][0]
+    for ls in ("residual", "guard+residual"):
+        assert np.linalg.norm(a - out[ls][0]) <= 1e-9 * np.linalg.norm(a)
     assert out["guard"][1] < out["residual"][1]
+    assert out["guard+residual"][1] == out["guard"][1]
+
+
+def test_guard_then_residual_line_search_where_full_steps_diverge():
+    """R(u) = atan(u) - 0.5 from u = 3 at the full load, no ramp: full Newton steps overshoot
+    further each time, so the guard's search fails; "guard+residual" then takes the
+    residual's (Armijo on |R|) from the same start and converges, GUARD_STALL iterations
+    later than the residual's alone."""
+    runs = {}
+    for ls in ("guard", "residual", "guard+residual"):
+        u = CreateVVector(1)
+        u[:] = 3.0
+        runs[ls] = solve_with_continuation(Scalar(0.5), u, 1.0, NewtonSettings(line_search=ls),
+                                           warm=True, ramp=False)
+        if runs[ls].converged:
+            assert u.FV().NumPy()[0] == pytest.approx(np.tan(0.5), rel=1e-9)
+    assert not runs["guard"].converged
+    assert runs["residual"].converged and runs["guard+residual"].converged
+    assert runs["guard+residual"].iterations == runs["residual"].iterations + GUARD_STALL
 
 
 def test_a_new_design_is_reached_along_the_design_path():
