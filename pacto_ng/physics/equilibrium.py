@@ -408,7 +408,7 @@ class Equilibrium:
             warm = True  # one Newton step from any state solves a linear problem
         # a new design of a nonlinear model: a failed warm start follows the design path
         path = (warm and old is not None and new is not None and self.contact is None
-                and any(not np.array_equal(a, b) for a, b in zip(old, new)))
+                and not everywhere(self.mesh, all(map(np.array_equal, old, new))))
         res = solve_with_continuation(
             self, self.gfx.vec, self.target, self.settings, warm=warm, linear=self.linear,
             first_increment=self._ramp_first, start=self._at_load, ramp=not path,
