@@ -31,17 +31,19 @@ PATH_MAX_ITER = 60
 class DesignPath:
     """The equilibrium problem of :class:`~pacto_ng.physics.equilibrium.Equilibrium` ``eq``
     along the path from the field values ``old`` at load factor ``loads[0]`` to ``new`` at
-    ``loads[1]``: Newton's ``load`` argument is the path's parameter ``t``."""
+    ``loads[1]`` (``values``: the new fields as the forward pass was given them, set as they
+    are at ``t = 1``): Newton's ``load`` argument is the path's parameter ``t``."""
 
-    def __init__(self, eq, old: list, new: list, loads: tuple[float, float]):
-        self.eq, self.old, self.new, self.loads = eq, old, new, loads
+    def __init__(self, eq, old: list, new: tuple[list, tuple], loads: tuple[float, float]):
+        self.eq, self.old, (self.new, self.values), self.loads = eq, old, new, loads
         self.free = eq.free
         self._t = None
 
     def _at(self, t: float) -> float:
         """Set the fields at ``t`` (once per ``t``); the load factor there."""
         if t != self._t:
-            self.eq.set_fields(*[(1.0 - t) * a + t * b for a, b in zip(self.old, self.new)])
+            self.eq.set_fields(*(self.values if t == 1.0 else
+                                 [(1.0 - t) * a + t * b for a, b in zip(self.old, self.new)]))
             self._t = t
         return self.loads[0] + t * (self.loads[1] - self.loads[0])
 
@@ -63,12 +65,13 @@ def field_values(fields) -> list:
     return [f.gf.vec.FV().NumPy().copy() for f in fields]
 
 
-def follow(eq, u, old: list, new: list, loads: tuple[float, float],
+def follow(eq, u, old: list, new: tuple[list, tuple], loads: tuple[float, float],
            s: NewtonSettings) -> NewtonResult:
     """Bring ``u``, an equilibrium at the fields ``old`` and load factor ``loads[0]``, to one
-    at ``new`` and ``loads[1]`` along the path (its first step half of it: the caller's warm
-    start was the whole).  The fields are left at ``new`` either way; on failure ``u`` holds
-    the path's last equilibrium and ``reason`` says why."""
+    at ``new`` (the values' copies, :func:`field_values`, and the values given) and
+    ``loads[1]`` along the path (its first step half of it: the caller's warm start was the
+    whole).  The fields are left at the new ones either way; on failure ``u`` holds the path's
+    last equilibrium and ``reason`` says why."""
     path = DesignPath(eq, old, new, loads)
     path._at(1.0)
     ref = eq.load_norm(loads[1])

@@ -414,7 +414,7 @@ class Equilibrium:
             first_increment=self._ramp_first, start=self._at_load, ramp=not path,
             on_step=self.on_step if self.contact is None else self._paired_step)
         if path and not res.converged:
-            res = self._along_path(old, new, res.iterations)
+            res = self._along_path(old, (new, values), res.iterations)
         self._at_load = res.load_reached
         self._design = new if res.converged else None
         if res.ramp_first is not None:
@@ -427,10 +427,11 @@ class Equilibrium:
         self._adjoint_ready = False
         return out
 
-    def _along_path(self, old: list, new: list, tried: int) -> NewtonResult:
-        """The equilibrium of the new design (fields ``new``) along the design path from the
-        state's (``old``, design_path.py), where a warm start of ``tried`` Newton iterations
-        failed; where the path fails too, the load ramped from zero."""
+    def _along_path(self, old: list, new: tuple, tried: int) -> NewtonResult:
+        """The equilibrium of the new design (``new``: its fields' copies and the values given,
+        :func:`~pacto_ng.physics.design_path.follow`) along the design path from the state's
+        (``old``), where a warm start of ``tried`` Newton iterations failed; where the path
+        fails too, the load ramped from zero."""
         res = follow(self, self.gfx.vec, old, new, (self._at_load, self.target), self.settings)
         res.iterations += tried
         if not res.converged:
