@@ -39,7 +39,7 @@ class DesignPath:
         self.free = eq.free
         self._t = None
 
-    def _at(self, t: float) -> float:
+    def at(self, t: float) -> float:
         """Set the fields at ``t`` (once per ``t``); the load factor there."""
         if t != self._t:
             self.eq.set_fields(*(self.values if t == 1.0 else
@@ -48,10 +48,10 @@ class DesignPath:
         return self.loads[0] + t * (self.loads[1] - self.loads[0])
 
     def residual(self, vec, out, t):
-        self.eq.residual(vec, out, self._at(t))
+        self.eq.residual(vec, out, self.at(t))
 
     def assemble_tangent(self, vec, t):
-        self.eq.assemble_tangent(vec, self._at(t))
+        self.eq.assemble_tangent(vec, self.at(t))
 
     def solve_tangent(self, rhs, out):
         self.eq.solve_tangent(rhs, out)
@@ -73,7 +73,7 @@ def follow(eq, u, old: list, new: tuple[list, tuple], loads: tuple[float, float]
     whole).  The fields are left at the new ones either way; on failure ``u`` holds the path's
     last equilibrium and ``reason`` says why."""
     path = DesignPath(eq, old, new, loads)
-    path._at(1.0)
+    path.at(1.0)
     ref = eq.load_norm(loads[1])
     result = NewtonResult(False)
     if not np.isfinite(ref) or ref == 0.0:
@@ -82,7 +82,7 @@ def follow(eq, u, old: list, new: tuple[list, tuple], loads: tuple[float, float]
     steps = replace(s, min_increment=max(s.min_increment, PATH_MIN_STEP),
                     max_total_iter=PATH_MAX_ITER)
     ramp_load(path, u, (0.0, 1.0, ref), 0.5, steps, (False, None, None), result)
-    path._at(1.0)
+    path.at(1.0)
     # the path's t is no load factor: the load reached is the target's or none, and its first
     # step no load ramp's first increment
     result.load_reached = loads[1] if result.converged else 0.0

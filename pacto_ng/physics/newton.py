@@ -99,16 +99,18 @@ class NewtonSettings:
     def for_contact(self) -> NewtonSettings:
         """These settings for a problem with contact: the guard's line search first, and where
         it fails the residual's (Armijo on ``|R|``, no ``stall`` limit short of ``max_iter``)
-        from the same start.  Neo-Hookean Newton's full steps raise ``|R|`` 10-100 times
-        before it converges quadratically (pneunet's part at 10-32 kPa, 2026-12-07): the
-        residual's line search alone cut them, 18-30 iterations per load step against 5-11,
-        and lost the equilibrium near 27 kPa where the guard's found it.  A full Newton step presses
-        walls whose contact its tangent did not see deep into each other (the residual's norm
-        grew up to 2e5 times on the squeezed slotted slab of tests/physics/test_contact.py),
-        and Newton without the line search wanders: 174 iterations on that slab with every
-        wall a candidate (1213 tetrahedra, order 2, linear, 3 kPa), 16 with it; the 3D Hertz
-        test's 191 s became 28 s (2026-12-07).  Before it, converged steps went up to 26
-        iterations without a new smallest residual (2026-12-07)."""
+        from the same start.
+
+        A full Newton step presses walls whose contact its tangent did not see deep into each
+        other (the residual's norm grew up to 2e5 times on the squeezed slotted slab of
+        tests/physics/test_contact.py), and Newton without the residual's search wanders: 174
+        iterations on that slab with every wall a candidate (1213 tetrahedra, order 2,
+        linear, 3 kPa), 16 with it; the 3D Hertz test's 191 s became 28 s (2026-12-07).
+        Before it, converged steps went up to 26 iterations without a new smallest residual.
+        But a Neo-Hookean Newton's full steps raise ``|R|`` 10-100 times before it converges
+        quadratically (pneunet's part at 10-32 kPa, its walls apart, 2026-12-07): the
+        residual's search alone cut them, 16-30 iterations per load step against 5-11, and
+        lost the equilibrium near 27 kPa where the guard's found it."""
         return replace(self, stall=self.max_iter, line_search="guard+residual")
 
     def for_route(self, direct: bool) -> NewtonSettings:
@@ -340,7 +342,7 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
     if warm and s.ramp_from_last:  # never from zero (past a maximum it meets it again)
         if 0.0 < start < target:
             ramp_load(problem, u, (start, target, ref), 0.5 * (target - start), s,
-                  (linear, accept, on_step), result)
+                      (linear, accept, on_step), result)
         return result
     u[:] = 0.0
     first = s.initial_increment if first_increment is None else min(1.0, max(first_increment, s.min_increment))
@@ -349,12 +351,11 @@ def solve_with_continuation(problem, u, target: float, s: NewtonSettings, *, war
 
 
 def ramp_load(problem, u, loads, inc: float, s: NewtonSettings, hooks,
-          result: NewtonResult) -> bool:
-    """The load ramp of :func:`solve_with_continuation` (and of a design path,
-    design_path.py) from the equilibrium ``u`` at
-    ``loads[0]`` to ``loads[1]`` (``loads[2]`` the target's load norm), ``inc`` the first
-    increment; recorded in ``result`` (a ramp from zero sets ``ramp_first``); whether it got
-    there (``u`` the last equilibrium either way)."""
+              result: NewtonResult) -> bool:
+    """The load ramp of :func:`solve_with_continuation` (and of a design path, design_path.py)
+    from the equilibrium ``u`` at ``loads[0]`` to ``loads[1]`` (``loads[2]`` the target's load
+    norm), ``inc`` the first increment; recorded in ``result`` (a ramp from zero sets
+    ``ramp_first``); whether it got there (``u`` the last equilibrium either way)."""
     (load, target, ref), (linear, accept, on_step) = loads, hooks
     from_zero = load == 0.0
     saved = u.CreateVector()
