@@ -401,13 +401,15 @@ class Equilibrium:
     def forward(self, *values):
         old = self._design
         self.set_fields(*values)
-        new = None if self.linear else field_values(self.fields)
+        # the design of the equilibrium about to be found: a nonlinear model without contact
+        # (a part's analysis, whose design stays) may follow the design path from it next time
+        new = None if self.linear or self.contact is not None else field_values(self.fields)
         # warm start from the last equilibrium (also one a failed solve reached on its way)
         warm = self.result is not None and (self.result.converged or self.result.load_reached > 0)
         if self.linear:
             warm = True  # one Newton step from any state solves a linear problem
-        # a new design of a nonlinear model: a failed warm start follows the design path
-        path = (warm and old is not None and new is not None and self.contact is None
+        # a new design: a failed warm start follows the design path
+        path = (warm and old is not None and new is not None
                 and not everywhere(self.mesh, all(map(np.array_equal, old, new))))
         res = solve_with_continuation(
             self, self.gfx.vec, self.target, self.settings, warm=warm, linear=self.linear,
