@@ -53,6 +53,13 @@ LINE_SEARCHES = ("guard", "residual", "guard+residual")
 #: the guard's attempt of "guard+residual" gives up after this many iterations without a new
 #: smallest residual (the residual's then starts)
 GUARD_STALL = 8
+#: a Newton step that cut the residual at least this many times (Newton near its quadratic
+#: convergence) lets the next steps reuse its factorised tangent (chord steps, no assembly or
+#: factorisation) ...
+CHORD_FROM = 100.0
+#: ... while each of them cuts the residual at least this many times; the first that does
+#: not is undone and a tangent assembled at the state
+CHORD_CUT = 10.0
 
 
 @dataclass(frozen=True)
@@ -76,6 +83,12 @@ class NewtonSettings:
     easy: int = 4  # a step converging in <= easy iterations lets the increment grow
     max_steps: int = 200
     max_total_iter: int = 1000  # Newton iterations per solve, over all load steps and retries
+    # a step that cut the residual CHORD_FROM-fold lets the next ones reuse its factorised
+    # tangent (chord steps) while each cuts the residual CHORD_CUT-fold; in a warm start
+    # only: a load ramp's steps keep full Newton (its increments grow after easy steps, and
+    # chord steps made more steps easy: 1e9 Pa on the Neo-Hookean pa-inverter of
+    # tests/physics/test_extremes.py then lost the load at its last increment)
+    chord: bool = True
     # "guard" (admissibility only), "residual" (Armijo on |R|) or "guard+residual" (the
     # guard's, stopping after GUARD_STALL iterations without progress; where it fails, the
     # residual's from the same start)
@@ -203,7 +216,9 @@ class NewtonResult:
 
 
 def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
-    """Newton iterations at a fixed load factor.  Returns (converged, iterations, reason, res).
+    """Newton iterations at a fixed load factor.  Returns (converged, iterations, reason, res),
+    the iterations counting the tangents assembled (chord steps, which reuse one, are not
+    counted).
 
     ``u`` is updated in place only by accepted (admissible) steps.
     """
@@ -222,6 +237,7 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
     it = 0
     prev = np.inf
     lowest, since = res, 0  # the smallest residual so far, and iterations since it
+    chord = False  # the next step reuses the last factorised tangent
     while res > tol:
         if res < 1e-7 * ref and res > 0.5 * prev:
             break  # stagnation at the round-off floor, far below any meaningful tolerance
@@ -231,6 +247,12 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
         if since >= s.stall:
             return False, it, (f"no progress in {s.stall} iterations (residual {res / ref:.2e} "
                                f"of the load, at best {lowest / ref:.2e})"), res
+        if chord:  # not counted: the iterations are the tangents assembled
+            new = _chord_step(problem, u, r, (du, trial, best), load, res)
+            if new is not None:
+                u.data, res, lowest = trial, new, min(lowest, new)
+                continue
+            chord = False  # undone: r is again u's residual
         problem.assemble_tangent(u, load)
         problem.solve_tangent(r, du)
         alpha = 1.0
@@ -255,10 +277,29 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
             problem.residual(trial, r, load)
             new = best_res
         u.data = trial
+        chord = s.chord and new * CHORD_FROM <= res
         res = new
         it += 1
         lowest, since = (res, 0) if res < lowest else (lowest, since + 1)
     return True, it, "", res
+
+
+def _chord_step(problem, u, r, work, load, res):
+    """A chord step of :func:`newton_step_solve` from ``u`` (``r`` its residual) with the last
+    factorised tangent: its residual norm where it is admissible and cuts ``res``
+    :data:`CHORD_CUT`-fold (``work[1]`` the new state, ``r`` its residual), else None (``r``
+    ``u``'s residual again; ``work[2]`` a spare vector)."""
+    du, trial, saved = work
+    problem.solve_tangent(r, du)
+    trial.data = u - du
+    if problem.admissible(trial):
+        saved.data = r
+        problem.residual(trial, r, load)
+        new = free_norm(r, problem.free)
+        if new * CHORD_CUT <= res:
+            return new
+        r.data = saved
+    return None
 
 
 def _attempt(problem, u, load, ref, s, linear, accept):
@@ -359,6 +400,7 @@ def ramp_load(problem, u, loads, inc: float, s: NewtonSettings, hooks,
     (load, target, ref), (linear, accept, on_step) = loads, hooks
     from_zero = load == 0.0
     saved = u.CreateVector()
+    s = replace(s, chord=False)  # full Newton steps (NewtonSettings.chord)
     while load < target * (1 - 1e-12):
         if result.steps >= s.max_steps:
             result.reason = f"more than {s.max_steps} load steps"

@@ -268,13 +268,13 @@ def test_a_new_design_is_reached_along_the_design_path():
     cantilever voided at 2e6 N): the warm start fails, the design path
     (physics/design_path.py) blends the designs and reaches the new design's equilibrium, the
     one a ramp from zero finds, in half its Newton iterations (58 against 117 when
-    written)."""
+    written; full Newton steps alone, no chord steps, so that iterations count tangents)."""
     mesh = cantilever_mesh("trig")
     centres = np.array([np.mean([mesh[v].point for v in el.vertices], axis=0)
                         for el in mesh.Elements()])
     band = (centres[:, 1] > 0.08) & (centres[:, 1] < 0.17) & (centres[:, 0] < 0.9)
     solid, voided = np.ones(mesh.ne), np.where(band, 1e-3, 1.0)
-    settings = NewtonSettings(rtol=1e-12)
+    settings = NewtonSettings(rtol=1e-12, chord=False)
     mech = cantilever(mesh, "wang", 1, load=2e6, newton=settings)
     mech.forward(solid)
     along = mech.forward(voided).FV().NumPy().copy()
@@ -287,3 +287,59 @@ def test_a_new_design_is_reached_along_the_design_path():
     assert path.iterations < 0.5 * fresh.result.iterations
     fields = mech.fields[0].gf.vec.FV().NumPy()
     assert np.array_equal(fields, voided)  # the fields are the new design's
+
+
+class CountedScalar(Scalar):
+    """:class:`Scalar` that counts its tangents."""
+
+    tangents = 0
+
+    def assemble_tangent(self, vec, load):
+        self.tangents += 1
+        super().assemble_tangent(vec, load)
+
+
+def test_chord_steps_reach_the_same_root_with_fewer_tangents():
+    """atan(u) = 0.5 from u = 0.3, at the full load: once a Newton step has cut the residual
+    CHORD_FROM-fold, the next steps reuse its tangent while each cuts the residual
+    CHORD_CUT-fold; the root is the same to round-off, with fewer tangents (2 against 4 when
+    written), and the Newton iterations reported are the tangents."""
+    runs = {}
+    for chord in (False, True):
+        problem, u = CountedScalar(0.5), CreateVVector(1)
+        u[:] = 0.3
+        result = solve_with_continuation(problem, u, 1.0, NewtonSettings(rtol=1e-14, chord=chord),
+                                         warm=True, ramp=False)
+        assert result.converged
+        assert u.FV().NumPy()[0] == pytest.approx(np.tan(0.5), rel=1e-14)
+        runs[chord] = (problem.tangents, result.iterations)
+    assert runs[True][0] < runs[False][0]
+    assert all(tangents == iterations for tangents, iterations in runs.values())
+
+
+def test_chord_steps_in_a_warm_start_of_a_new_design():
+    """The Neo-Hookean cantilever at 2e5 N, warm-started at a design with a softened band:
+    chord steps reach the equilibrium full Newton steps reach (to 1e-10 of it, both at a
+    residual of 1e-12 of the load) with fewer tangents assembled (4 against 6 when written)."""
+    mesh = cantilever_mesh("trig")
+    centres = np.array([np.mean([mesh[v].point for v in el.vertices], axis=0)
+                        for el in mesh.Elements()])
+    softened = np.where(centres[:, 1] > 0.15, 0.8, 1.0)
+    runs = {}
+    for chord in (False, True):
+        mech = cantilever(mesh, "neohookean", 1, load=2e5,
+                          newton=NewtonSettings(rtol=1e-12, chord=chord))
+        mech.forward(np.ones(mesh.ne))
+        count, assemble = [0], mech.assemble_tangent
+
+        def counted(vec, load):
+            count[0] += 1
+            assemble(vec, load)
+
+        mech.assemble_tangent = counted
+        u = mech.forward(softened).FV().NumPy().copy()
+        assert mech.result.converged and mech.result.ramp_first is None  # the warm start
+        runs[chord] = (u, count[0])
+    full, chorded = runs[False][0], runs[True][0]
+    assert np.linalg.norm(chorded - full) <= 1e-10 * np.linalg.norm(full)
+    assert runs[True][1] < runs[False][1]
