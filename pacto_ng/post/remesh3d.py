@@ -30,6 +30,7 @@ The part is analysed by :class:`~.part_analysis.PartAnalysis`, as a 2D part is.
 """
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import tempfile
@@ -106,13 +107,13 @@ def _sample(field, source, pts):
 #: after "Intersecting elements" in the volume mesher, seen on a 40-iteration pa-inverter-3d
 #: part), which no exception would catch.  ``stl``: the surface remeshed from its STL, then
 #: the volume; ``fill``: the surface's own triangles kept and the volume filled
-_MESHER = ("import sys\n"
+_MESHER = ("import json, sys\n"
            "import numpy as np\n"
            "from netgen.meshing import Element2D, FaceDescriptor, Mesh, MeshPoint, Pnt\n"
            "from netgen.stl import STLGeometry\n"
            "kind, path, h, out = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]\n"
            "if kind == 'stl':\n"
-           "    m = STLGeometry(path).GenerateMesh(maxh=h)\n"
+           "    m = STLGeometry(path).GenerateMesh(maxh=h, **json.loads(sys.argv[5]))\n"
            "else:\n"
            "    data = np.load(path)\n"
            "    m = Mesh(dim=3)\n"
@@ -124,9 +125,15 @@ _MESHER = ("import sys\n"
            "sys.exit(3) if m.ne == 0 else m.Save(out)\n")
 
 
-#: the element sizes (fractions of the requested one) tried in turn when Netgen's mesher
-#: crashes on a part's surface: a finer size resolves a thin wall it could not close
-MESH_RETRY = (1.0, 0.7, 0.5)
+#: the element sizes (fractions of the requested one) and Netgen's meshing options tried in
+#: turn when its mesher crashes on a part's surface: the same size with a gentler grading
+#: (default 0.3) or more of the surface's ridges taken as edges (``yangle``, default 30°),
+#: then finer sizes, which resolve a thin wall it could not close.  Netgen's crashes depend
+#: on the options as chaotically as on the size: on the part of a `pacto run pneunet-3d
+#: --model neohookean` (2026-12-07), the defaults crashed at maxh 2.3, 2.4, 2.5 and 2.7 mm
+#: (meshed at 2.2 and 2.6 mm), grading 0.2 and yangle 10° meshed at all six (14,895 and
+#: 16,607 tetrahedra at 2.5 mm), where the finer size 1.75 mm gave 27,157
+MESH_RETRY = ((1.0, {}), (1.0, {"grading": 0.2}), (1.0, {"yangle": 10.0}), (0.7, {}), (0.5, {}))
 #: why a try of the mesher was stopped (its time limit)
 TOOK_LONGER = "it took longer than"
 
@@ -134,8 +141,9 @@ TOOK_LONGER = "it took longer than"
 def _netgen_mesh(surface, maxh: float, timeout: float, unsmoothed=None):
     """The Netgen tetrahedral mesh of the closed, outward-oriented ``surface``, the element
     size that gave it and how its surface was made: its STL remeshed at ``maxh``, or after a
-    crash of the mesher at the next size of :data:`MESH_RETRY` (``"remeshed"``); when every
-    size fails (thin walls of one or two source elements, seen on pneunet-3d parts), the
+    crash of the mesher with the next size and options of :data:`MESH_RETRY`
+    (``"remeshed"``); when every try fails (thin walls of one or two source elements, seen
+    on pneunet-3d parts), the
     surface's own triangles kept and the volume filled at ``maxh`` (``"kept"``), and where
     the smoothing made the surface touch itself, the same with the ``unsmoothed`` surface
     (the clipped cells' boundary: ``"unsmoothed"``).  A try that takes longer than
@@ -147,11 +155,11 @@ def _netgen_mesh(surface, maxh: float, timeout: float, unsmoothed=None):
         surf.clear_data()
         surf.save(str(stl), binary=True)
         tried = []
-        for h in (f * maxh for f in MESH_RETRY):
-            why = _mesh_child("stl", stl, h, vol, timeout)
+        for h, options in ((f * maxh, options) for f, options in MESH_RETRY):
+            why = _mesh_child("stl", stl, h, vol, timeout, options)
             if not isinstance(why, str):
                 return why, h, "remeshed"
-            tried.append(f"{h:.3g}: {why}")
+            tried.append(f"{h:.3g}{''.join(f' {k} {v:g}' for k, v in options.items())}: {why}")
             if why.startswith(TOOK_LONGER):
                 break
         for how, surf in (("kept", surface), ("unsmoothed", unsmoothed)):
@@ -168,16 +176,17 @@ def _netgen_mesh(surface, maxh: float, timeout: float, unsmoothed=None):
                      f"self-touching part: try another --maxh or --threshold)")
 
 
-def _mesh_child(kind: str, source: Path, maxh: float, vol: Path, timeout: float):
-    """One try of the child-process mesher (``kind`` ``stl`` or ``fill``, :data:`_MESHER`):
-    the Netgen mesh, or why it failed (a string, :data:`TOOK_LONGER` ... after ``timeout``
-    s)."""
+def _mesh_child(kind: str, source: Path, maxh: float, vol: Path, timeout: float,
+                options: dict | None = None):
+    """One try of the child-process mesher (``kind`` ``stl`` or ``fill``, :data:`_MESHER`;
+    ``options``: Netgen's meshing options of an STL try): the Netgen mesh, or why it failed
+    (a string, :data:`TOOK_LONGER` ... after ``timeout`` s)."""
     from netgen.meshing import Mesh as NGMesh
 
     try:
         proc = subprocess.run([sys.executable, "-c", _MESHER, kind, str(source),
-                               repr(float(maxh)), str(vol)], capture_output=True,
-                              timeout=timeout)
+                               repr(float(maxh)), str(vol), json.dumps(options or {})],
+                              capture_output=True, timeout=timeout)
     except subprocess.TimeoutExpired:
         return f"{TOOK_LONGER} {timeout:g} s"
     if proc.returncode != 0 or not vol.is_file():

@@ -190,7 +190,8 @@ def test_unmeshed_edges_counts_segments_without_a_triangle():
 
 def test_a_3d_mesher_crash_is_retried_finer_then_with_the_surface_kept(monkeypatch):
     """Netgen's STL mesher crashes on some part surfaces (a thin wall); the part is meshed
-    again at the next, finer size of MESH_RETRY, and the size that worked is returned.  When
+    again with the next size and options of MESH_RETRY (the same size with other options
+    first), and the size that worked is returned.  When
     every size fails, the surface's own triangles are kept and the volume filled: the mesh
     then encloses exactly the surface's volume (a sphere's, whose flat triangles the STL
     mesher would have replaced) and its boundary is those triangles; when that fails too, the
@@ -204,17 +205,23 @@ def test_a_3d_mesher_crash_is_retried_finer_then_with_the_surface_kept(monkeypat
     real = remesh3d._mesh_child
     tries = []
 
-    def crash_first(kind, source, maxh, vol, timeout):
-        tries.append((kind, maxh))
-        if len(tries) == 1:
-            return "its mesher stopped with exit code -6"
-        return real(kind, source, maxh, vol, timeout)
+    def crash(first):
+        def crashing(kind, source, maxh, vol, timeout, options=None):
+            tries.append((kind, maxh, options))
+            if len(tries) <= first:
+                return "its mesher stopped with exit code -6"
+            return real(kind, source, maxh, vol, timeout, options)
+        return crashing
 
-    monkeypatch.setattr(remesh3d, "_mesh_child", crash_first)
     cube = pv.Cube(center=(0.5, 0.5, 0.5)).triangulate()
-    gen, used, how = remesh3d._netgen_mesh(cube, 0.5, 60.0)
-    assert tries == [("stl", 0.5), ("stl", 0.5 * remesh3d.MESH_RETRY[1])]
-    assert used == tries[1][1] and gen.ne > 0 and how == "remeshed"
+    for first in (1, 3):  # the same size with other options; then a finer size
+        tries.clear()
+        monkeypatch.setattr(remesh3d, "_mesh_child", crash(first))
+        gen, used, how = remesh3d._netgen_mesh(cube, 0.5, 60.0)
+        assert tries == [("stl", 0.5 * f, options)
+                         for f, options in remesh3d.MESH_RETRY[:first + 1]]
+        assert used == tries[-1][1] and gen.ne > 0 and how == "remeshed"
+    assert tries[-1][1] < 0.5 and tries[1] == ("stl", 0.5, {"grading": 0.2})
 
     def stl_fails(kind, *args):
         return "its mesher stopped with exit code -6" if kind == "stl" else real(kind, *args)
