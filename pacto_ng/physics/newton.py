@@ -250,7 +250,8 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
         if chord:  # not counted: the iterations are the tangents assembled
             new = _chord_step(problem, u, r, (du, trial, best), load, res)
             if new is not None:
-                u.data, res, lowest = trial, new, min(lowest, new)
+                u.data, res = trial, new
+                lowest, since = (res, 0) if res < lowest else (lowest, since)
                 continue
             chord = False  # undone: r is again u's residual
         problem.assemble_tangent(u, load)

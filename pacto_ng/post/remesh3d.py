@@ -129,10 +129,10 @@ _MESHER = ("import json, sys\n"
 #: turn when its mesher crashes on a part's surface: the same size with a gentler grading
 #: (default 0.3) or more of the surface's ridges taken as edges (``yangle``, default 30°),
 #: then finer sizes, which resolve a thin wall it could not close.  Netgen's crashes depend
-#: on the options as chaotically as on the size: on the part of a `pacto run pneunet-3d
-#: --model neohookean` (2026-12-07), the defaults crashed at maxh 2.3, 2.4, 2.5 and 2.7 mm
-#: (meshed at 2.2 and 2.6 mm), grading 0.2 and yangle 10° meshed at all six (14,895 and
-#: 16,607 tetrahedra at 2.5 mm), where the finer size 1.75 mm gave 27,157
+#: on the options as erratically as on the size: on the part of a `pacto run pneunet-3d
+#: --model neohookean` (2026-12-07), the defaults crashed at maxh 2.3, 2.4 and 2.5 mm (meshed
+#: at 2.6 mm), grading 0.2 and yangle 10° each meshed at 2.2, 2.3, 2.4, 2.5 and 2.7 mm
+#: (14,895 and 16,607 tetrahedra at 2.5 mm), where the finer 1.75 mm gave 27,157
 MESH_RETRY = ((1.0, {}), (1.0, {"grading": 0.2}), (1.0, {"yangle": 10.0}), (0.7, {}), (0.5, {}))
 #: why a try of the mesher was stopped (its time limit)
 TOOK_LONGER = "it took longer than"
