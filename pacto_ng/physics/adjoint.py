@@ -58,9 +58,11 @@ class Adjoint:
         """Factorise the tangent at the converged state (once per forward pass)."""
         if self._adjoint_ready:
             return
-        # a linear problem's tangent does not depend on u: the one Newton factorised is exact
+        # a linear problem's tangent does not depend on u: the one Newton factorised is exact;
+        # a nonlinear one's is near the one Newton factorised at this design (its last full
+        # step's), whose factorisation then preconditions it
         if not (self.linear and self._tangent_at is not None):
-            self.assemble_tangent(self.gfx.vec, self.target)
+            self.assemble_tangent(self.gfx.vec, self.target, near=self._tangent_at is not None)
         self._adjoint_ready = True
 
     def adjoint(self, dJdu):

@@ -217,7 +217,9 @@ class Equilibrium:
         """The tangent matrix last assembled by :meth:`assemble_tangent`."""
         return self._lin.a.mat if self._lin is not None else self.a.mat
 
-    def assemble_tangent(self, vec, load):
+    def assemble_tangent(self, vec, load, near: bool = False):
+        """The tangent at ``vec`` and ``load``, ready to solve with; ``near``: close to the one
+        factorised last, whose factorisation may precondition it (LinearSolver.prepare)."""
         self.load.Set(load)
         if self._lin is not None:
             if self._tangent_at is not None:
@@ -225,7 +227,7 @@ class Equilibrium:
             self._lin.assemble()
         else:
             self.a.AssembleLinearization(vec)
-        self._solver.prepare()
+        self._solver.prepare(near)
         self._tangent_at = (load, vec.FV().NumPy().copy()) if not self.linear else ("linear",)
 
     def solve_tangent(self, rhs, out):

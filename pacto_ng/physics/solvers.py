@@ -64,6 +64,12 @@ DIRECT_MAX_DOFS_3D = 140_000
 ADJOINT_RTOL = 1e-12  # Krylov tolerance of the Darcy and filter solves (relative)
 MAX_ITERATIONS = 1000
 GMRES_RESTART = 100  # GMRES keeps this many Krylov vectors at most (8 MB each per 1e6 dofs)
+#: a matrix assembled near the one factorised (Newton's tangent at the converged state, after
+#: the tangent of its last full step) is solved by CG / GMRES with that factorisation as the
+#: preconditioner, to this relative tolerance, in at most STALE_ITERATIONS; where it needs
+#: more, the matrix is factorised
+STALE_RTOL = 1e-12
+STALE_ITERATIONS = 10
 
 
 def adjoint_rtol(newton_rtol: float) -> float:
@@ -169,6 +175,9 @@ class LinearSolver:
         self._pre = None
         self._inv = None
         self._factorised = None  # the matrix _inv factorises
+        self._stale = False  # the matrix's values changed since _inv factorised it
+        self.stale_solves = 0  # solves preconditioned by the factorisation of an earlier matrix
+        self.stale_failed = 0  # ... of them that needed the matrix factorised after all
         self._condensed_rhs = None
         self._free = None  # the free dofs as a numpy mask (_cg_to_residual)
         self.iterations = 0  # Krylov iterations of the last solve
@@ -190,10 +199,18 @@ class LinearSolver:
         """Whether the route is the direct factorisation."""
         return self.kind == "direct"
 
-    def prepare(self):
+    def prepare(self, near: bool = False):
         """Make the solver ready for the form's current matrix (after each assembly): the
         direct route factorises it (the first time) or refactorises it numerically; the
-        iterative route's preconditioner was updated by the assembly itself."""
+        iterative route's preconditioner was updated by the assembly itself.  ``near``: the
+        matrix is close to the one factorised last (the same pattern): the direct route
+        keeps that factorisation as a preconditioner (:data:`STALE_RTOL`), factorising only
+        where it does not do."""
+        if self.direct and near and self._inv is not None \
+                and self._factorised is self.form.mat and not distributed(self.form.space.mesh):
+            self._stale = True
+            return
+        self._stale = False
         if self.direct:
             # on a distributed mesh the direct route is NGSolve's MasterInverse (the matrix
             # gathered on rank 0), which has no numeric update: it is made anew
@@ -243,25 +260,27 @@ class LinearSolver:
     def _solve(self, rhs, out, rtol, transpose, strict):
         if self.direct:
             inv = self._inv.T if transpose and not self.symmetric else self._inv
+            if self._stale:
+                self.stale_solves += 1
+                free = rhs.CreateVector()
+                self._on_free_dofs(rhs, free)
+                krylov = self._krylov(inv, free, out, STALE_RTOL, STALE_ITERATIONS, transpose)
+                res = krylov.residuals
+                if res and (res[0] == 0 or res[-1] <= STALE_RTOL * res[0]):
+                    return
+                self.stale_failed += 1
+                self.prepare()  # too far from the factorised matrix: factorise this one
+                inv = self._inv.T if transpose and not self.symmetric else self._inv
             out.data = inv * rhs
             return
-        from ngsolve.krylovspace import CGSolver, GMResSolver
-
         if self.freedofs is not None:
             free = rhs.CreateVector()
             self._on_free_dofs(rhs, free)
             rhs = free
         tol = self.rtol if rtol is None else float(rtol)
-        mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
-        if self.symmetric:
-            method, extra = CGSolver, {}
-        else:
-            method, extra = GMResSolver, {"restart": GMRES_RESTART}
-        krylov = method(mat, self._pre.mat, tol=tol, maxiter=MAX_ITERATIONS, **extra)
-        krylov.Solve(rhs=rhs, sol=out)
-        self.iterations = krylov.iterations
-        self.total_iterations += krylov.iterations
+        krylov = self._krylov(self._pre.mat, rhs, out, tol, MAX_ITERATIONS, transpose)
         res = krylov.residuals
+        mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
         if strict and res and res[0] > 0 and not res[-1] <= tol * res[0]:
             # GMRES ends at a breakdown of its Arnoldi process without recording the residual
             # it reached (BDDC whose coarse space holds every dof is an exact inverse: one
@@ -272,9 +291,26 @@ class LinearSolver:
             pr.data = self._pre.mat * r
             reached = float(pr.Norm()) / res[0]
             if not reached <= tol:
-                raise SolverFailure(f"{method.__name__} with {self.preconditioner} did not "
-                                    f"reach the relative tolerance {tol:.1e} in "
+                raise SolverFailure(f"{type(krylov).__name__} with {self.preconditioner} did "
+                                    f"not reach the relative tolerance {tol:.1e} in "
                                     f"{krylov.iterations} iterations (reached {reached:.1e})")
+
+    def _krylov(self, pre, rhs, out, tol: float, maxiter: int, transpose: bool):
+        """CG (GMRES for an unsymmetric matrix) on the form's matrix (transposed with
+        ``transpose``) preconditioned by ``pre``, from 0 (``rhs`` zero on the fixed dofs); the
+        solver, its iterations counted."""
+        from ngsolve.krylovspace import CGSolver, GMResSolver
+
+        mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
+        if self.symmetric:
+            method, extra = CGSolver, {}
+        else:
+            method, extra = GMResSolver, {"restart": GMRES_RESTART}
+        krylov = method(mat, pre, tol=tol, maxiter=maxiter, **extra)
+        krylov.Solve(rhs=rhs, sol=out)
+        self.iterations = krylov.iterations
+        self.total_iterations += krylov.iterations
+        return krylov
 
     def _cg_to_residual(self, rhs, out, target, strict):
         """Preconditioned CG from ``out = 0`` that stops on the Euclidean norm of its residual
@@ -339,11 +375,14 @@ class LinearSolver:
         was asked: auto | direct | iterative), ``method`` (the direct solver, or CG / GMRES),
         ``preconditioner`` (None for direct), ``tolerance`` (the default Krylov tolerance,
         None for direct), ``iterations`` (Krylov iterations of the last solve),
-        ``total_iterations`` and ``solves``."""
+        ``total_iterations`` and ``solves``; on the direct route ``factors_reused``, the
+        solves preconditioned by an earlier matrix's factorisation (Newton's tangent for the
+        adjoint's), and ``factors_reused_failed``, those of them that factorised after all."""
         iterative = not self.direct
         return {"kind": self.kind, "setting": self.setting,
                 "method": ("CG" if self.symmetric else "GMRES") if iterative else self.inverse,
                 "preconditioner": self.preconditioner,
                 "tolerance": self.rtol if iterative else None,
                 "iterations": self.iterations, "total_iterations": self.total_iterations,
-                "solves": self.solves, "ndof": self.form.space.ndof}
+                "solves": self.solves, "ndof": self.form.space.ndof,
+                "factors_reused": self.stale_solves, "factors_reused_failed": self.stale_failed}

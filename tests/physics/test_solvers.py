@@ -343,3 +343,29 @@ def test_a_linear_design_is_one_cg_solve_to_newtons_residual():
     mech.residual(mech.gfu.vec, r, mech.target)
     ref = mech.load_norm(mech.target)
     assert free_norm(r, mech.free) <= mech.settings.rtol * ref
+
+
+@pytest.mark.parametrize("load", ["fixed", "follower"])
+def test_the_adjoint_preconditioned_by_newtons_factorisation(load, monkeypatch):
+    """On the direct route the adjoint's tangent (at the converged state) is solved by CG, or
+    GMRES on Kᵀ for the follower load, preconditioned by the factorisation of Newton's last
+    full step at the same design (solvers.STALE_RTOL), instead of being factorised: the
+    gradient equals the one of the tangent factorised (a STALE_RTOL of 1e-300, which no
+    Krylov solve reaches: every such solve factorises) to 1e-9 of its largest entry (1.0e-15
+    fixed, 2.4e-15 follower when written), and passes the FD check."""
+    from pacto_ng.physics import solvers
+
+    grads = {}
+    for reuse in (True, False):
+        if not reuse:
+            monkeypatch.setattr(solvers, "STALE_RTOL", 1e-300)
+        chain, (_, _, mech), x0 = _chain("neohookean", load, "direct")
+        chain.forward(x=x0)
+        grads[reuse] = chain.gradient("objective")
+        info = mech.solver_info
+        assert info["factors_reused"] > 0
+        assert info["factors_reused_failed"] == (0 if reuse else info["factors_reused"])
+        if reuse:
+            errs = {name: _fd(chain, name, x0).rel_error for name in ("objective", "delta", "se")}
+            assert max(errs.values()) < FD_TOL, errs
+    assert np.max(np.abs(grads[True] - grads[False])) <= 1e-9 * np.max(np.abs(grads[False]))
