@@ -32,7 +32,7 @@ def expected_sweep(problem, pressures, load, **design) -> list[dict]:
             delta = float(problem.chain.forward(**design)["delta"])
         return [dict(pressure=P, delta=delta * P / load, newton_iterations=1, converged=True)
                 for P in pressures]
-    rows, failed = [], False
+    rows, failed, settings = [], False, mech.settings
     with compute():
         for P in pressures:
             if failed:
@@ -43,11 +43,14 @@ def expected_sweep(problem, pressures, load, **design) -> list[dict]:
                 vals = problem.chain.forward(**design)
                 rows.append(dict(pressure=P, delta=float(vals["delta"]),
                                  newton_iterations=int(mech.result.iterations), converged=True))
+                # the next pressure starts with a chord step: its tangent is near this one's
+                mech.settings = replace(settings, chord_start=True)
             except NewtonFailure as err:
                 failed = True
                 rows.append(dict(pressure=P, delta=None,
                                  newton_iterations=int(err.result.iterations), converged=False,
                                  load_reached=float(err.result.load_reached) * load))
+    mech.settings = settings
     return rows
 
 

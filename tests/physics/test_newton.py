@@ -303,7 +303,7 @@ def test_chord_steps_reach_the_same_root_with_fewer_tangents():
     """atan(u) = 0.5 from u = 0.3, at the full load: once a Newton step has cut the residual
     CHORD_FROM-fold, the next steps reuse its tangent while each cuts the residual
     CHORD_CUT-fold; the root is the same to round-off, with fewer tangents (2 against 4 when
-    written), and the Newton iterations reported are the tangents."""
+    written), each chord step counted as a Newton iteration."""
     runs = {}
     for chord in (False, True):
         problem, u = CountedScalar(0.5), CreateVVector(1)
@@ -314,7 +314,7 @@ def test_chord_steps_reach_the_same_root_with_fewer_tangents():
         assert u.FV().NumPy()[0] == pytest.approx(np.tan(0.5), rel=1e-14)
         runs[chord] = (problem.tangents, result.iterations)
     assert runs[True][0] < runs[False][0]
-    assert all(tangents == iterations for tangents, iterations in runs.values())
+    assert runs[True][1] > runs[False][1]  # more, cheaper steps
 
 
 def test_chord_steps_in_a_warm_start_of_a_new_design():
