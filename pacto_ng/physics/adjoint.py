@@ -55,7 +55,8 @@ class Adjoint:
         return lag
 
     def _ensure_tangent(self):
-        """Factorise the tangent at the converged state (once per forward pass)."""
+        """The tangent at the converged state, ready to solve with (once per forward pass):
+        factorised, or preconditioned by the factorisation of Newton's last full step."""
         if self._adjoint_ready:
             return
         # a linear problem's tangent does not depend on u: the one Newton factorised is exact;
