@@ -258,25 +258,23 @@ class LinearSolver:
         out.data += inner * rhs
 
     def _solve(self, rhs, out, rtol, transpose, strict):
-        if self.direct:
-            inv = self._inv.T if transpose and not self.symmetric else self._inv
-            if self._stale:
-                self.stale_solves += 1
-                free = rhs.CreateVector()
-                self._on_free_dofs(rhs, free)
-                krylov = self._krylov(inv, free, out, STALE_RTOL, STALE_ITERATIONS, transpose)
-                res = krylov.residuals
-                if res and (res[0] == 0 or res[-1] <= STALE_RTOL * res[0]):
-                    return
-                self.stale_failed += 1
-                self.prepare()  # too far from the factorised matrix: factorise this one
-                inv = self._inv.T if transpose and not self.symmetric else self._inv
-            out.data = inv * rhs
+        inverse = lambda: self._inv.T if transpose and not self.symmetric else self._inv
+        if self.direct and not self._stale:
+            out.data = inverse() * rhs
             return
         if self.freedofs is not None:
             free = rhs.CreateVector()
             self._on_free_dofs(rhs, free)
             rhs = free
+        if self.direct:  # preconditioned by the factorisation of an earlier matrix
+            self.stale_solves += 1
+            krylov = self._krylov(inverse(), rhs, out, STALE_RTOL, STALE_ITERATIONS, transpose)
+            res = krylov.residuals
+            if not (res and (res[0] == 0 or res[-1] <= STALE_RTOL * res[0])):
+                self.stale_failed += 1
+                self.prepare()  # too far from the factorised matrix: factorise this one
+                out.data = inverse() * rhs
+            return
         tol = self.rtol if rtol is None else float(rtol)
         krylov = self._krylov(self._pre.mat, rhs, out, tol, MAX_ITERATIONS, transpose)
         res = krylov.residuals

@@ -33,6 +33,7 @@ def expected_sweep(problem, pressures, load, **design) -> list[dict]:
         return [dict(pressure=P, delta=delta * P / load, newton_iterations=1, converged=True)
                 for P in pressures]
     rows, failed, settings = [], False, mech.settings
+    chord = replace(settings, chord_start=True)
     with compute():
         for P in pressures:
             if failed:
@@ -44,7 +45,7 @@ def expected_sweep(problem, pressures, load, **design) -> list[dict]:
                 rows.append(dict(pressure=P, delta=float(vals["delta"]),
                                  newton_iterations=int(mech.result.iterations), converged=True))
                 # the next pressure starts with a chord step: its tangent is near this one's
-                mech.settings = replace(settings, chord_start=True)
+                mech.settings = chord
             except NewtonFailure as err:
                 failed = True
                 rows.append(dict(pressure=P, delta=None,
