@@ -20,7 +20,7 @@ from .design_path import field_values, follow
 from .materials import jacobian
 from .newton import NewtonResult, solve_with_continuation
 from .quadrature import element_points, guard_rules
-from .solvers import LinearSolver, adjoint_rtol
+from .solvers import STALE_FORCING, LinearSolver, adjoint_rtol
 
 #: with contact, a warm start gives up after this many Newton iterations without a new
 #: smallest residual (a load ramp from zero then takes over; a load ramp's steps may take up
@@ -233,20 +233,23 @@ class Equilibrium:
     def solve_tangent(self, rhs, out):
         """``out = K⁻¹ rhs``.  A linear problem's Krylov solve stops once the residual's norm
         on the free dofs is half what Newton's convergence test asks (``rtol |f|``, ``|f|``
-        the load norm): one solve per design.  A nonlinear problem's stops at the relative
-        tolerance ``max(0.1 rtol |f| / |rhs|, min(0.01, |rhs| / |f|))`` of the preconditioned
-        norm (``|rhs|`` the residual's): never tighter than a tenth of what Newton's
+        the load norm): one solve per design.  A nonlinear problem's (the iterative route's,
+        or a sweep's preconditioned by an earlier factorisation) stops at the relative
+        tolerance ``max(0.1 rtol |f| / |rhs|, min(c, |rhs| / |f|))`` of the preconditioned
+        norm (``|rhs|`` the residual's; ``c`` 0.01, or :data:`~.solvers.STALE_FORCING`
+        preconditioned by a factorisation): never tighter than a tenth of what Newton's
         convergence test asks, and loose far from equilibrium (an inexact Newton step whose
         forcing term shrinks with the residual)."""
         rtol = residual = None
-        if not self._solver.direct:
+        if not (self._solver.direct and self.linear):
             ref = self.load_norm(self.target)
             if self.linear:
                 residual = 0.5 * self.settings.rtol * ref
             else:
                 res = free_norm(rhs, self.free)
                 if res > 0 and ref > 0:
-                    rtol = max(0.1 * self.settings.rtol * ref / res, min(1e-2, res / ref))
+                    cap = STALE_FORCING if self._solver.direct else 1e-2
+                    rtol = max(0.1 * self.settings.rtol * ref / res, min(cap, res / ref))
         self._solver.solve(rhs, out, rtol=rtol, residual=residual, strict=False)
 
     @property

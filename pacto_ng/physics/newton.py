@@ -89,11 +89,17 @@ class NewtonSettings:
     # chord steps made more steps easy: 1e9 Pa on the Neo-Hookean pa-inverter of
     # tests/physics/test_extremes.py then lost the load at its last increment)
     chord: bool = True
-    # a warm start's first step is a chord step with the last factorised tangent (a part's
-    # sweep over pressures: the last pressure's, near where the response is near-linear;
-    # across designs it was rarely near: 40 of 146 chord steps undone over 40 iterations of
-    # pneunet-3d, the same tangents assembled)
-    chord_start: bool = False
+    # a sweep of one design over loads (a part's pressures, the expected sweep): the last
+    # factorised tangent, the last load's, is near every tangent of the next load, where the
+    # response is near-linear.  The warm start's first step is a chord step with it, and each
+    # symmetric tangent is solved by CG preconditioned by it, factorised only where CG does
+    # not converge (solvers.STALE_FORCING; LinearSolver.prepare(near=True)); not a follower
+    # load's: UMFPACK's triangular solves cost 3.4 times sparse Cholesky's (1.11 against 0.33
+    # s at 90 249 dofs), and with GMRES pneunet-3d's part took 117 s for its follower sweep
+    # against 101 s factorised, where the fixed one's fell from 73 to 54 s.  Across
+    # designs the last tangent was rarely near: 40 of 146 chord steps undone over 40
+    # iterations of pneunet-3d, the same tangents assembled
+    sweep: bool = False
     # "guard" (admissibility only), "residual" (Armijo on |R|) or "guard+residual" (the
     # guard's, stopping after GUARD_STALL iterations without progress; where it fails, the
     # residual's from the same start)
@@ -241,7 +247,7 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
     it = 0
     prev = np.inf
     lowest, since = res, 0  # the smallest residual so far, and iterations since it
-    chord = s.chord and s.chord_start and not linear  # the next step reuses the last tangent
+    chord = s.chord and s.sweep and not linear  # the next step reuses the last tangent
     while res > tol:
         if res < 1e-7 * ref and res > 0.5 * prev:
             break  # stagnation at the round-off floor, far below any meaningful tolerance
@@ -259,7 +265,10 @@ def newton_step_solve(problem, u, load, ref, s: NewtonSettings, linear=False):
                 lowest, since = (res, 0) if res < lowest else (lowest, since)
                 continue
             chord, since = False, since + 1  # undone: r is again u's residual
-        problem.assemble_tangent(u, load)
+        if s.sweep and problem.symmetric:
+            problem.assemble_tangent(u, load, near=True)
+        else:
+            problem.assemble_tangent(u, load)
         problem.solve_tangent(r, du)
         alpha = 1.0
         new, best_res = np.inf, np.inf

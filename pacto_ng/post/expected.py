@@ -33,7 +33,7 @@ def expected_sweep(problem, pressures, load, **design) -> list[dict]:
         return [dict(pressure=P, delta=delta * P / load, newton_iterations=1, converged=True)
                 for P in pressures]
     rows, failed, settings = [], False, mech.settings
-    chord = replace(settings, chord_start=True)
+    sweep = replace(settings, sweep=True)
     with compute():
         for P in pressures:
             if failed:
@@ -44,8 +44,8 @@ def expected_sweep(problem, pressures, load, **design) -> list[dict]:
                 vals = problem.chain.forward(**design)
                 rows.append(dict(pressure=P, delta=float(vals["delta"]),
                                  newton_iterations=int(mech.result.iterations), converged=True))
-                # the next pressure starts with a chord step: its tangent is near this one's
-                mech.settings = chord
+                # the next pressure's tangents are near this one's (NewtonSettings.sweep)
+                mech.settings = sweep
             except NewtonFailure as err:
                 failed = True
                 rows.append(dict(pressure=P, delta=None,

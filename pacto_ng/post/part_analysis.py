@@ -317,8 +317,8 @@ class PartAnalysis:
         except NewtonFailure as failure:
             res = failure.result
             return self._failed(P, res.iterations, res.load_reached / abs(P) if P else 0.0)
-        # the next pressure starts with a chord step: its tangent is near this one's
-        self.mech.settings = dataclasses.replace(self.mech.settings, chord_start=True)
+        # the next pressure's tangents are near this one's (NewtonSettings.sweep)
+        self.mech.settings = dataclasses.replace(self.mech.settings, sweep=True)
         return self._read(P, iterations)
 
     def sweep(self, pressures, *, say: Callable[[str], None] | None = None) -> Sweep:

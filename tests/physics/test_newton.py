@@ -6,6 +6,8 @@ Neo-Hookean ``P11 = μ (λ1 - 1/λ1) + λ ln λ1 / λ1`` (unbounded as λ1 -> 0)
 ``P11 = (λ + 2μ) λ1 (λ1² - 1) / 2``, whose compressive force is largest, ``(λ + 2μ) / (3√3)``,
 at λ1 = 1/√3: beyond that no equilibrium with J > 0 exists.
 """
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from ngsolve.la import CreateVVector
@@ -343,3 +345,30 @@ def test_chord_steps_in_a_warm_start_of_a_new_design():
     full, chorded = runs[False][0], runs[True][0]
     assert np.linalg.norm(chorded - full) <= 1e-10 * np.linalg.norm(full)
     assert runs[True][1] < runs[False][1]
+
+
+def test_a_sweep_solves_its_tangents_preconditioned_by_the_last_factorisation():
+    """The Neo-Hookean cantilever swept over 1e5, 2e5, 3e5 N, each load warm-started from the
+    last: with ``sweep`` (after the first load, as a part's analysis sets it) each tangent is
+    solved by CG preconditioned by the last factorisation, to 1e-12; the equilibria equal those
+    of factorised tangents (to 1e-10 of them, both at a residual of 1e-12 of the load), with
+    fewer factorisations (7 against 15 when written: 10 solves preconditioned, 2 of them
+    factorised after all)."""
+    mesh = cantilever_mesh("trig")
+    runs = {}
+    for sweep in (False, True):
+        mech = cantilever(mesh, "neohookean", 1, load=3e5,
+                          newton=NewtonSettings(rtol=1e-12, chord=False))
+        states = []
+        for target in (1 / 3, 2 / 3, 1.0):
+            mech.target = target
+            states.append(mech.forward(np.ones(mesh.ne)).FV().NumPy().copy())
+            assert mech.result.converged
+            mech.settings = replace(mech.settings, sweep=sweep)
+        runs[sweep] = (states, mech.solver_info)
+    for full, swept in zip(runs[False][0], runs[True][0]):
+        assert np.linalg.norm(swept - full) <= 1e-10 * np.linalg.norm(full)
+    full, swept = runs[False][1], runs[True][1]
+    assert full["factors_reused"] == 0 and swept["solves"] == full["solves"]
+    factorised = swept["solves"] - swept["factors_reused"] + swept["factors_reused_failed"]
+    assert factorised < full["solves"] // 2 + 1
