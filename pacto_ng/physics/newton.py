@@ -90,15 +90,11 @@ class NewtonSettings:
     # tests/physics/test_extremes.py then lost the load at its last increment)
     chord: bool = True
     # a sweep of one design over loads (a part's pressures, the expected sweep): the last
-    # factorised tangent, the last load's, is near every tangent of the next load, where the
-    # response is near-linear.  The warm start's first step is a chord step with it, and each
-    # symmetric tangent is solved by CG preconditioned by it, factorised only where CG does
-    # not converge (solvers.STALE_FORCING; LinearSolver.prepare(near=True)); not a follower
-    # load's: UMFPACK's triangular solves cost 3.4 times sparse Cholesky's (1.11 against 0.33
-    # s at 90 249 dofs), and with GMRES pneunet-3d's part took 117 s for its follower sweep
-    # against 101 s factorised, where the fixed one's fell from 73 to 54 s.  Across
-    # designs the last tangent was rarely near: 40 of 146 chord steps undone over 40
-    # iterations of pneunet-3d, the same tangents assembled
+    # load's factorised tangent is near the next load's.  The warm start's first step is a
+    # chord step with it, and each symmetric tangent is solved by CG preconditioned by it
+    # (solvers.STALE_FORCING; LinearSolver.prepare(near=True)); not a follower load's:
+    # UMFPACK's triangular solves cost 3.4 times sparse Cholesky's, and GMRES took pneunet-3d's
+    # follower sweep from 101 to 117 s.  Across designs the last tangent was rarely near
     sweep: bool = False
     # "guard" (admissibility only), "residual" (Armijo on |R|) or "guard+residual" (the
     # guard's, stopping after GUARD_STALL iterations without progress; where it fails, the
