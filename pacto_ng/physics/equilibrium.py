@@ -241,7 +241,7 @@ class Equilibrium:
         convergence test asks, and loose far from equilibrium (an inexact Newton step whose
         forcing term shrinks with the residual)."""
         rtol = residual = None
-        if not (self._solver.direct and self.linear):
+        if self._solver.krylov:
             ref = self.load_norm(self.target)
             if self.linear:
                 residual = 0.5 * self.settings.rtol * ref

@@ -205,6 +205,12 @@ class LinearSolver:
         """Whether the route is the direct factorisation."""
         return self.kind == "direct"
 
+    @property
+    def krylov(self) -> bool:
+        """Whether the next solve is by Krylov iterations (the iterative route, or the direct
+        one preconditioned by an earlier matrix's factorisation), to which a tolerance applies."""
+        return not self.direct or self._stale
+
     def prepare(self, near: bool = False):
         """Make the solver ready for the form's current matrix (after each assembly): the
         direct route factorises it (the first time) or refactorises it numerically; the
