@@ -53,7 +53,8 @@ def _show_parameters(case, params: Parameters):
     derived = {**params.mechanics.set_by_material(), **params.derived}
     for name, val, unit, help_ in params.describe(units):
         how = f"  ({derived[name]})" if name in derived else ""
-        print(f"  {name:18s} {val!s:>12s} {unit:12s} {help_}{how}")
+        shown = f"{val:.10g}" if isinstance(val, float) else str(val)  # not 0.8908799999999999
+        print(f"  {name:18s} {shown:>12s} {unit:12s} {help_}{how}")
     if not case.analysis_only:  # the set-up's objective scale, where derived
         found = case.derived_objective_ref(params)
         if found is not None:
