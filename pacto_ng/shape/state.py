@@ -258,7 +258,14 @@ class PartState:
         out.data = self._inverse * rhs
 
     def solve_transposed(self, rhs, out):
-        """``Kᵀ out = rhs`` with the last factorised tangent."""
+        """``Kᵀ out = rhs`` with the last factorised tangent; with contact, the tangent at the
+        state with the pairs' motion (:meth:`~.contact_term.ShapeContact.with_motion`),
+        factorised for this solve."""
+        if self.contact is not None:
+            tangent = self.contact.with_motion(self.state.vec)
+            inverse = tangent.Inverse(self.states.FreeDofs(), inverse="umfpack")
+            out.data = inverse.T * rhs
+            return
         out.data = (self._inverse if self._symmetric() else self._inverse.T) * rhs
 
     def admissible(self, vec) -> bool:
