@@ -95,19 +95,11 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
     dim = problem.mesh.dim
     params = analysis_params(run.params, model, order or PART_ORDER[dim])
     maxh = PART_MAXH[dim] * problem.h if maxh is None else float(maxh)
-    est = part_estimate(problem, maxh, params.order, kinds)
-    seconds = check_resources(est, f"--maxh = {maxh:g}", dim=dim, kinds=kinds,
-                              n_pressures=len(pressures), model=params.model,
-                              mesh_time_limit=run.params.mesh_time_limit, time_limit=time_limit)
-    say(quiet, f"  the part at maxh {maxh:g}, order {params.order}: about {est.elements:.3g} "
-                f"{est.kind}, {est.dofs:.3g} dofs; the analysis about {seconds:.3g} s, "
-                f"{est.memory / 1e9:.2g} GB")
+    limits = dict(dim=dim, kinds=kinds, n_pressures=len(pressures), model=params.model,
+                  mesh_time_limit=run.params.mesh_time_limit, time_limit=time_limit)
+    check_resources(part_estimate(problem, maxh, params.order, kinds), f"--maxh = {maxh:g}",
+                    **limits)  # before meshing: the mesh's time and memory, from Σ a ρ̄
     entry, p_final = _rebuilt_entry(run, problem, quiet)
-    design = _at_part_order(problem, params.order, entry, quiet)
-    expected = expected_sweep(design, pressures, run.load, x=run.x)
-    say(quiet, "  expected Δ: " + ", ".join(
-        f"{r['pressure']:.3g} -> {r['delta']:.4g}" if r["converged"] else
-        f"{r['pressure']:.3g} -> failed" for r in expected))
     part = make_part(problem, setup, threshold=threshold_value, maxh=maxh,
                      threshold2=threshold2, connect=connect, pressure=p_final, p_in=run.load,
                      mesh_time_limit=run.params.mesh_time_limit)
@@ -115,6 +107,16 @@ def analyse_run(folder, *, pressures=None, threshold_value=0.5, maxh=None, order
                 f"{part.measure:.4g} {'m²' if dim == 2 else 'm³'}"
                 + ("" if part.seal is None else
                    f", {'sealed' if part.sealed else 'NOT SEALED'}"))
+    est = part_estimate(problem, maxh, params.order, kinds, mesh=part.mesh)
+    seconds = check_resources(est, f"--maxh = {maxh:g}", **limits)  # the part as meshed
+    say(quiet, f"  the part at maxh {maxh:g}, order {params.order}: {est.elements:.5g} "
+                f"{est.kind}, {est.dofs:.5g} dofs; the analysis about {seconds:.3g} s, "
+                f"{est.memory / 1e9:.2g} GB")
+    design = _at_part_order(problem, params.order, entry, quiet)
+    expected = expected_sweep(design, pressures, run.load, x=run.x)
+    say(quiet, "  expected Δ: " + ", ".join(
+        f"{r['pressure']:.3g} -> {r['delta']:.4g}" if r["converged"] else
+        f"{r['pressure']:.3g} -> failed" for r in expected))
     darcy = _thresholded_darcy(problem, part)
     rounded = rounded_sweep(design, part, pressures, run.load)
     if rounded is not None:
