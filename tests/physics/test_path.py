@@ -20,6 +20,7 @@ import pytest
 
 from benchmarks.limit_point import A, closed_form, closed_peak, inflated, sphere_octant
 from pacto_ng.physics.path import trace
+from pacto_ng.post import past_peak
 
 
 @pytest.fixture(scope="module")
@@ -54,13 +55,15 @@ def test_the_path_through_the_maximum_is_the_closed_forms(analysis, one_thread):
     assert point.converged and point.delta == pytest.approx(ua[k], rel=1e-8)
 
 
-def test_a_sweep_past_the_maximum_reports_it(analysis, one_thread):
+def test_a_sweep_past_the_maximum_reports_it(analysis, one_thread, monkeypatch):
     """A sweep to a pressure above the maximum: Newton loses the equilibrium, the path is
     followed on, the pressure falls and never comes back (a Neo-Hookean sphere does not
-    stiffen again), so the point is not converged and the maximum is reported, within 0.2 %
+    stiffen again; within 20 path steps here, where the library allows 60: 15 s against 105 s
+    in the suite), so the point is not converged and the maximum is reported, within 0.2 %
     of the closed form's and where it lies; the path's pressures against the chamber's volume
     are the closed form's to 0.15 % up to the stretch 2.5."""
     peak, at = closed_peak()
+    monkeypatch.setattr(past_peak, "PEAK_STEPS", 20)  # the stretch 2.5 is passed by then
     lines = []
     sweep = analysis.sweep([0.5 * peak, 1.05 * peak], say=lines.append)
     assert [p.converged for p in sweep.points] == [True, False]
@@ -75,7 +78,7 @@ def test_a_sweep_past_the_maximum_reports_it(analysis, one_thread):
     path = sweep.path
     assert len(path) > 5 and np.all(np.diff([q["volume_change"] for q in path]) > 0)
     # to the stretch 2.5 (measured within 8.7e-4 at this maxh 0.2; further on the thinning
-    # shell outruns the mesh: 1.0e-2 at the stretch 4.8 the path reaches, 8.0e-3 at 0.15)
+    # shell outruns the mesh: 1.0e-2 at the stretch 4.8 the path reaches in 60 steps, 8.0e-3 at 0.15)
     stretches = (A ** 3 + 6.0 * np.array([q["volume_change"] for q in path]) / np.pi) ** (
         1.0 / 3.0) / A
     assert stretches[-1] > 2.5
