@@ -89,6 +89,7 @@ def objectives(folder):
 RUN = ("cantilever-3d", "--maxh", "0.06", "--quiet")
 
 
+@pytest.mark.slow  # 20-40 s: the default suite stays under 10 minutes
 def test_mpi_run_and_resume_across_rank_counts(tmp_path):
     """``mpirun -n 3 pacto run`` (two ranks holding elements) gives the serial run's objective
     history to 1e-8, and its design.vtu the serial run's displacement and element fields; a run of 3 iterations on 3 ranks resumed serially, and one of 3 serial
@@ -162,6 +163,7 @@ def test_a_distributed_run_writes_the_serial_run_s_figures_and_pictures(tmp_path
     assert abs(half.shape[0] - half.shape[1]) <= 0.1 * half.shape[0]
 
 
+@pytest.mark.slow  # 20-40 s: the default suite stays under 10 minutes
 def test_a_distributed_run_makes_the_serial_run_s_part(tmp_path):
     """``mpirun -n 3 pacto run`` of a pressure case makes its part as the serial run does: rank
     0 analyses the final design on the serial mesh and makes, checks and analyses the part

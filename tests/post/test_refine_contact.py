@@ -71,6 +71,7 @@ def test_the_walls_overlap_is_measured_on_the_displacement(formulation):
     assert overlaps[0] == 0.0 and overlaps[1] > 0.1
 
 
+@pytest.mark.slow  # 20-40 s: the default suite stays under 10 minutes
 def test_a_3d_part_s_walls_are_probed_and_the_part_analysed_with_them_in_contact():
     """A 3D part's walls are probed at one point per face (part_stage.PROBE_INTORDER_3D): the
     slotted slab's overlap at 3 kPa within 15 % of the contact quadrature's (11 % on these
