@@ -215,13 +215,14 @@ class ShapeContact:
         base = self._positions(vec)
         shifted, r = base.CreateVector(), base.CreateVector()
         held, moved = np.zeros(len(rows)), np.zeros(len(rows))
+        entries = [colour[cols] == c for c in range(int(colour.max()) + 1)]  # one per row
         with self._reference():
             for anew, out in ((False, held), (True, moved)):  # every pairing anew last
-                for c in range(int(colour.max()) + 1):
-                    at = colour[cols] == c  # each row meets one column of the colour
+                for at in entries:
+                    group = np.unique(cols[at])
                     for sign in (1.0, -1.0):
                         shifted.data = base
-                        shifted.FV().NumPy()[np.unique(cols[at])] += sign * self._step
+                        shifted.FV().NumPy()[group] += sign * self._step
                         if anew:
                             self.contact.update(self.form, shifted)
                         self.form.Apply(shifted, r)
