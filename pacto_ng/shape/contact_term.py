@@ -27,7 +27,7 @@ motion (the paired point sliding along the other wall carries the contact force 
 dofs, a term of the order of the contact pressure over the modulus), which
 :meth:`ShapeContact.pair_motion` adds by central differences of the residual paired anew.
 Without ``C`` the gradient was 0.12 off at 30 kPa on a block of 1 MPa, and 5.7e-4 to 3.1e-3
-at 3 kPa; with it, within 1e-7 of central differences of the re-solved state (pairs sought
+at 3 kPa; with it, within 1.2e-7 of central differences of the re-solved state (pairs sought
 anew at every shape: tests/shape/test_contact_gradient.py).  ``C`` costs two pairings per
 colour of its columns (about 20-30 colours in 2D, 60 in 3D at order 1).
 

@@ -11,13 +11,14 @@ V moves every wall of the part, the slot's too.
 
 The gradient holds the pairs' motion (ShapeContact.pair_motion: the contact residual's
 derivative with the pairs sought anew, by central differences of the residual): measured
-(2026-12-07, differences of the state at the step 1e-3) 2.4e-9 (linear), 1.2e-9 (Neo-Hookean
-at ν = 0.49, the mixed formulation) at 3 kPa, 1.2e-8 at 30 kPa; at the step 1e-4 the
-differences' own noise (Newton's tolerance over the step) is 2e-7.  Without the pairs'
+(2026-12-07, differences of the state at the step 1e-3) 2.2e-9 (linear), 6.0e-8
+(Neo-Hookean), 1.2e-7 (Neo-Hookean at ν = 0.49, the mixed formulation) at 3 kPa, 4.4e-9 at
+30 kPa; at the step 1e-4 the differences' own noise (Newton's tolerance over the step) is
+2e-7.  Without the pairs'
 motion (NGSolve's tangent, which holds the pairs) the error was 5.7e-4, 8.7e-5 and 1.5e-3 at
 3 kPa, 6.2e-3 at first touch (1.1 kPa) and 0.12 at 30 kPa.  Without the contact's term at
 all the error is 0.20 at 3 kPa (the term is a fifth of the derivative).  In 3D (the block
-extruded 0.2 m, held in plane strain, tetrahedra of 0.1 m, order 1; slow): 7.3e-8, where
+extruded 0.2 m, held in plane strain, tetrahedra of 0.1 m, order 1; slow): 5.1e-9, where
 it was 2.6e-3."""
 import numpy as np
 import pytest
