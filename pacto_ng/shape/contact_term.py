@@ -198,14 +198,14 @@ class ShapeContact:
 
     def pair_motion(self, vec):
         """``C``: what the pairs' motion adds to ``∂R_c/∂u`` at ``u`` = ``vec`` (its pairs
-        current), or None without pairs.  ``R_c`` pairs at the positions it is given; the
+        current, ``H`` of the last :meth:`tangent` at ``vec``), or None without pairs.  ``R_c`` pairs at the positions it is given; the
         tangent ``H`` holds them.  Each column of ``C`` is the central difference of ``R_c``
         paired anew at ``u ± ε e_j``, less that of ``R_c`` with the pairs held (``H e_j`` to
         the differences' own error, the kink of ``max(g, 0)²`` alike in both), for the
         columns of the dofs coupled to a pair in contact, several at once where no row of
         ``H``'s pattern joins them (Curtis, Powell & Reid 1974); ``ε`` = :data:`MOTION_STEP`
         element sizes.  The pairs are sought anew at ``vec`` at the end."""
-        rows, cols, vals = (np.asarray(p) for p in self.tangent(vec).COO())
+        rows, cols, vals = (np.asarray(p) for p in self.form.mat.COO())  # H at vec
         touching = np.unique(rows[vals != 0.0])  # the dofs of pairs in contact
         keep = np.isin(rows, touching) | np.isin(cols, touching)
         rows, cols = rows[keep], cols[keep].astype(np.int64)
