@@ -20,7 +20,7 @@ from .design_path import field_values, follow
 from .materials import jacobian
 from .newton import NewtonResult, solve_with_continuation
 from .quadrature import element_points, guard_rules
-from .solvers import STALE_FORCING, LinearSolver, adjoint_rtol
+from .solvers import LinearSolver, adjoint_rtol
 
 #: with contact, a warm start gives up after this many Newton iterations without a new
 #: smallest residual (a load ramp from zero then takes over; a load ramp's steps may take up
@@ -70,14 +70,13 @@ class Equilibrium:
         from the load vectors) choose the load norm's route."""
         from ngsolve import VOL, GridFunction, Grad, LinearForm
 
-        # the tangent's solver (solvers.py): its preconditioner, if any, is registered on the
-        # form before the first assembly; a linear system's K is then assembled by its form
-        # at every design (the element-matrix scatter would bypass the preconditioner)
+        # the tangent's solver (solvers.py), its preconditioner registered before the first
+        # assembly: a linear K is assembled by its form (not by the element-matrix scatter)
         form = self._lin.a if self._lin is not None else self.a
-        self._solver = LinearSolver(form, self.space.FreeDofs(form.condense),
-                                    setting=self.settings.solver,
-                                    symmetric=self.symmetric, order=self.order,
-                                    inverse=self.inverse_type, coarse=coarse)
+        self._solver = LinearSolver(
+            form, self.space.FreeDofs(form.condense), setting=self.settings.solver,
+            symmetric=self.symmetric, order=self.order, inverse=self.inverse_type,
+            coarse=coarse, at_rest=self._tangent_form if self._lin is None else None)
         if self._lin is not None and not self._solver.direct:
             self._lin.element_matrices = False
         self.settings = self.settings.for_route(self._solver.direct)  # Newton's tolerance
@@ -236,8 +235,8 @@ class Equilibrium:
         the load norm): one solve per design.  A nonlinear problem's (the iterative route's,
         or a sweep's preconditioned by an earlier factorisation) stops at the relative
         tolerance ``max(0.1 rtol |f| / |rhs|, min(c, |rhs| / |f|))`` of the preconditioned
-        norm (``|rhs|`` the residual's; ``c`` 0.01, or :data:`~.solvers.STALE_FORCING`
-        preconditioned by a factorisation): never tighter than a tenth of what Newton's
+        norm (``|rhs|`` the residual's; ``c`` the solver's
+        :attr:`~.solvers.LinearSolver.forcing`): never tighter than a tenth of what Newton's
         convergence test asks, and loose far from equilibrium (an inexact Newton step whose
         forcing term shrinks with the residual)."""
         rtol = residual = None
@@ -248,7 +247,7 @@ class Equilibrium:
             else:
                 res = free_norm(rhs, self.free)
                 if res > 0 and ref > 0:
-                    cap = STALE_FORCING if self._solver.direct else 1e-2
+                    cap = self._solver.forcing
                     rtol = max(0.1 * self.settings.rtol * ref / res, min(cap, res / ref))
         self._solver.solve(rhs, out, rtol=rtol, residual=residual, strict=False)
 
@@ -399,6 +398,7 @@ class Equilibrium:
             else:
                 f.gf.vec.data = v
         self._tangent_at = None  # a new design: any factorisation is stale
+        self._solver.new_design()  # ... and a preconditioner built at rest
         self._fbody_stale = True  # ... and so is the body load (it depends on the fields)
         if self._lin is not None:
             self._lin.stale = True

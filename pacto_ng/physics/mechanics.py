@@ -256,15 +256,24 @@ class Mechanics(Equilibrium, Adjoint):
         u, v = self.displacement(x), self.displacement(self.space.TestFunction())
         self.gfx = GridFunction(self.space)  # the state: u, or (u, ϑ, p̃)
         self.gfu = self.displacement(self.gfx)  # the displacement (a view of the state)
-        # the mixed formulation's element fields are condensed out of the tangent
-        self.a = BilinearForm(self.space, symmetric=self.symmetric,
-                              condense=self.mixed is not None)
-        with symbolic_linearisation(symbolic_tangent(self.mesh.dim, self.formulation)):
-            self.a += Variation(self.potential(x))
-            if residual_density is not None:
-                self.a += self.hot(self.residual_density(u, v)) * self.DX
-            if residual_terms is not None:
-                self.a += residual_terms(u, v, self.load)
+
+        def tangent_form():
+            # the mixed formulation's element fields are condensed out of the tangent
+            a = BilinearForm(self.space, symmetric=self.symmetric,
+                             condense=self.mixed is not None)
+            with symbolic_linearisation(symbolic_tangent(self.mesh.dim, self.formulation)):
+                a += Variation(self.potential(x))
+                if residual_density is not None:
+                    a += self.hot(self.residual_density(u, v)) * self.DX
+                if residual_terms is not None:
+                    a += residual_terms(u, v, self.load)
+            return a
+
+        self.a = tangent_form()
+        # a second form of the same tangent, for the iterative route's preconditioner of a
+        # nonlinear energy, assembled at rest once per design (LinearSolver, ``at_rest``)
+        nonlinear = not (self.linear or self._traits.quadratic)
+        self._tangent_form = tangent_form if nonlinear and self.mixed is None else None
         # the body force is linear in u: its residual is a LinearForm, assembled once per design,
         # not re-evaluated (and differentiated twice) in every Newton iteration (measured: the
         # Darcy body term doubled the cost of AssembleLinearization of a Neo-Hookean form)

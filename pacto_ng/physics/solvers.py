@@ -17,7 +17,12 @@ preconditioned Krylov solver beyond.
   regions where the form has boundary terms (a spring's face), so that BDDC's coarse
   (wirebasket) problem is the vertex problem (an eighth of the dofs), solved by a direct
   factorisation; with NGSolve's default (edges in the wirebasket) every order-2 dof is
-  coarse and BDDC is a direct solve.  The transpose
+  coarse and BDDC is a direct solve.  A nonlinear model's tangent changes at every Newton
+  step, and away from rest it can be indefinite (crushed void elements, compression), where
+  BDDC built on it fails (CG diverged on the Neo-Hookean cantilever-3d at its full load): its
+  preconditioner is BDDC built once per design on the same tangent at rest (the design's
+  small-strain stiffness, symmetric positive definite), and its Newton steps and adjoint are
+  solved by GMRES with it.  The transpose
   solve (an unsymmetric adjoint) is GMRES on ``Aᵀ`` with the same preconditioner (it
   approximates ``A⁻¹``; the follower tangent is a perturbation of a symmetric one).
 
@@ -40,7 +45,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..parallel import distributed, free_norm
+from ..parallel import distributed
+from .krylov import KrylovRun, cg_to_residual, gmres
 
 SOLVERS = ("auto", "direct", "iterative")
 
@@ -76,6 +82,10 @@ STALE_ITERATIONS = 10
 #: costs a fraction of the tangent's assembly, while a looser solve made the Newton steps chord
 #: steps (pneunet-3d's part at 32 kPa: 16 Newton iterations at 1e-2 against 9 factorised)
 STALE_FORCING = 1e-6
+#: ... and one solved by GMRES with BDDC built on the tangent at rest (``at_rest``): at 1e-2,
+#: 34 Newton iterations where the tangent's own BDDC took 9 (cantilever-3d, maxh 0.06, order
+#: 2, Neo-Hookean, a random design); at 1e-4 and 1e-6, 9
+AT_REST_FORCING = 1e-4
 
 
 def adjoint_rtol(newton_rtol: float) -> float:
@@ -163,11 +173,16 @@ class LinearSolver:
         In 3D at order >= 2, the regions (boundaries, edges, points) where the form has
         boundary terms, whose dofs stay in BDDC's coarse space (None: every boundary; see
         :func:`_vertex_coarse_space`).
+    at_rest : callable or None
+        A nonlinear tangent's: makes a second form of the same tangent.  On the iterative
+        route the preconditioner is built on it, linearised at rest (``u = 0``: the design's
+        small-strain stiffness) once per design (:meth:`new_design`), and the tangents of the
+        design's Newton steps and its adjoint are solved by GMRES with it (see the module).
     """
 
     def __init__(self, form, freedofs=None, *, setting: str = "auto", symmetric: bool = True,
                  order: int = 1, inverse: str | None = None, rtol: float = ADJOINT_RTOL,
-                 coarse=None):
+                 coarse=None, at_rest=None):
         from ngsolve import Preconditioner
 
         fes = form.space
@@ -185,6 +200,8 @@ class LinearSolver:
         self.stale_solves = 0  # solves preconditioned by the factorisation of an earlier matrix
         self.stale_failed = 0  # ... of them that needed the matrix factorised after all
         self._condensed_rhs = None
+        self._rest_form = None  # the form the preconditioner is built on at rest (at_rest)
+        self._rest_stale = True  # ... not yet assembled for this design
         self._free = None  # the free dofs as a numpy mask (_cg_to_residual)
         self.iterations = 0  # Krylov iterations of the last solve
         self.total_iterations = 0
@@ -198,7 +215,9 @@ class LinearSolver:
             self.preconditioner = pre
             if self.preconditioner == "bddc" and fes.mesh.dim == 3 and order >= 2:
                 _vertex_coarse_space(fes, coarse)
-            self._pre = Preconditioner(form, self.preconditioner)
+            if at_rest is not None:
+                self._rest_form = at_rest()
+            self._pre = Preconditioner(self._rest_form or form, self.preconditioner)
 
     @property
     def direct(self) -> bool:
@@ -210,6 +229,22 @@ class LinearSolver:
         """Whether the next solve is by Krylov iterations (the iterative route, or the direct
         one preconditioned by an earlier matrix's factorisation), to which a tolerance applies."""
         return not self.direct or self._stale
+
+    @property
+    def forcing(self) -> float:
+        """The largest relative Krylov tolerance of a Newton step (its forcing term's cap,
+        Equilibrium.solve_tangent): 1e-2 with a preconditioner built on the matrix itself;
+        tighter where it was built from another matrix, an earlier factorisation
+        (:data:`STALE_FORCING`) or the tangent at rest (:data:`AT_REST_FORCING`), whose
+        preconditioned residual measures the step's error less well."""
+        if self.direct:
+            return STALE_FORCING
+        return AT_REST_FORCING if self._rest_form is not None else 1e-2
+
+    def new_design(self):
+        """The design changed: a preconditioner built at rest is built anew at the next
+        :meth:`prepare`."""
+        self._rest_stale = True
 
     def prepare(self, near: bool = False):
         """Make the solver ready for the form's current matrix (after each assembly): the
@@ -223,6 +258,11 @@ class LinearSolver:
             self._stale = True
             return
         self._stale = False
+        if self._rest_form is not None and self._rest_stale:
+            rest = self.form.mat.CreateColVector()
+            rest[:] = 0.0
+            self._rest_form.AssembleLinearization(rest)  # BDDC is set up by the assembly
+            self._rest_stale = False
         if self.direct:
             # on a distributed mesh the direct route is NGSolve's MasterInverse (the matrix
             # gathered on rank 0), which has no numeric update: it is made anew
@@ -302,65 +342,40 @@ class LinearSolver:
             pr.data = self._pre.mat * r
             reached = float(pr.Norm()) / res[0]
             if not reached <= tol:
-                raise SolverFailure(f"{type(krylov).__name__} with {self.preconditioner} did "
+                raise SolverFailure(f"{krylov.name} with {self.preconditioner} did "
                                     f"not reach the relative tolerance {tol:.1e} in "
                                     f"{krylov.iterations} iterations (reached {reached:.1e})")
 
     def _krylov(self, pre, rhs, out, tol: float, maxiter: int, transpose: bool):
-        """CG (GMRES for an unsymmetric matrix) on the form's matrix (transposed with
-        ``transpose``) preconditioned by ``pre``, from 0 (``rhs`` zero on the fixed dofs); the
-        solver, its iterations counted."""
-        from ngsolve.krylovspace import CGSolver, GMResSolver
+        """CG (GMRES for an unsymmetric matrix, or with the preconditioner built at rest) on
+        the form's matrix (transposed with ``transpose``) preconditioned by ``pre``, from 0
+        (``rhs`` zero on the fixed dofs); its iterations counted.  Returns ``(name,
+        iterations, residuals)``."""
+        from ngsolve.krylovspace import CGSolver
 
         mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
-        if self.symmetric:
-            method, extra = CGSolver, {}
+        if self.symmetric and self._rest_form is None:
+            krylov = CGSolver(mat, pre, tol=tol, maxiter=maxiter)
+            krylov.Solve(rhs=rhs, sol=out)
+            run = KrylovRun("CGSolver", krylov.iterations, list(krylov.residuals))
         else:
-            method, extra = GMResSolver, {"restart": GMRES_RESTART}
-        krylov = method(mat, pre, tol=tol, maxiter=maxiter, **extra)
-        krylov.Solve(rhs=rhs, sol=out)
-        self.iterations = krylov.iterations
-        self.total_iterations += krylov.iterations
-        return krylov
+            run = gmres(mat, pre, rhs, out, tol, maxiter, GMRES_RESTART)
+        self.iterations = run.iterations
+        self.total_iterations += run.iterations
+        return run
 
     def _cg_to_residual(self, rhs, out, target, strict):
-        """Preconditioned CG from ``out = 0`` that stops on the Euclidean norm of its residual
-        on the free dofs (updated by the recurrence), not on the preconditioned norm
-        NGSolve's CG measures: with BDDC the two differed by a factor of about 300 on the
-        cantilever-3d, so that a solve to Newton's tolerance in the preconditioned norm left
-        a residual that Newton's test refused, and cost a second solve (20 CG iterations
-        and a residual each design, measured at 603 528 dofs)."""
-        from ngsolve import InnerProduct
-
-        mat, pre = self.form.mat, self._pre.mat
-        free = self._free_mask()
-        r, z, p, w = (rhs.CreateVector() for _ in range(4))
+        """CG to the Euclidean residual ``target`` on the free dofs (:func:`.krylov.cg_to_residual`)."""
+        r = rhs.CreateVector()
         self._on_free_dofs(rhs, r)
-        out[:] = 0.0
-        norm = free_norm(r, free)
-        its = 0
-        if norm > target:
-            z.data = pre * r
-            p.data = z
-            rz = InnerProduct(r, z)
-            while its < MAX_ITERATIONS:
-                w.data = mat * p
-                alpha = rz / InnerProduct(p, w)
-                out.data += alpha * p
-                r.data -= alpha * w
-                its += 1
-                norm = free_norm(r, free)
-                if norm <= target:
-                    break
-                z.data = pre * r
-                rz, rz_old = InnerProduct(r, z), rz
-                p *= rz / rz_old
-                p.data += z
-        self.iterations = its
-        self.total_iterations += its
-        if strict and not norm <= target:
+        run = cg_to_residual(self.form.mat, self._pre.mat, r, out, target, self._free_mask(),
+                             MAX_ITERATIONS)
+        self.iterations = run.iterations
+        self.total_iterations += run.iterations
+        if strict and not run.residuals[-1] <= target:
             raise SolverFailure(f"CG with {self.preconditioner} did not reach the residual "
-                                f"{target:.1e} in {its} iterations (reached {norm:.1e})")
+                                f"{target:.1e} in {run.iterations} iterations (reached "
+                                f"{run.residuals[-1]:.1e})")
 
     def _on_free_dofs(self, rhs, into):
         """``into = rhs`` on the free dofs, 0 on the others: the fixed dofs' entries of a
@@ -391,8 +406,10 @@ class LinearSolver:
         adjoint's), and ``factors_reused_failed``, those of them that factorised after all."""
         iterative = not self.direct
         return {"kind": self.kind, "setting": self.setting,
-                "method": ("CG" if self.symmetric else "GMRES") if iterative else self.inverse,
-                "preconditioner": self.preconditioner,
+                "method": (("CG" if self.symmetric and self._rest_form is None else "GMRES")
+                           if iterative else self.inverse),
+                "preconditioner": (f"{self.preconditioner} at rest, once per design"
+                                   if self._rest_form is not None else self.preconditioner),
                 "tolerance": self.rtol if iterative else None,
                 "iterations": self.iterations, "total_iterations": self.total_iterations,
                 "solves": self.solves, "ndof": self.form.space.ndof,
