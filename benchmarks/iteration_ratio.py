@@ -24,6 +24,7 @@ factorisation or of a preconditioner at every iteration costs.
 from __future__ import annotations
 
 import argparse
+import resource
 import statistics
 import time
 
@@ -84,18 +85,36 @@ def one(case: str, maxh: float, model: str, route: str) -> dict:
     space = problem.mech.fes
     mv = matvec_time(space)
     it = statistics.median(times)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # GiB, the process's so far
     return {"case": case, "maxh": maxh, "model": model, "route": route, "dofs": space.ndof,
-            "load": factor, "iteration": it, "matvec": mv, "ratio": it / mv}
+            "load": factor, "iteration": it, "matvec": mv, "ratio": it / mv, "peak": peak}
+
+
+def slopes(rows: list[dict]) -> str:
+    """Per case, model and route measured at two sizes or more: the least-squares slope of
+    log(time per iteration) against log(dofs)."""
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["case"], r["model"], r["route"]), []).append(r)
+    lines = []
+    for (case, model, route), rs in groups.items():
+        if len(rs) > 1:
+            fit = np.polyfit(np.log([r["dofs"] for r in rs]),
+                             np.log([r["iteration"] for r in rs]), 1)[0]
+            lines.append(f"- {case}, {model}, {route}: slope of time against dofs {fit:.2f} "
+                         f"over {rs[0]['dofs']:,}-{rs[-1]['dofs']:,} dofs\n")
+    return "".join(lines)
 
 
 def table(rows: list[dict]) -> str:
     head = ("| case | maxh | model | load factor | route | displacement dofs | iteration (s) | "
-            "matvec (ms) | iteration / matvec |\n|---|---|---|---|---|---|---|---|---|\n")
+            "matvec (ms) | iteration / matvec | peak RSS so far (GiB) |\n"
+            "|---|---|---|---|---|---|---|---|---|---|\n")
     return head + "".join(
         f"| {r['case']} | {r['maxh']:g} | {r['model']} | {r['load']:g} | {r['route']} | "
         f"{r['dofs']:,} | "
-        f"{r['iteration']:.3g} | {1e3 * r['matvec']:.3g} | **{r['ratio']:.0f}** |\n"
-        for r in rows)
+        f"{r['iteration']:.3g} | {1e3 * r['matvec']:.3g} | **{r['ratio']:.0f}** | "
+        f"{r['peak']:.2f} |\n" for r in rows) + "\n" + slopes(rows)
 
 
 def main(argv=None) -> int:
