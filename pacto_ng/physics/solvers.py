@@ -22,7 +22,7 @@ preconditioned Krylov solver beyond.
   BDDC built on it fails (CG diverged on the Neo-Hookean cantilever-3d at its full load): its
   preconditioner is BDDC built once per design on the same tangent at rest (the design's
   small-strain stiffness, symmetric positive definite), and its Newton steps and adjoint are
-  solved by GMRES with it.  The transpose
+  solved with it (CG, or GMRES for an unsymmetric tangent).  The transpose
   solve (an unsymmetric adjoint) is GMRES on ``Aᵀ`` with the same preconditioner (it
   approximates ``A⁻¹``; the follower tangent is a perturbation of a symmetric one).
 
@@ -82,9 +82,10 @@ STALE_ITERATIONS = 10
 #: costs a fraction of the tangent's assembly, while a looser solve made the Newton steps chord
 #: steps (pneunet-3d's part at 32 kPa: 16 Newton iterations at 1e-2 against 9 factorised)
 STALE_FORCING = 1e-6
-#: ... and one solved by GMRES with BDDC built on the tangent at rest (``at_rest``): at 1e-2,
-#: 34 Newton iterations where the tangent's own BDDC took 9 (cantilever-3d, maxh 0.06, order
-#: 2, Neo-Hookean, a random design); at 1e-4 and 1e-6, 9
+#: ... and one solved by GMRES with BDDC built on the tangent at rest (``at_rest``): GMRES on
+#: the symmetric Neo-Hookean tangent of cantilever-3d (maxh 0.06, order 2, a random design)
+#: took 34 Newton iterations at 1e-2, 9 at 1e-4 and 1e-6, as BDDC on each tangent did; CG
+#: with the same preconditioner took 8 at 1e-2, 1e-4 and 1e-6 (CG keeps 1e-2)
 AT_REST_FORCING = 1e-4
 
 
@@ -177,7 +178,7 @@ class LinearSolver:
         A nonlinear tangent's: makes a second form of the same tangent.  On the iterative
         route the preconditioner is built on it, linearised at rest (``u = 0``: the design's
         small-strain stiffness) once per design (:meth:`new_design`), and the tangents of the
-        design's Newton steps and its adjoint are solved by GMRES with it (see the module).
+        design's Newton steps and its adjoint are solved with it (see the module).
     """
 
     def __init__(self, form, freedofs=None, *, setting: str = "auto", symmetric: bool = True,
@@ -233,13 +234,13 @@ class LinearSolver:
     @property
     def forcing(self) -> float:
         """The largest relative Krylov tolerance of a Newton step (its forcing term's cap,
-        Equilibrium.solve_tangent): 1e-2 with a preconditioner built on the matrix itself;
-        tighter where it was built from another matrix, an earlier factorisation
-        (:data:`STALE_FORCING`) or the tangent at rest (:data:`AT_REST_FORCING`), whose
-        preconditioned residual measures the step's error less well."""
+        Equilibrium.solve_tangent): 1e-2 for CG; tighter where the preconditioner was built
+        from another matrix and the solve is not CG, an earlier factorisation
+        (:data:`STALE_FORCING`) or GMRES with the tangent at rest (:data:`AT_REST_FORCING`),
+        whose residual then measures the step's error less well."""
         if self.direct:
             return STALE_FORCING
-        return AT_REST_FORCING if self._rest_form is not None else 1e-2
+        return AT_REST_FORCING if self._rest_form is not None and not self.symmetric else 1e-2
 
     def new_design(self):
         """The design changed: a preconditioner built at rest is built anew at the next
@@ -347,14 +348,13 @@ class LinearSolver:
                                     f"{krylov.iterations} iterations (reached {reached:.1e})")
 
     def _krylov(self, pre, rhs, out, tol: float, maxiter: int, transpose: bool):
-        """CG (GMRES for an unsymmetric matrix, or with the preconditioner built at rest) on
-        the form's matrix (transposed with ``transpose``) preconditioned by ``pre``, from 0
-        (``rhs`` zero on the fixed dofs); its iterations counted.  Returns ``(name,
-        iterations, residuals)``."""
+        """CG (GMRES, restarted, for an unsymmetric matrix) on the form's matrix (transposed
+        with ``transpose``) preconditioned by ``pre``, from 0 (``rhs`` zero on the fixed
+        dofs); its iterations counted.  Returns a :class:`~.krylov.KrylovRun`."""
         from ngsolve.krylovspace import CGSolver
 
         mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
-        if self.symmetric and self._rest_form is None:
+        if self.symmetric:
             krylov = CGSolver(mat, pre, tol=tol, maxiter=maxiter)
             krylov.Solve(rhs=rhs, sol=out)
             run = KrylovRun("CGSolver", krylov.iterations, list(krylov.residuals))
@@ -406,7 +406,7 @@ class LinearSolver:
         adjoint's), and ``factors_reused_failed``, those of them that factorised after all."""
         iterative = not self.direct
         return {"kind": self.kind, "setting": self.setting,
-                "method": (("CG" if self.symmetric and self._rest_form is None else "GMRES")
+                "method": (("CG" if self.symmetric else "GMRES")
                            if iterative else self.inverse),
                 "preconditioner": (f"{self.preconditioner} at rest, once per design"
                                    if self._rest_form is not None else self.preconditioner),
