@@ -203,6 +203,7 @@ class LinearSolver:
         self._condensed_rhs = None
         self._rest_form = None  # the form the preconditioner is built on at rest (at_rest)
         self._rest_stale = True  # ... not yet assembled for this design
+        self.rest_builds = 0  # ... assemblies of it (once per design)
         self._free = None  # the free dofs as a numpy mask (_cg_to_residual)
         self.iterations = 0  # Krylov iterations of the last solve
         self.total_iterations = 0
@@ -218,7 +219,8 @@ class LinearSolver:
                 _vertex_coarse_space(fes, coarse)
             if at_rest is not None:
                 self._rest_form = at_rest()
-            self._pre = Preconditioner(self._rest_form or form, self.preconditioner)
+            self._pre = Preconditioner(form if self._rest_form is None else self._rest_form,
+                                       self.preconditioner)
 
     @property
     def direct(self) -> bool:
@@ -264,6 +266,7 @@ class LinearSolver:
             rest[:] = 0.0
             self._rest_form.AssembleLinearization(rest)  # BDDC is set up by the assembly
             self._rest_stale = False
+            self.rest_builds += 1
         if self.direct:
             # on a distributed mesh the direct route is NGSolve's MasterInverse (the matrix
             # gathered on rank 0), which has no numeric update: it is made anew
@@ -403,7 +406,8 @@ class LinearSolver:
         None for direct), ``iterations`` (Krylov iterations of the last solve),
         ``total_iterations`` and ``solves``; on the direct route ``factors_reused``, the
         solves preconditioned by an earlier matrix's factorisation (Newton's tangent for the
-        adjoint's), and ``factors_reused_failed``, those of them that factorised after all."""
+        adjoint's), and ``factors_reused_failed``, those of them that factorised after all;
+        ``preconditioner_builds``: how often a preconditioner built at rest was built."""
         iterative = not self.direct
         return {"kind": self.kind, "setting": self.setting,
                 "method": (("CG" if self.symmetric else "GMRES")
@@ -413,4 +417,5 @@ class LinearSolver:
                 "tolerance": self.rtol if iterative else None,
                 "iterations": self.iterations, "total_iterations": self.total_iterations,
                 "solves": self.solves, "ndof": self.form.space.ndof,
-                "factors_reused": self.stale_solves, "factors_reused_failed": self.stale_failed}
+                "factors_reused": self.stale_solves, "factors_reused_failed": self.stale_failed,
+                "preconditioner_builds": self.rest_builds}
