@@ -76,7 +76,7 @@ class Equilibrium:
         self._solver = LinearSolver(
             form, self.space.FreeDofs(form.condense), setting=self.settings.solver,
             symmetric=self.symmetric, order=self.order, inverse=self.inverse_type,
-            coarse=coarse, at_rest=self._tangent_form if self._lin is None else None)
+            coarse=coarse, at_rest=self._tangent_form)
         if self._lin is not None and not self._solver.direct:
             self._lin.element_matrices = False
         self.settings = self.settings.for_route(self._solver.direct)  # Newton's tolerance

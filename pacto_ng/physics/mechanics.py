@@ -271,8 +271,9 @@ class Mechanics(Equilibrium, Adjoint):
 
         self.a = tangent_form()
         # a second form of the same tangent, for the iterative route's preconditioner of a
-        # nonlinear energy, assembled at rest once per design (LinearSolver, ``at_rest``); not
-        # for the mixed formulation, whose condensed tangent keeps BDDC on each tangent
+        # nonlinear energy (never one with a linear system), assembled at rest once per design
+        # (LinearSolver, ``at_rest``); not for the mixed formulation, whose condensed tangent
+        # keeps BDDC on each tangent
         nonlinear = not (self.linear or self._traits.quadratic)
         self._tangent_form = tangent_form if nonlinear and self.mixed is None else None
         # the body force is linear in u: its residual is a LinearForm, assembled once per design,

@@ -46,7 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..parallel import distributed
-from .krylov import KrylovRun, cg_to_residual, gmres
+from .krylov import cg, cg_to_residual, gmres
 
 SOLVERS = ("auto", "direct", "iterative")
 
@@ -354,13 +354,9 @@ class LinearSolver:
         """CG (GMRES, restarted, for an unsymmetric matrix) on the form's matrix (transposed
         with ``transpose``) preconditioned by ``pre``, from 0 (``rhs`` zero on the fixed
         dofs); its iterations counted.  Returns a :class:`~.krylov.KrylovRun`."""
-        from ngsolve.krylovspace import CGSolver
-
         mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
         if self.symmetric:
-            krylov = CGSolver(mat, pre, tol=tol, maxiter=maxiter)
-            krylov.Solve(rhs=rhs, sol=out)
-            run = KrylovRun("CGSolver", krylov.iterations, list(krylov.residuals))
+            run = cg(mat, pre, rhs, out, tol, maxiter)
         else:
             run = gmres(mat, pre, rhs, out, tol, maxiter, GMRES_RESTART)
         self.iterations = run.iterations
@@ -368,7 +364,8 @@ class LinearSolver:
         return run
 
     def _cg_to_residual(self, rhs, out, target, strict):
-        """CG to the Euclidean residual ``target`` on the free dofs (:func:`.krylov.cg_to_residual`)."""
+        """CG to the Euclidean residual ``target`` on the free dofs
+        (:func:`.krylov.cg_to_residual`, on a copy of ``rhs``)."""
         r = rhs.CreateVector()
         self._on_free_dofs(rhs, r)
         run = cg_to_residual(self.form.mat, self._pre.mat, r, out, target, self._free_mask(),
