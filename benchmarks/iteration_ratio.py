@@ -6,14 +6,14 @@ matrix-vector products at the same size, measured in the same process.
     python3 -m benchmarks iteration_ratio
 
 Per case, Netgen size (``maxh``), model and linear-solver route (``solver=direct|iterative``,
-pacto_ng/physics/solvers.py), in one process: the case's problem at order 2
-(``pacto_ng.case.build_problem``) and its initial design; one evaluation (state, adjoints and
-sensitivities: ``Problem.evaluate(x)``, what an optimisation iteration costs before its MMA
-update) to build the forms, the solver and the filter (a hyperelastic model at the largest load factor
-``2^-k`` of the case's load at which Newton carries the initial design, recorded: a run ramps
-its load the same way); then the median of ``REPEATS``
-evaluations of designs that differ (``x (1 + 1e-3 k)``, so nothing is reused that a new
-design would not reuse).  The matrix-vector product: the linear-elasticity stiffness matrix on
+pacto_ng/physics/routes.py), in one process: the case's problem at order 2
+(``pacto_ng.case.build_problem``), optimised from its initial design as ``pacto run`` does
+(its schedule, load ramp and optimiser) for ``1 + REPEATS`` iterations: the median time of
+iterations 1 to ``REPEATS`` (history's ``time``: state, adjoints, sensitivities and the
+optimiser's update; the first builds the forms, the solver and the filter).  The designs are
+the run's own, so that what a solver keeps from one design to the next (a factorisation's
+structure, a preconditioner kept across designs) is kept only as far as a run's first
+iterations allow, where the designs change most.  The matrix-vector product: the linear-elasticity stiffness matrix on
 the problem's own displacement space (the same sparsity as every matrix of the iteration,
 stored in full, not its symmetric half), assembled by NGSolve; the median of ``MV_REPEATS``
 products ``y = A x``.  The ratio of the two medians is the iteration's cost in products: a
@@ -32,13 +32,14 @@ import numpy as np
 from ngsolve import BilinearForm, Grad, InnerProduct, SetNumThreads, Sym, TaskManager, dx
 
 from benchmarks.__main__ import replace_block
+from pacto_ng.auto import choose
 from pacto_ng.case import build_problem, get_case
 from pacto_ng.initial import initial_design
-from pacto_ng.physics.equilibrium import NewtonFailure
+from pacto_ng.optimize.driver import LoopState, optimize
 from pacto_ng.threads import thread_count
 
 ORDER = 2
-REPEATS = 3
+REPEATS = 5  # iterations timed after the first (which builds the forms, the solver, the filter)
 MV_REPEATS = 20
 SIZES = {"cantilever-3d": (0.05, 0.03), "pneunet-3d": (0.005, 0.0035)}
 BLOCK = "iteration_ratio"
@@ -65,29 +66,25 @@ def one(case: str, maxh: float, model: str, route: str) -> dict:
     """One size, model and route: ``{dofs, iteration, matvec, ratio}`` (seconds)."""
     c = get_case(case)
     params = c.defaults.replace(maxh=maxh, order=ORDER, model=model, solver=route)
+    if params.load_ramp < 0:  # the load ramp a run chooses for the case's load
+        params = choose(c, params)[0]
+    params = c.resolve(params)
     problem = build_problem(c, params)
-    x0 = initial_design(problem)
-    penal, beta, factor = problem.schedule_now()
-    while True:  # the largest load factor 2^-k at which Newton carries the initial design
-        problem.apply_schedule(penal, beta, factor)
-        try:
-            problem.evaluate(x0)
-            break
-        except NewtonFailure:
-            if factor < 1e-3:
-                raise
-            factor *= 0.5
-    times = []
-    for k in range(1, REPEATS + 1):
-        t0 = time.perf_counter()
-        problem.evaluate(x0 * (1.0 + 1e-3 * k))
-        times.append(time.perf_counter() - t0)
+    problem.expect_many_designs()
+    ref = problem.setup.objective_ref
+    state = LoopState(k=0, x=initial_design(problem), opt_state=None,
+                      scale=10.0 / ref if ref > 0 else None)
+    optimize(problem, params.schedule.schedule(), iterations=1 + REPEATS, tol=0.0,
+             method=params.optimizer, move=params.move, state=state, obj_tol=0.0,
+             load_adapt=params.load_adapt)
+    times = [row["time"] for row in state.history[1:]]
     space = problem.mech.fes
     mv = matvec_time(space)
     it = statistics.median(times)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # GiB, the process's so far
     return {"case": case, "maxh": maxh, "model": model, "route": route, "dofs": space.ndof,
-            "load": factor, "iteration": it, "matvec": mv, "ratio": it / mv, "peak": peak}
+            "load": state.history[-1]["load"], "iteration": it, "matvec": mv,
+            "ratio": it / mv, "peak": peak}
 
 
 def slopes(rows: list[dict]) -> str:

@@ -6,7 +6,8 @@ Around the system (assembled and factorised, each dimension's fit) a run holds t
 (``_MESH_BYTES`` per element, 860 measured at 185k triangles), the linear fast paths' element
 matrices while they are built (about 88 bytes per entry, built only below 20·10⁶ entries:
 physics/scatter.py; counted for the displacement and a Darcy pressure in every case, an
-over-estimate for cases without them), and the pressure's and filter's systems, MMA and the
+over-estimate for cases without them; on the iterative route the displacement's up to 10⁸
+entries, 30 bytes each: physics/linear_system.py), and the pressure's and filter's systems, MMA and the
 outputs (``_RUN_FACTOR`` = 1.25 on the system; checked on whole runs in
 :mod:`pacto_ng.resource_probes`).
 """
@@ -18,6 +19,11 @@ _MESH_BYTES = 1000.0        # per element of the mesh (Netgen + NGSolve; 860 mea
 _RUN_FACTOR = 1.25          # a whole run over its displacement system (module docstring)
 _SCATTER_BYTES = 88.0       # per entry of the fast paths' element matrices, while built
 _SCATTER_MAX = 20_000_000   # entries above which they are not built (physics/scatter.py)
+# the displacement's on the iterative route (physics/linear_system.py ITERATIVE_MAX_ENTRIES),
+# where they let BDDC be kept across designs: 30.4 bytes per entry at the peak of their build,
+# 19 resident after it (cantilever-3d, 228,318 dofs, 45.5e6 entries: 0.91 -> 2.19 GB peak)
+_ITERATIVE_SCATTER_BYTES = 30.0
+_ITERATIVE_SCATTER_MAX = 100_000_000
 
 
 @dataclass(frozen=True)
@@ -46,17 +52,18 @@ def mesh_bytes(elements: float) -> float:
 
 
 def run_overheads(system: float, elements: float, local: float, *, dim: int,
-                  displacement_matrices: bool = True) -> float:
+                  iterative: bool = False) -> float:
     """A run's memory around its displacement ``system`` (bytes, assembled and factorised):
     the system times ``_RUN_FACTOR``, the mesh, and the linear fast paths' element matrices
-    for ``local`` scalar dofs per element (a ``dim``-vector displacement's, unless
-    ``displacement_matrices`` is False: an iterative route assembles by its form, and the
-    Darcy pressure's two matrices; none above ``_SCATTER_MAX`` entries)."""
+    for ``local`` scalar dofs per element (a ``dim``-vector displacement's, and the Darcy
+    pressure's two matrices; none above their budget, which is larger for the displacement on
+    the ``iterative`` route)."""
     scatter = 0.0
-    parts = [2 * elements * local ** 2]  # Darcy K, D
-    if displacement_matrices:
-        parts.append(elements * (dim * local) ** 2)
-    for entries in parts:
+    darcy = 2 * elements * local ** 2  # Darcy K, D
+    displacement = elements * (dim * local) ** 2
+    for entries in (darcy, displacement) if not iterative else (darcy,):
         if entries <= _SCATTER_MAX:  # above it the fast path is not built
             scatter += _SCATTER_BYTES * entries
+    if iterative and displacement <= _ITERATIVE_SCATTER_MAX:
+        scatter += _ITERATIVE_SCATTER_BYTES * displacement
     return _RUN_FACTOR * system + mesh_bytes(elements) + scatter

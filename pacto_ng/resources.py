@@ -50,7 +50,7 @@ hexahedra] · o^k`` (points above 2·10⁴ dofs)::
 Fill-in is far larger in 3D: a nested-dissection factorisation of a 3D mesh grows like
 ``ndof^(4/3)`` and more (at 1.5·10⁵ dofs the 3D Cholesky takes 2.7 GB, the 2D fit gives 0.19
 GB).  Which route a 3D system takes is the physics' (:func:`route`:
-:func:`pacto_ng.physics.solvers.choose`; with ``solver = auto`` direct at order 1 and up to
+:func:`pacto_ng.physics.routes.choose`; with ``solver = auto`` direct at order 1 and up to
 ``DIRECT_MAX_DOFS_3D`` dofs, iterative above it at order ≥ 2); 2D systems are estimated as
 factorised.  A run holds more around its system: the mesh, the linear fast paths' element
 matrices while they are built (not on the iterative route), and the pressure's and filter's
@@ -83,7 +83,7 @@ import numpy as np
 from .errors import InputError
 from .estimate import Estimate, mesh_bytes, run_overheads
 from .geometry import is_solid
-from .physics.solvers import choose
+from .physics.routes import choose
 
 
 @dataclass(frozen=True)
@@ -125,7 +125,7 @@ _HUGE = 1e300               # counts are capped here (a maxh of 1e-300 still giv
 
 def route(dofs: float, order: int, dim: int, linear_solver: str = "auto") -> str:
     """``"direct"`` or ``"iterative"``: the displacement system's route as the physics takes
-    it (:func:`pacto_ng.physics.solvers.choose`; ``linear_solver`` its ``solver`` setting)."""
+    it (:func:`pacto_ng.physics.routes.choose`; ``linear_solver`` its ``solver`` setting)."""
     return choose(linear_solver, int(min(dofs, 1e18)), dim, max(int(order), 1))
 
 
@@ -141,7 +141,7 @@ def run_memory(dofs: float, order: int, elements: float, dim: int, *, boxes: boo
     a, b, q, o = d.fits[(solver or "umfpack") if direct else "iterative"]
     system = a * min(max(dofs, 1.0), 1e30) ** b * (q if boxes else 1.0) * o ** k
     local = (k + 1) ** dim if boxes else math.comb(k + dim, dim)  # scalar dofs per element
-    memory = run_overheads(system, elements, local, dim=dim, displacement_matrices=direct)
+    memory = run_overheads(system, elements, local, dim=dim, iterative=not direct)
     if d.output_points:
         points = d.output_points[bool(boxes)][k > 1]
         memory += _OUTPUT_BYTES_PER_POINT * points * min(elements, _HUGE)

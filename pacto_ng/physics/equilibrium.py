@@ -71,14 +71,14 @@ class Equilibrium:
         from ngsolve import VOL, GridFunction, Grad, LinearForm
 
         # the tangent's solver (solvers.py), its preconditioner registered before the first
-        # assembly: a linear K is assembled by its form (not by the element-matrix scatter)
-        form = self._lin.a if self._lin is not None else self.a
+        # assembly (a linear K's kept across designs: LinearSystem.assemble, reuse.py)
+        form, lin = (self._lin.a, self._lin) if self._lin is not None else (self.a, None)
         self._solver = LinearSolver(
             form, self.space.FreeDofs(form.condense), setting=self.settings.solver,
             symmetric=self.symmetric, order=self.order, inverse=self.inverse_type,
-            coarse=coarse, at_rest=self._tangent_form)
-        if self._lin is not None and not self._solver.direct:
-            self._lin.element_matrices = False
+            coarse=coarse, at_rest=self._tangent_form, refresh=lin and lin.assemble_form)
+        if lin is not None:
+            self._lin.solver = self._solver
         self.settings = self.settings.for_route(self._solver.direct)  # Newton's tolerance
         self._solver.rtol = adjoint_rtol(self.settings.rtol)  # its default: the adjoint's
         self._tangent_at = None  # id of the state the factorisation belongs to

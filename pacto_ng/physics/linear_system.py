@@ -14,7 +14,9 @@ the design-independent spring matrix) and the field derivatives ``∫ (∂C/∂�
 from ``C`` too.  With a declared modulus (``φ = E(fields) φ1``, SIMP) ``C = E C1`` per element:
 from the second design on ``K`` comes from element matrices computed once
 (:class:`~pacto_ng.physics.scatter.ElementMatrices`) and ``E``, ``∂E/∂field`` from the
-declared numpy modulus.
+declared numpy modulus.  On an iterative solver's route the form still assembles ``K`` at the
+designs where the solver's preconditioner is set up from it, the element matrices at the
+others (:mod:`~pacto_ng.physics.reuse`).
 
 The declarations are verified once at construction, on random values of every field at the
 block's quadrature points (``C`` at two different ``G``, ``∂φ/∂G = C G``, ``φ = ½ G:C:G``,
@@ -32,6 +34,12 @@ from ..parallel import free_norm
 from .quadrature import centroid_rules, stiffness_rules
 from .scatter import ElementMatrices
 from .traits import DeclarationError
+
+#: the element matrices' budget (entries) on an iterative solver's route, where they let its
+#: preconditioner be kept across designs (reuse.py): 1.2 GB at 12 bytes each, up to about 5e5
+#: dofs of order-2 tetrahedra (cantilever-3d at 228,318 dofs: 45.5 million entries, built in
+#: 18.7 s, one thread, two assemblies with BDDC's set-up of 5.3 s each among them)
+ITERATIVE_MAX_ENTRIES = 100_000_000
 
 
 @contextmanager
@@ -134,9 +142,10 @@ class LinearSystem:
         # design on (not for the first, so that a single analysis does not pay for them), or
         # from the first after expect_many_designs
         self.scatter = None
-        # False: K is assembled by its form at every design, never from element matrices (an
-        # iterative solver's preconditioner is built during the form's assembly)
-        self.element_matrices = True
+        #: K's LinearSolver (set by its owner): on the iterative route it says at which designs
+        #: K is assembled by its form, whose assembly sets up its preconditioner, and not from
+        #: the element matrices (LinearSolver.rebuild_due; reuse.py)
+        self.solver = None
         self._scatter_built = False
         self._many_designs = False
         self._modulus = None
@@ -253,8 +262,11 @@ class LinearSystem:
         """Whether ``C = g C1`` (and ``∂C``) come from the declared modulus in numpy: with the
         element matrices, and on an iterative solver's route (its form's assembly then needs
         no evaluation of C's CF at the centroids)."""
-        return self._modulus is not None and (self.scatter is not None
-                                              or not self.element_matrices)
+        return self._modulus is not None and (self.scatter is not None or self._iterative)
+
+    @property
+    def _iterative(self) -> bool:
+        return self.solver is not None and not self.solver.direct
 
     def expect_many_designs(self):
         """Say that many designs follow (an optimisation): the element matrices are built at
@@ -270,16 +282,19 @@ class LinearSystem:
         gfc = self.gfC.vec.FV().NumPy()
         c1 = self._C1
         setc = lambda cs: gfc.__setitem__(slice(None), (cs[0][:, None] * c1).ravel())
+        budget = {"max_entries": ITERATIVE_MAX_ENTRIES} if self._iterative else {}
         self.scatter = ElementMatrices.build(self.a, self.mech.fes, setc, 1,
-                                             volume=self._volume)
+                                             volume=self._volume, **budget)
 
     def assemble(self):
         """Assemble ``K`` and ``f`` for the current fields (once per design)."""
         if not self.stale:
             return
-        if (self.element_matrices and self._modulus is not None and not self._scatter_built
+        built = False
+        if (self._modulus is not None and not self._scatter_built
                 and (self.version >= 1 or self._many_designs)):
             self._build_scatter()  # a second design: from now on worth the element matrices
+            built = True  # (its checks assembled the form with other coefficients)
         if self._numpy_modulus:
             modulus, E1 = self._modulus
             self._g, self._dg = self._relative_modulus(
@@ -287,10 +302,12 @@ class LinearSystem:
             self.gfC.vec.FV().NumPy()[:] = (self._g[:, None] * self._C1).ravel()
         else:
             self.gfC.vec.FV().NumPy()[:] = np.asarray(self.C(self._centroids)).ravel()
-        if self.scatter is not None:
-            self.scatter.assemble([self._g])
+        if self.scatter is None or self._iterative and (built or self.solver.rebuild_due):
+            self.assemble_form()
+            if self.solver is not None:
+                self.solver.rebuilt()
         else:
-            self.a.Assemble()
+            self.scatter.assemble([self._g])
         if self._coupling is not None:
             self.f.vec.data = self._fpoints + self._coupling.load()
         elif self.has_load:
@@ -299,6 +316,11 @@ class LinearSystem:
             self.f.vec[:] = 0.0
         self.stale = False
         self.version += 1
+
+    def assemble_form(self):
+        """``K`` of the current design assembled by its form, which sets up an iterative
+        solver's preconditioner from it."""
+        self.a.Assemble()
 
     def residual(self, vec, out, load):
         self.assemble()

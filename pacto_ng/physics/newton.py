@@ -33,7 +33,7 @@ from dataclasses import dataclass, field, replace
 from ..errors import InputError
 from ..parallel import free_norm
 from ..settings import Settings, setting
-from .solvers import DIRECT_MAX_DOFS_3D, SOLVERS
+from .routes import DIRECT_MAX_DOFS_3D, SOLVERS
 
 import numpy as np
 

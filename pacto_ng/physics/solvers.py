@@ -26,12 +26,10 @@ preconditioned Krylov solver beyond.
   solve (an unsymmetric adjoint) is GMRES on ``Aᵀ`` with the same preconditioner (it
   approximates ``A⁻¹``; the follower tangent is a perturbation of a symmetric one).
 
-``auto`` (:func:`choose`) takes the direct route in 2D and, in 3D, up to
-:data:`DIRECT_MAX_DOFS_3D` dofs and for a vector space of order 1 (where every dof is a BDDC
-vertex dof, so that the iterative route is a direct solve plus iterations); the scalar
-order-1 systems (Darcy, the filter) take ``h1amg`` above the same number of dofs.  The
-threshold is measured by ``PACTO_THREADS=1 python3 -m benchmarks.solvers_3d``
-(docs/studies.md, "3D solvers: direct against iterative"; see the constant's comment).
+The route (``auto``: direct in 2D and in 3D up to a size) is chosen by
+:func:`~pacto_ng.physics.routes.choose`.  On the iterative route a linear system's
+preconditioner is kept across designs while it serves them well (``refresh``;
+:mod:`~pacto_ng.physics.reuse`).
 
 The Krylov tolerance is relative to the right-hand side's (preconditioned) norm; the caller
 ties it to what it needs (Newton: its own residual test, whose tolerance on this route is
@@ -46,26 +44,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..parallel import distributed
-from .krylov import cg, cg_to_residual, gmres
-
-SOLVERS = ("auto", "direct", "iterative")
-
-# Above this many dofs of a 3D system, ``auto`` takes the iterative route.  Measured
-# (docs/studies.md, "3D solvers: direct against iterative": linear elasticity on a
-# cantilever box at order 2, one linear solve with its assembly, one thread, CG + BDDC to
-# 1e-8): the direct route is faster at 8 000 dofs (1.1 against 1.5 s), the iterative one at
-# 25 000 (5.0 against 8.0 s) and 56 000 (3.4 against 25 s), with slopes of 2 against 1.
-# An optimisation asks more of the iterative route than that solve: the adjoint is a second
-# Krylov solve where the direct route reuses its factorisation, the tolerances of Newton's
-# linear step and of the adjoint are tighter than 1e-8 (12 digits against 8 at CG's linear
-# rate: about 1.5x the iterations, estimated), and SIMP's contrast adds some (measured: 57 ->
-# 65 iterations at 25 000 dofs, E0 = 1e-6 E1, a 0/1 design).  Whole optimisation iterations
-# favour the direct route further (docs/studies.md, "3D optimisation iterations", order 2,
-# one thread): with the element-matrix assembly of linear runs it was the faster at every size
-# measured, 8.6 against 11.3 s per iteration at 78 000 dofs (cantilever-3d) and 4.0 against
-# 10.8 s at 50 000 (pneunet-3d); the fitted slopes (1.51 against 1.04, cantilever-3d) cross
-# near 1.4e5 dofs, where the 3D Cholesky needs about 2 GB (pacto_ng/resources.py).
-DIRECT_MAX_DOFS_3D = 140_000
+from .krylov import KrylovRun, cg, cg_to_residual, gmres
+from .routes import choose, preconditioner_for, vertex_coarse_space
+from .reuse import Reuse
 
 ADJOINT_RTOL = 1e-12  # Krylov tolerance of the Darcy and filter solves (relative)
 MAX_ITERATIONS = 1000
@@ -102,55 +83,6 @@ class SolverFailure(RuntimeError):
     """A Krylov solve that did not reach its tolerance within its iterations."""
 
 
-def preconditioner_for(fes, order: int) -> str:
-    """``"h1amg"`` for a scalar H1 space of order 1, ``"bddc"`` otherwise and on a distributed
-    mesh (NGSolve's h1amg takes a serial matrix only)."""
-    from ngsolve import H1
-
-    return "h1amg" if type(fes) is H1 and order == 1 and not distributed(fes.mesh) else "bddc"
-
-
-def choose(setting: str, ndof: int, dim: int, order: int, preconditioner: str = "bddc",
-           parallel: bool = False) -> str:
-    """``"direct"`` or ``"iterative"`` for a system of ``ndof`` dofs on a ``dim``-D mesh of
-    element order ``order`` whose iterative route would use ``preconditioner`` (see the
-    module); ``setting`` is ``auto``, ``direct`` or ``iterative``.  On a distributed mesh
-    (``parallel``) ``auto`` is iterative: the direct route gathers the matrix on rank 0."""
-    if setting not in SOLVERS:
-        raise ValueError(f"solver must be one of {', '.join(SOLVERS)} (got '{setting}')")
-    if setting != "auto":
-        return setting
-    if parallel:
-        return "iterative"
-    coarse_is_all = preconditioner == "bddc" and order == 1  # every dof a vertex dof
-    if dim == 3 and not coarse_is_all and ndof > DIRECT_MAX_DOFS_3D:
-        return "iterative"
-    return "direct"
-
-
-def _vertex_coarse_space(fes, coarse=None):
-    """Make the wirebasket dofs that are not on a vertex interface dofs, except those of the
-    elements of the regions ``coarse`` (None: every boundary element): BDDC's coarse problem
-    is then the vertex problem and those regions' dofs.  Such a region is where the form has
-    boundary terms (a spring on a face): their element matrices are singular on its edge dofs,
-    which BDDC would invert.  A form without boundary terms passes ``()``: on the cantilever
-    box at order 2 the boundary's edges had held 64 % of the coarse dofs (32 358 against
-    11 703 vertex dofs at 78 219 dofs) and doubled the time of a CG iteration."""
-    from ngsolve import VERTEX, NodeId
-    from ngsolve.comp import COUPLING_TYPE
-
-    keep = np.zeros(fes.ndof, dtype=bool)
-    for v in range(fes.mesh.nv):
-        keep[[d for d in fes.GetDofNrs(NodeId(VERTEX, v)) if d >= 0]] = True
-    for region in ((fes.mesh.Boundaries(".*"),) if coarse is None else coarse):
-        keep |= np.array(list(fes.GetDofs(region)), dtype=bool)
-    wirebasket = COUPLING_TYPE.WIREBASKET_DOF
-    types = fes.couplingtype
-    for d in np.flatnonzero(~keep):
-        if types[d] == wirebasket:
-            fes.SetCouplingType(int(d), COUPLING_TYPE.INTERFACE_DOF)
-
-
 class LinearSolver:
     """Solves with the matrix of ``form`` on ``freedofs`` (see the module).
 
@@ -179,11 +111,17 @@ class LinearSolver:
         route the preconditioner is built on it, linearised at rest (``u = 0``: the design's
         small-strain stiffness) once per design (:meth:`new_design`), and the tangents of the
         design's Newton steps and its adjoint are solved with it (see the module).
+    refresh : callable or None
+        A linear system's: assembles the form's matrix by the form for the current design
+        (its preconditioner set up again).  On the iterative route the preconditioner is then
+        kept across designs, whose matrices the owner writes by other means while
+        :attr:`rebuild_due` is False, and rebuilt by this where a solve needs it
+        (:mod:`~pacto_ng.physics.reuse`).
     """
 
     def __init__(self, form, freedofs=None, *, setting: str = "auto", symmetric: bool = True,
                  order: int = 1, inverse: str | None = None, rtol: float = ADJOINT_RTOL,
-                 coarse=None, at_rest=None):
+                 coarse=None, at_rest=None, refresh=None):
         from ngsolve import Preconditioner
 
         fes = form.space
@@ -204,6 +142,8 @@ class LinearSolver:
         self._rest_form = None  # the form the preconditioner is built on at rest (at_rest)
         self._rest_stale = True  # ... not yet assembled for this design
         self.rest_builds = 0  # ... assemblies of it (once per design)
+        self._refresh = refresh
+        self.reuse = None  # a preconditioner kept across designs (reuse.py)
         self._free = None  # the free dofs as a numpy mask (_cg_to_residual)
         self.iterations = 0  # Krylov iterations of the last solve
         self.total_iterations = 0
@@ -216,11 +156,13 @@ class LinearSolver:
         if self.kind == "iterative":
             self.preconditioner = pre
             if self.preconditioner == "bddc" and fes.mesh.dim == 3 and order >= 2:
-                _vertex_coarse_space(fes, coarse)
+                vertex_coarse_space(fes, coarse)
             if at_rest is not None:
                 self._rest_form = at_rest()
             self._pre = Preconditioner(form if self._rest_form is None else self._rest_form,
                                        self.preconditioner)
+            if refresh is not None:
+                self.reuse = Reuse()
 
     @property
     def direct(self) -> bool:
@@ -246,8 +188,38 @@ class LinearSolver:
 
     def new_design(self):
         """The design changed: a preconditioner built at rest is built anew at the next
-        :meth:`prepare`."""
+        :meth:`prepare`; one kept across designs now belongs to an earlier design."""
         self._rest_stale = True
+        if self.reuse is not None:
+            self.reuse.new_design()
+
+    @property
+    def rebuild_due(self) -> bool:
+        """On the iterative route, whether the form's next matrix should be assembled by the
+        form, so that its preconditioner is set up from it (always, unless it is kept across
+        designs)."""
+        return not self.direct and (self.reuse is None or self.reuse.due)
+
+    def rebuilt(self):
+        """The owner assembled the form's matrix by the form: its preconditioner is the
+        current design's."""
+        if self.reuse is not None:
+            self.reuse.built()
+
+    def _iterations_allowed(self, kept: bool) -> int:
+        """A solve's most Krylov iterations: a kept preconditioner's cap, if it has one."""
+        cap = self.reuse.cap if kept else None
+        return MAX_ITERATIONS if cap is None else min(cap, MAX_ITERATIONS)
+
+    @property
+    def _kept(self) -> bool:
+        return self.reuse is not None and self.reuse.kept
+
+    def _rebuild(self):
+        """A kept preconditioner reached its cap in a solve: set it up from the current
+        matrix (the owner's ``refresh``)."""
+        self._refresh()
+        self.reuse.built(in_solve=True)
 
     def prepare(self, near: bool = False):
         """Make the solver ready for the form's current matrix (after each assembly): the
@@ -333,8 +305,14 @@ class LinearSolver:
                 out.data = inverse() * rhs
             return
         tol = self.rtol if rtol is None else float(rtol)
-        krylov = self._krylov(self._pre.mat, rhs, out, tol, MAX_ITERATIONS, transpose)
+        kept = self._kept
+        krylov = self._krylov(self._pre.mat, rhs, out, tol,
+                              self._iterations_allowed(kept), transpose)
         res = krylov.residuals
+        if kept and res and not (res[0] == 0 or res[-1] <= tol * res[0]):
+            self._rebuild()  # and solve again with the current design's preconditioner
+            krylov = self._krylov(self._pre.mat, rhs, out, tol, MAX_ITERATIONS, transpose)
+            res = krylov.residuals
         mat = self.form.mat.T if transpose and not self.symmetric else self.form.mat
         if strict and res and res[0] > 0 and not res[-1] <= tol * res[0]:
             # GMRES ends at a breakdown of its Arnoldi process without recording the residual
@@ -359,19 +337,35 @@ class LinearSolver:
             run = cg(mat, pre, rhs, out, tol, maxiter)
         else:
             run = gmres(mat, pre, rhs, out, tol, maxiter, GMRES_RESTART)
-        self.iterations = run.iterations
-        self.total_iterations += run.iterations
+        self._count(run.iterations)
         return run
+
+    def _count(self, iterations: int):
+        self.iterations = iterations
+        self.total_iterations += iterations
+        if self.reuse is not None:
+            self.reuse.count(iterations)
 
     def _cg_to_residual(self, rhs, out, target, strict):
         """CG to the Euclidean residual ``target`` on the free dofs
         (:func:`.krylov.cg_to_residual`, on a copy of ``rhs``)."""
         r = rhs.CreateVector()
         self._on_free_dofs(rhs, r)
+        kept = self._kept
         run = cg_to_residual(self.form.mat, self._pre.mat, r, out, target, self._free_mask(),
-                             MAX_ITERATIONS)
-        self.iterations = run.iterations
-        self.total_iterations += run.iterations
+                             self._iterations_allowed(kept))
+        self._count(run.iterations)
+        if kept and not run.residuals[-1] <= target:
+            # the kept preconditioner reached its cap: rebuilt, CG goes on from ``out``, whose
+            # residual ``r`` holds
+            self._rebuild()
+            step = out.CreateVector()
+            more = cg_to_residual(self.form.mat, self._pre.mat, r, step, target,
+                                  self._free_mask(), MAX_ITERATIONS)
+            self._count(more.iterations)
+            out.data += step
+            run = KrylovRun(run.name, run.iterations + more.iterations,
+                            [run.residuals[0], more.residuals[-1]])
         if strict and not run.residuals[-1] <= target:
             raise SolverFailure(f"CG with {self.preconditioner} did not reach the residual "
                                 f"{target:.1e} in {run.iterations} iterations (reached "
@@ -404,7 +398,10 @@ class LinearSolver:
         ``total_iterations`` and ``solves``; on the direct route ``factors_reused``, the
         solves preconditioned by an earlier matrix's factorisation (Newton's tangent for the
         adjoint's), and ``factors_reused_failed``, those of them that factorised after all;
-        ``preconditioner_builds``: how often a preconditioner built at rest was built."""
+        ``preconditioner_builds``: how often a preconditioner built at rest, or kept across
+        designs, was built; of the latter ``preconditioner_kept_designs``, the designs it
+        served that it was not built at, and ``preconditioner_rebuilt_in_solve``, the solves
+        that rebuilt it at their cap."""
         iterative = not self.direct
         return {"kind": self.kind, "setting": self.setting,
                 "method": (("CG" if self.symmetric else "GMRES")
@@ -415,4 +412,8 @@ class LinearSolver:
                 "iterations": self.iterations, "total_iterations": self.total_iterations,
                 "solves": self.solves, "ndof": self.form.space.ndof,
                 "factors_reused": self.stale_solves, "factors_reused_failed": self.stale_failed,
-                "preconditioner_builds": self.rest_builds}
+                "preconditioner_builds": self.rest_builds + (self.reuse.builds if self.reuse
+                                                             is not None else 0),
+                "preconditioner_kept_designs": self.reuse.kept_designs if self.reuse else 0,
+                "preconditioner_rebuilt_in_solve": (self.reuse.rebuilt_in_solve if self.reuse
+                                                    else 0)}
