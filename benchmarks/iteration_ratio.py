@@ -13,9 +13,10 @@ iterations 1 to ``REPEATS`` (history's ``time``: state, adjoints, sensitivities 
 optimiser's update; the first builds the forms, the solver and the filter).  The designs are
 the run's own, so that what a solver keeps from one design to the next (a factorisation's
 structure, a preconditioner kept across designs) is kept only as far as a run's first
-iterations allow, where the designs change most.  The matrix-vector product: the linear-elasticity stiffness matrix on
-the problem's own displacement space (the same sparsity as every matrix of the iteration,
-stored in full, not its symmetric half), assembled by NGSolve; the median of ``MV_REPEATS``
+iterations allow, where the designs change most.  The matrix-vector product: the
+linear-elasticity stiffness matrix on the problem's own displacement space (the same sparsity
+as every matrix of the iteration, stored in full, not its symmetric half), assembled by
+NGSolve; the median of ``MV_REPEATS``
 products ``y = A x``.  The ratio of the two medians is the iteration's cost in products: a
 few dozen is what an optimal preconditioner allows (state, adjoint and sensitivities at a
 handful of products each per Krylov iteration), several hundred is what the set-up of a

@@ -7,8 +7,8 @@ Around the system (assembled and factorised, each dimension's fit) a run holds t
 matrices while they are built (about 88 bytes per entry, built only below 20·10⁶ entries:
 physics/scatter.py; counted for the displacement and a Darcy pressure in every case, an
 over-estimate for cases without them; on the iterative route the displacement's up to 10⁸
-entries, 30 bytes each: physics/linear_system.py), and the pressure's and filter's systems, MMA and the
-outputs (``_RUN_FACTOR`` = 1.25 on the system; checked on whole runs in
+entries, 30 bytes each: physics/linear_system.py), and the pressure's and filter's systems,
+MMA and the outputs (``_RUN_FACTOR`` = 1.25 on the system; checked on whole runs in
 :mod:`pacto_ng.resource_probes`).
 """
 from __future__ import annotations

@@ -78,7 +78,7 @@ class Equilibrium:
             symmetric=self.symmetric, order=self.order, inverse=self.inverse_type,
             coarse=coarse, at_rest=self._tangent_form, refresh=lin and lin.assemble_form)
         if lin is not None:
-            self._lin.solver = self._solver
+            lin.solver = self._solver
         self.settings = self.settings.for_route(self._solver.direct)  # Newton's tolerance
         self._solver.rtol = adjoint_rtol(self.settings.rtol)  # its default: the adjoint's
         self._tangent_at = None  # id of the state the factorisation belongs to
