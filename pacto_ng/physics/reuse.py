@@ -9,11 +9,13 @@ last design's BDDC stays a good preconditioner of the new matrix, which is then 
 the element matrices (:class:`~pacto_ng.physics.scatter.ElementMatrices`) without assembling
 the form.  It is rebuilt where it has cost, in Krylov iterations beyond those of the design
 it was built at, :data:`SETUP_ITERATIONS` in all: the iterations its set-up costs, so that
-the iterations lost never exceed the set-ups saved.  A solve with a kept preconditioner that
-needs :meth:`Reuse.cap` iterations stops, and the preconditioner is rebuilt for the rest; the
-next design is then built afresh, and after each further such solve in a row twice as many
-(at most :data:`MAX_BACKOFF`): where the designs jump (a sharp projection flips elements
-between solid and void) keeping costs more than it saves.
+the iterations lost between two set-ups are at most one set-up's worth.  A solve with a kept
+preconditioner that needs :attr:`Reuse.cap` iterations stops, and the preconditioner is
+rebuilt for the rest; the next design is then built afresh, and after each further such solve
+in a row twice as many (at most :data:`MAX_BACKOFF`): where the designs jump (a sharp
+projection flips elements between solid and void) keeping costs more than it saves.
+Measured on whole cantilever-3d runs: 7 % less wall time at 228,318 dofs, 12 % at 32,901, all
+of it in the first half of the run (docs/studies.md).
 
 The policy counts iterations, not seconds, so that a run repeats itself iteration for
 iteration.
