@@ -234,16 +234,16 @@ def _element_by_element(integrators, fes, set_coefficients, nterms, rows, cols, 
         else:
             chunks[-1] = (chunks[-1][0], e + 1)
 
-    def pairs(start, stop):  # the element, row and column of each entry stored
+    def stored(start, stop):  # the elements' dofs, and which of their pairs are stored
         d = np.array(dofs[start:stop])
         keep = (d[:, :, None] >= 0) & (d[:, None, :] >= 0)
         if lower:
             keep &= d[:, :, None] >= d[:, None, :]
-        return d, np.nonzero(keep)
+        return d, keep
 
     counts = np.zeros(ne, dtype=np.int64)
     for start, stop in chunks:
-        counts[start:stop] = np.bincount(pairs(start, stop)[1][0], minlength=stop - start)
+        counts[start:stop] = stored(start, stop)[1].sum(axis=(1, 2))
     indptr = np.concatenate(([0], np.cumsum(counts)))
     indices = np.empty(indptr[-1], dtype=np.int32 if cols.size < 2**31 else np.int64)
     data = [np.empty(indptr[-1]) for _ in range(nterms)]
@@ -252,7 +252,8 @@ def _element_by_element(integrators, fes, set_coefficients, nterms, rows, cols, 
         indicator[k] = np.ones(ne)
         set_coefficients(indicator)
         for start, stop in chunks:
-            d, (e, i, j) = pairs(start, stop)
+            d, keep = stored(start, stop)
+            e, i, j = np.nonzero(keep)  # the element, row and column of each entry stored
             at = slice(indptr[start], indptr[stop])
             if k == 0:
                 pos = np.asarray(index[d[e, i], d[e, j]]).ravel()
