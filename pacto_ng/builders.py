@@ -30,13 +30,12 @@ from .errors import InputError
 from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
 from .parallel import bounding_box
 from .physics import darcy_load
-from .physics.compiled import symbolic_tangent
 from .physics.darcy_leakage import Outflow
 from .physics.energy import make_energy
 from .physics.loads import PointLoad
 from .physics.mechanics import Mechanics
 from .physics.mixed import formulation_for, has_simplices
-from .physics.newton import NEWTON_PER_ITERATION
+from .physics.compiled import NEWTON_PER_ITERATION, element_weight, symbolic_tangent
 from .problem import Problem
 from .settings import Settings, setting
 from .setup import OBJECTIVES, Pressure
@@ -257,7 +256,8 @@ class Builder:
                              residual_density=pressure.follower,
                              realcompile=params.newton.compiles(
                                  model.linear, self.mesh.ne * params.iterations
-                                 * NEWTON_PER_ITERATION,
+                                 * NEWTON_PER_ITERATION * element_weight(
+                                     params.order, self.mesh.dim, has_simplices(self.mesh)),
                                  symbolic=symbolic_tangent(self.mesh.dim, formulation)),
                              output="u" + suffix, formulation=formulation)
         except ValueError as err:

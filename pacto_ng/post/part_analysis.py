@@ -57,7 +57,7 @@ import numpy as np
 from ngsolve import VOL, Grad, InnerProduct, LinearForm, Parameter
 
 from ..errors import InputError
-from ..physics.compiled import symbolic_tangent
+from ..physics.compiled import element_weight, symbolic_tangent
 from ..physics.contact import SelfContact
 from ..physics.energy import make_energy
 from ..physics.equilibrium import NewtonFailure
@@ -93,7 +93,7 @@ def solid_fields(mesh) -> dict:
     return {"rho_bar1": ones, "rho_bar2": np.array([m == STIFF for m in mats], dtype=float)}
 
 
-#: Newton iterations of a sweep, for the compiler's estimate (newton.COMPILE_PAYS): five
+#: Newton iterations of a sweep, for the compiler's estimate (compiled.COMPILE_PAYS): five
 #: pressures at 3-4 each (pneunet-3d's part, Neo-Hookean, 2026-12-06)
 SWEEP_NEWTON = 20
 
@@ -193,7 +193,8 @@ class PartAnalysis:
             linear=linear and kind != "follower" and not contact,
             newton=self._newton(params, contact), residual_terms=terms,
             realcompile=params.newton.compiles(
-                linear and kind != "follower" and not contact, mesh.ne * SWEEP_NEWTON,
+                linear and kind != "follower" and not contact, mesh.ne * SWEEP_NEWTON
+                * element_weight(self.order, mesh.dim, has_simplices(mesh)),
                 symbolic=symbolic_tangent(mesh.dim, self.formulation)),
             formulation=self.formulation)
         if contact:

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from pacto_ng.case import build_problem, get_case
-from pacto_ng.physics.newton import COMPILE_PAYS, COMPILE_PAYS_SYMBOLIC, NewtonParameters
+from pacto_ng.physics.compiled import COMPILE_PAYS, COMPILE_PAYS_SYMBOLIC, element_weight
+from pacto_ng.physics.newton import NewtonParameters
 
 
 def test_the_forms_are_compiled_where_the_work_pays_for_the_compiler(monkeypatch):
@@ -25,6 +26,16 @@ def test_the_forms_are_compiled_where_the_work_pays_for_the_compiler(monkeypatch
     monkeypatch.setattr(shutil, "which", lambda name: None)
     assert not auto.compiles(False, 1e12)  # no compiler wrapper: not compiled
     assert on.compiles(False, 1.0)  # asked for: NGSolve says what is missing
+
+
+def test_an_elements_work_counts_its_nodes_against_order_1():
+    """The work weighs an element by its nodes at its order over its nodes at order 1: a
+    tetrahedron has 4, 10 and 20 nodes at orders 1-3, a triangle 3 and 6, a quadrilateral 4
+    and 9, a hexahedron 8 and 27."""
+    assert element_weight(1, 3, True) == 1.0 and element_weight(1, 2, False) == 1.0
+    assert element_weight(2, 3, True) == 10 / 4 and element_weight(3, 3, True) == 20 / 4
+    assert element_weight(2, 2, True) == 6 / 3
+    assert element_weight(2, 2, False) == 9 / 4 and element_weight(2, 3, False) == 27 / 8
 
 
 @pytest.mark.skipif(shutil.which("ngscxx") is None, reason="needs NGSolve's ngscxx")
