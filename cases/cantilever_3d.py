@@ -8,8 +8,10 @@ E0 = 1e-6 E1, ν = 0.4, volume fraction 0.3, tetrahedra of 0.02 m, Helmholtz fil
 for large deflections (the load then matters: 1e5 N by default).  Measured 2026-12-07 with
 ``PACTO_THREADS=1 pacto run cantilever-3d --model wang``: converged at iteration 141,
 compliance 1.427e4, greyness 0.042, 7 min on one thread (docs/studies.md "The design path").
-``--model neohookean`` stalls at this load, its Newton iterations 141-212 per iteration by
-iteration 22 as the void crushes.
+``--model neohookean`` stalls at this load: by iteration 22 (p 1.88, β 1) a design takes
+122 Newton iterations (70 s).  Not because the void crushes (that design's equilibrium has its
+lowest det F at 0.92), but because Newton's full steps overshoot on the grey, soft beam, which
+deflects 28 % of its length there (docs/studies.md, "Neo-Hookean runs in 3D").
 
 Continuation: the library's (p 1 -> 3, β 1 -> 64, each β stage ending once settled).  Measured
 2026-12-06 with ``pacto run cantilever-3d``: converged at iteration 123 (β = 64 from 110),

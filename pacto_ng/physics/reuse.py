@@ -17,10 +17,6 @@ projection flips elements between solid and void) keeping costs more than it sav
 Measured on whole cantilever-3d runs: 7 % less wall time at 228,318 dofs, 12 % at 32,901, all
 of it in the first half of the run (docs/studies.md).
 
-A nonlinear model's preconditioner, BDDC built on its tangent at rest (solvers.py), is kept
-the same way: there no element matrices are needed, since the Newton tangents are assembled
-at every step anyway and only the form at rest, which sets BDDC up, is skipped.
-
 The policy counts iterations, not seconds, so that a run repeats itself iteration for
 iteration.
 """

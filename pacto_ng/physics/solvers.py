@@ -20,16 +20,16 @@ preconditioned Krylov solver beyond.
   coarse and BDDC is a direct solve.  A nonlinear model's tangent changes at every Newton
   step, and away from rest it can be indefinite (crushed void elements, compression), where
   BDDC built on it fails (CG diverged on the Neo-Hookean cantilever-3d at its full load): its
-  preconditioner is BDDC built on the same tangent at rest (a design's small-strain
-  stiffness, symmetric positive definite), and its Newton steps and adjoint are solved with it
-  (CG, or GMRES for an unsymmetric tangent).  The transpose
+  preconditioner is BDDC built once per design on the same tangent at rest (the design's
+  small-strain stiffness, symmetric positive definite), and its Newton steps and adjoint are
+  solved with it (CG, or GMRES for an unsymmetric tangent).  The transpose
   solve (an unsymmetric adjoint) is GMRES on ``Aᵀ`` with the same preconditioner (it
   approximates ``A⁻¹``; the follower tangent is a perturbation of a symmetric one).
 
 The route (``auto``: direct in 2D and in 3D up to a size) is chosen by
-:func:`~pacto_ng.physics.routes.choose`.  On the iterative route the preconditioner, a linear
-system's or one at rest, is kept across designs while it serves them well (``refresh``,
-``at_rest``; :mod:`~pacto_ng.physics.reuse`).
+:func:`~pacto_ng.physics.routes.choose`.  On the iterative route a linear system's
+preconditioner is kept across designs while it serves them well (``refresh``;
+:mod:`~pacto_ng.physics.reuse`).
 
 The Krylov tolerance is relative to the right-hand side's (preconditioned) norm; the caller
 ties it to what it needs (Newton: its own residual test, whose tolerance on this route is
@@ -109,9 +109,8 @@ class LinearSolver:
     at_rest : callable or None
         A nonlinear tangent's: makes a second form of the same tangent.  On the iterative
         route the preconditioner is built on it, linearised at rest (``u = 0``: the design's
-        small-strain stiffness), and the tangents of the design's Newton steps and its adjoint
-        are solved with it (see the module); it is kept across designs as ``refresh``'s is,
-        and set up again by assembling the form at rest.
+        small-strain stiffness) once per design (:meth:`new_design`), and the tangents of the
+        design's Newton steps and its adjoint are solved with it (see the module).
     refresh : callable or None
         A linear system's: assembles the form's matrix by the form for the current design
         (its preconditioner set up again).  On the iterative route the preconditioner is then
@@ -141,7 +140,8 @@ class LinearSolver:
         self.stale_failed = 0  # ... of them that needed the matrix factorised after all
         self._condensed_rhs = None
         self._rest_form = None  # the form the preconditioner is built on at rest (at_rest)
-        self._rest_stale = True  # ... not yet weighed for this design (prepare)
+        self._rest_stale = True  # ... not yet assembled for this design
+        self.rest_builds = 0  # ... assemblies of it (once per design)
         self._refresh = refresh
         self.reuse = None  # a preconditioner kept across designs (reuse.py)
         self._free = None  # the free dofs as a numpy mask (_cg_to_residual)
@@ -159,10 +159,9 @@ class LinearSolver:
                 vertex_coarse_space(fes, coarse)
             if at_rest is not None:
                 self._rest_form = at_rest()
-                self._refresh = self._assemble_at_rest
             self._pre = Preconditioner(form if self._rest_form is None else self._rest_form,
                                        self.preconditioner)
-            if self._refresh is not None:
+            if refresh is not None:
                 self.reuse = Reuse()
 
     @property
@@ -188,8 +187,8 @@ class LinearSolver:
         return AT_REST_FORCING if self._rest_form is not None and not self.symmetric else 1e-2
 
     def new_design(self):
-        """The design changed: a preconditioner kept across designs now belongs to an earlier
-        design (one at rest is set up again at the next :meth:`prepare` where it is due)."""
+        """The design changed: a preconditioner built at rest is built anew at the next
+        :meth:`prepare`; one kept across designs now belongs to an earlier design."""
         self._rest_stale = True
         if self.reuse is not None:
             self.reuse.new_design()
@@ -216,13 +215,6 @@ class LinearSolver:
     def _kept(self) -> bool:
         return self.reuse is not None and self.reuse.kept
 
-    def _assemble_at_rest(self):
-        """Assemble the form at rest for the current design: its preconditioner is set up by
-        the assembly."""
-        rest = self.form.mat.CreateColVector()
-        rest[:] = 0.0
-        self._rest_form.AssembleLinearization(rest)
-
     def _rebuild(self):
         """A kept preconditioner reached its cap in a solve: set it up from the current
         matrix (the owner's ``refresh``)."""
@@ -242,10 +234,11 @@ class LinearSolver:
             return
         self._stale = False
         if self._rest_form is not None and self._rest_stale:
+            rest = self.form.mat.CreateColVector()
+            rest[:] = 0.0
+            self._rest_form.AssembleLinearization(rest)  # BDDC is set up by the assembly
             self._rest_stale = False
-            if self.reuse.due:
-                self._assemble_at_rest()
-                self.reuse.built()
+            self.rest_builds += 1
         if self.direct:
             # on a distributed mesh the direct route is NGSolve's MasterInverse (the matrix
             # gathered on rank 0), which has no numeric update: it is made anew
@@ -405,21 +398,22 @@ class LinearSolver:
         ``total_iterations`` and ``solves``; on the direct route ``factors_reused``, the
         solves preconditioned by an earlier matrix's factorisation (Newton's tangent for the
         adjoint's), and ``factors_reused_failed``, those of them that factorised after all;
-        ``preconditioner_builds``: how often a preconditioner kept across designs (a linear
-        system's, or one at rest) was set up; ``preconditioner_kept_designs``, the designs it
+        ``preconditioner_builds``: how often a preconditioner built at rest, or kept across
+        designs, was built; of the latter ``preconditioner_kept_designs``, the designs it
         served that it was not built at, and ``preconditioner_rebuilt_in_solve``, the solves
         that rebuilt it at their cap."""
         iterative = not self.direct
         return {"kind": self.kind, "setting": self.setting,
                 "method": (("CG" if self.symmetric else "GMRES")
                            if iterative else self.inverse),
-                "preconditioner": (f"{self.preconditioner} at rest"
+                "preconditioner": (f"{self.preconditioner} at rest, once per design"
                                    if self._rest_form is not None else self.preconditioner),
                 "tolerance": self.rtol if iterative else None,
                 "iterations": self.iterations, "total_iterations": self.total_iterations,
                 "solves": self.solves, "ndof": self.form.space.ndof,
                 "factors_reused": self.stale_solves, "factors_reused_failed": self.stale_failed,
-                "preconditioner_builds": self.reuse.builds if self.reuse else 0,
+                "preconditioner_builds": self.rest_builds + (self.reuse.builds if self.reuse
+                                                             is not None else 0),
                 "preconditioner_kept_designs": self.reuse.kept_designs if self.reuse else 0,
                 "preconditioner_rebuilt_in_solve": (self.reuse.rebuilt_in_solve if self.reuse
                                                     else 0)}
