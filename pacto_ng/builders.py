@@ -30,12 +30,12 @@ from .errors import InputError
 from .filters import ConeFilter, HeavisideProjection, HelmholtzFilter, IdentityFilter
 from .parallel import bounding_box
 from .physics import darcy_load
+from .physics.compiled import NEWTON_PER_ITERATION, element_weight, symbolic_tangent
 from .physics.darcy_leakage import Outflow
 from .physics.energy import make_energy
 from .physics.loads import PointLoad
 from .physics.mechanics import Mechanics
 from .physics.mixed import formulation_for, has_simplices
-from .physics.compiled import NEWTON_PER_ITERATION, element_weight, symbolic_tangent
 from .problem import Problem
 from .settings import Settings, setting
 from .setup import OBJECTIVES, Pressure
