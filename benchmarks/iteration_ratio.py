@@ -72,9 +72,7 @@ def one(case: str, maxh: float, model: str, route: str) -> dict:
     params = c.resolve(params)
     problem = build_problem(c, params)
     problem.expect_many_designs()
-    ref = problem.setup.objective_ref
-    state = LoopState(k=0, x=initial_design(problem), opt_state=None,
-                      scale=10.0 / ref if ref > 0 else None)
+    state = LoopState.start(initial_design(problem), problem.setup.objective_ref)
     optimize(problem, params.schedule.schedule(), iterations=1 + REPEATS, tol=0.0,
              method=params.optimizer, move=params.move, state=state, obj_tol=0.0,
              load_adapt=params.load_adapt)

@@ -53,7 +53,8 @@ GB).  Which route a 3D system takes is the physics' (:func:`route`:
 :func:`pacto_ng.physics.routes.choose`; with ``solver = auto`` direct at order 1 and up to
 ``DIRECT_MAX_DOFS_3D`` dofs, iterative above it at order ≥ 2); 2D systems are estimated as
 factorised.  A run holds more around its system: the mesh, the linear fast paths' element
-matrices while they are built (not on the iterative route), and the pressure's and filter's
+matrices while they are built (on the iterative route the displacement's up to 10⁸
+entries), and the pressure's and filter's
 systems, MMA and the outputs (:func:`pacto_ng.estimate.run_overheads`); in 3D writing
 design.vtu adds about 460 bytes per point written (4 or 10 per tetrahedron, 8 or 27 per
 hexahedron, order 1 or above).  This machine (23 GB, about 18 GB usable) plans 3D runs up to

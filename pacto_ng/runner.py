@@ -297,9 +297,7 @@ def _optimise(case: Case, params: Parameters, path: Path, progress: _Progress, *
         state = load_checkpoint(ckpt, problem)
         progress.saved = state.k
     else:
-        ref = problem.setup.objective_ref
-        state = LoopState(k=0, x=initial_design(problem), opt_state=None,
-                          scale=10.0 / ref if ref > 0 else None)
+        state = LoopState.start(initial_design(problem), problem.setup.objective_ref)
     # once the problem is built and the checkpoint read: a run refused while building it, or a
     # resume refused for its checkpoint, leaves the folder as it was
     info = {"case": case.name, "case_file": case.file, "params": params.to_dict(),

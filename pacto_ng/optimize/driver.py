@@ -80,6 +80,12 @@ class LoopState:
     beta_capped_at: int = -1  # ... the iteration at which the cap last changed
     beta_step: float = 2.0  # ... and the ratio of the cut step that Newton took
 
+    @classmethod
+    def start(cls, x: np.ndarray, ref: float) -> LoopState:
+        """The state a run starts from at the design ``x``: the objective scaled to 10 at its
+        reference value ``ref`` (none where it is not positive)."""
+        return cls(k=0, x=x, opt_state=None, scale=10.0 / ref if ref > 0 else None)
+
 
 @dataclass
 class LoopResult:
